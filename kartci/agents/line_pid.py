@@ -1,0 +1,55 @@
+"""The seed's P / PI line-tracking controller (TestSensor.cc in the annex), on messages."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from typing import Any
+
+from kartci.agents.base import Outbox
+from kartci.logs.types import header, msg
+from kartci.spec.models import LinePidController, LineTrackerModel
+
+
+class LinePid:
+    """u2 = Kp * (-d) + Ki * integral; wL = (v1 - 0.06 u2) / r, wR = (v1 + 0.06 u2) / r.
+
+    d is estimated from the camera difference only (Eq. 6.13); the controller never sees the
+    true offset. Like the seed, the integral accumulates 0.01 * Ki * error per control step and
+    the wheels stop while the sonar reads less than `stop_range_m`.
+    """
+
+    inputs = ("line_sensor", "sonar")
+
+    def __init__(self, spec: LinePidController, model: LineTrackerModel) -> None:
+        self.spec, self.model = spec, model
+        self.period_s = spec.period_s
+        self._left = self._right = 0.0
+        self._range = math.inf
+        self._integral = 0.0
+
+    def on_message(self, topic: str, message: Any) -> None:
+        if topic == "line_sensor":
+            self._left, self._right = message.left, message.right
+        elif topic == "sonar":
+            self._range = message.range
+
+    def step(self, t_ns: int) -> Outbox:
+        s = self.spec
+        y = self._left - self._right
+        d = s.slope_m * y + s.offset_m
+        error = -d
+        self._integral += 0.01 * s.ki * error
+        u2 = s.kp * error + self._integral
+        stop = self._range < s.stop_range_m
+        gate = 0.0 if stop else 1.0
+        r = self.model.wheel_radius_m
+        w_left = (s.v1_mps - s.half_track_m * u2) * gate / r
+        w_right = (s.v1_mps + s.half_track_m * u2) * gate / r
+        cmd = msg("sensor_msgs/msg/JointState", header=header(t_ns, "base_link"),
+                  name=["left_wheel_hinge", "right_wheel_hinge"], position=np.zeros(0),
+                  velocity=np.array([w_left, w_right]), effort=np.zeros(0))
+        state = msg("kartci_msgs/msg/LineControllerState", header=header(t_ns, "base_link"),
+                    distance_estimate_m=d, u2=u2, integral=self._integral, sonar_stop=stop)
+        return [("wheel_cmd", cmd), ("controller/state", state)]

@@ -1,0 +1,259 @@
+"""The `kartci` command: thin typer commands over the library. Errors: one line, exit 2."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from kartci.errors import KartciError, SpecError
+from kartci.report.tables import MARK, delta, num, tolerance
+from kartci.results import ScenarioResult, exit_code
+
+app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
+                  help="Run robot scenarios headless, record them, score them against baselines.")
+baseline_app = typer.Typer(help="Inspect and update stored baselines.", no_args_is_help=True)
+app.add_typer(baseline_app, name="baseline")
+out_console = Console()
+err_console = Console(stderr=True)
+
+SetOpt = Annotated[list[str] | None, typer.Option(
+    "--set", help="Override a scenario value: dotted.key=value (repeatable).")]
+OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder.")]
+BaselinesOpt = Annotated[Path | None, typer.Option(
+    help="Folder of baseline files (default: the project's baselines/).")]
+
+
+def _baselines(path: Path | None) -> Path:
+    from kartci.runner import default_baselines
+
+    return path or default_baselines()
+
+
+@app.command("list")
+def list_cmd() -> None:
+    """List the scenarios with a one-line description."""
+    from kartci.spec import load_scenario, scenario_names
+
+    table = Table("scenario", "description", box=None)
+    for name in scenario_names():
+        table.add_row(name, load_scenario(name).description)
+    out_console.print(table)
+
+
+@app.command()
+def show(name: str, set_: SetOpt = None) -> None:
+    """Print a scenario fully resolved (world and model files included, overrides applied)."""
+    from kartci.spec import load_scenario
+
+    spec = load_scenario(name, set_ or [])
+    typer.echo(json.dumps(spec.model_dump(mode="json"), indent=2))
+
+
+@app.command()
+def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")] = None) -> None:
+    """JSON Schema of scenario files, for editor completion and validation."""
+    from kartci.spec import json_schema
+
+    text = json.dumps(json_schema(), indent=2)
+    if out is None:
+        typer.echo(text)
+    else:
+        out.write_text(text + "\n", encoding="utf-8")
+
+
+def _print_verdicts(results: list[ScenarioResult]) -> None:
+    for r in results:
+        if r.error:
+            out_console.print(f"[bold]{r.name}[/]: {MARK[r.status]} error: {r.error}",
+                              markup=True, highlight=False)
+            continue
+        table = Table("metric", "value", "baseline", "delta", "tolerance", "verdict",
+                      title=f"{r.name}: {MARK[r.status]} {r.status.value}", title_justify="left")
+        for v in r.verdicts:
+            table.add_row(v.name, num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
+                          tolerance(v), f"{MARK[v.status]} {v.status.value}")
+        for c in r.criteria:
+            table.add_row(f"criterion {c.name}", num(c.value), c.bound, "", "",
+                          "✅ pass" if c.ok else "❌ failed")
+        out_console.print(table)
+
+
+def _finish(results: list[ScenarioResult], out: Path) -> None:
+    from kartci.report import summary_md, write_all
+
+    paths = write_all(results, out)
+    _print_verdicts(results)
+    step_summary = os.environ.get("GITHUB_STEP_SUMMARY")
+    if step_summary:
+        with Path(step_summary).open("a", encoding="utf-8") as f:
+            f.write(summary_md(results)[: 1_000_000])
+    code = exit_code(results)
+    out_console.print(f"report: {paths['html']}  (exit {code})", highlight=False)
+    raise typer.Exit(code)
+
+
+@app.command()
+def run(
+    names: Annotated[list[str] | None, typer.Argument(
+        help="Scenario names or YAML paths (default: every scenario in scenarios/).")] = None,
+    set_: SetOpt = None,
+    out: OutOpt = Path("reports/latest"),
+    baselines: BaselinesOpt = None,
+) -> None:
+    """Run scenarios, record each as OUT/<scenario>/run.mcap, score and judge them.
+
+    Exit 0 when everything passes, 1 on a regression or failed criterion, 2 on bad input or a
+    run error. Reports: OUT/report.html, summary.md, summary.json, junit.xml.
+    """
+    from kartci.runner import run_suite
+    from kartci.spec import scenario_names
+
+    selected = names or scenario_names()
+    quiet = not out_console.is_terminal or bool(os.environ.get("CI"))
+
+    def done(name: str, r: ScenarioResult) -> None:
+        rtf = r.run.get("real_time_factor")
+        err_console.print(f"{MARK[r.status]} {name}: {r.status.value} "
+                          f"(sim {num(r.run.get('sim_time_s'), 's')}, {num(rtf)}x real time)",
+                          highlight=False)
+
+    def progress(name: str, t: float) -> None:
+        if not quiet:
+            err_console.print(f"  {name}: t = {t:6.1f} s", end="\r", highlight=False)
+
+    results = run_suite(selected, set_ or [], out, _baselines(baselines), done, progress)
+    _finish(results, out)
+
+
+@app.command()
+def report(out: Annotated[Path, typer.Argument(help="A folder written by `kartci run`.")],
+           baselines: BaselinesOpt = None) -> None:
+    """Rebuild metrics and all reports of a run folder from its logs alone."""
+    from kartci.runner import rescore
+
+    _finish(rescore(out, _baselines(baselines)), out)
+
+
+@baseline_app.command("update")
+def baseline_update(
+    out: Annotated[Path, typer.Argument(help="A folder written by `kartci run`.")],
+    names: Annotated[list[str] | None, typer.Argument(help="Scenarios (default: all in OUT).")]
+    = None,
+    baselines: BaselinesOpt = None,
+) -> None:
+    """Store a run's metrics as the baselines; the only command that writes baselines."""
+    from kartci.verdict import update
+
+    folders = [out / n for n in names] if names else sorted(
+        p.parent for p in out.glob("*/metrics.json"))
+    if not folders:
+        raise SpecError(f"{out}: no <scenario>/metrics.json found; run `kartci run` first")
+    target = _baselines(baselines)
+    for folder in folders:
+        path = folder / "metrics.json"
+        if not path.exists():
+            raise SpecError(f"{path}: not found (scenario '{folder.name}' not in this run)")
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+            values = doc["metrics"]
+        except (ValueError, KeyError) as err:
+            raise SpecError(f"{path}: malformed metrics file ({err})") from None
+        changes = update(target / f"{folder.name}.json", folder.name, values)
+        moved = [c for c in changes if c.kind != "unchanged"]
+        out_console.print(f"{folder.name}: {len(moved)} of {len(changes)} metrics changed",
+                          highlight=False)
+        for c in moved:
+            out_console.print(f"  {c.kind:8s} {c.metric}: {num(c.old)} -> {num(c.new)}",
+                              highlight=False)
+
+
+@app.command()
+def characterise(
+    out: OutOpt = Path("reports/characterisation"),
+    scenario: Annotated[str, typer.Option(help="Scenario whose robot and world are used.")]
+    = "line_straight",
+    fovs: Annotated[str, typer.Option(help="Fields of view to compare, rad, comma-separated.")]
+    = "0.5,0.75,1.0,1.2,1.4,1.5,2.0",
+    step_m: Annotated[float, typer.Option(help="Offset step of the sweep, m.")] = 0.0005,
+    set_: SetOpt = None,
+) -> None:
+    """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
+    6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
+    from kartci.report.plots import sensor_sweep
+    from kartci.sim.characterise import sweep
+    from kartci.spec import load_scenario
+
+    spec = load_scenario(scenario, set_ or [])
+    agent = next(iter(spec.agents))
+    try:
+        fov_list = [float(f) for f in fovs.split(",") if f.strip()]
+    except ValueError:
+        raise SpecError(f"--fovs {fovs!r}: expected comma-separated numbers") from None
+    if not 0 < step_m <= 0.005:
+        raise SpecError(f"--step-m {step_m}: expected 0 < step <= 0.005")
+    offsets = np.round(np.arange(-0.03, 0.03 + step_m / 2, step_m), 9)
+    out.mkdir(parents=True, exist_ok=True)
+    geo = sweep(spec, agent, offsets, mode="geometric")
+    ren = sweep(spec, agent, offsets, mode="rendered")
+    with (out / "sweep.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["offset_m", "left", "right", "difference", "left_rendered",
+                    "right_rendered", "difference_rendered"])
+        for i, d in enumerate(offsets):
+            w.writerow([f"{d:.6f}", f"{geo.left[i]:.6f}", f"{geo.right[i]:.6f}",
+                        f"{geo.difference[i]:.6f}", f"{ren.left[i]:.6f}", f"{ren.right[i]:.6f}",
+                        f"{ren.difference[i]:.6f}"])
+    fov_curves = {f: sweep(spec, agent, offsets, fov_rad=f, mode="geometric") for f in fov_list}
+    with (out / "fov_sweep.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["offset_m", *[f"difference_fov_{x:g}" for x in fov_list]])
+        for i, d in enumerate(offsets):
+            w.writerow([f"{d:.6f}", *[f"{fov_curves[x].difference[i]:.6f}" for x in fov_list]])
+    slope, intercept, r2 = geo.fit()
+    rslope, rintercept, rr2 = ren.fit()
+    lines = [f"geometric: y = {slope:.2f} d + {intercept:.4f}  (R^2 {r2:.4f} over |d| <= 8 mm)",
+             f"rendered:  y = {rslope:.2f} d + {rintercept:.4f}  (R^2 {rr2:.4f})",
+             "seed (Eq. 6.12): y = 39.4022 d + 0.0036"]
+    for x in fov_list:
+        s, _, r = fov_curves[x].fit()
+        lines.append(f"fov {x:g} rad: slope {s:.2f} /m, R^2 {r:.3f}")
+    figs = [sensor_sweep(list(offsets), {"left": list(geo.left), "right": list(geo.right),
+                                         "left - right": list(geo.difference),
+                                         "left - right (rendered)": list(ren.difference)},
+                         "camera outputs across the line (fov 1.2 rad)"),
+            sensor_sweep(list(offsets), {f"fov {x:g} rad": list(c.difference)
+                                         for x, c in fov_curves.items()},
+                         "left - right for several fields of view")]
+    html_text = ("<!doctype html><html><head><meta charset='utf-8'><title>line sensor "
+                 "characterisation</title></head><body><h1>Line-sensor characterisation</h1><pre>"
+                 + "\n".join(lines) + "</pre>" + "".join(figs) + "</body></html>\n")
+    (out / "characterisation.html").write_text(html_text, encoding="utf-8")
+    for line in lines:
+        out_console.print(line, highlight=False)
+    out_console.print(f"wrote {out}/sweep.csv, fov_sweep.csv, characterisation.html",
+                      highlight=False)
+
+
+def main() -> None:
+    """Entry point: every KartciError becomes one line on stderr and exit code 2."""
+    try:
+        app()
+    except KartciError as err:
+        print(f"kartci: error: {err}", file=sys.stderr)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        print("kartci: interrupted", file=sys.stderr)
+        sys.exit(130)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,65 @@
+"""Turn a log into one pandas table per topic, for the message types metrics and plots use."""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from kartci.logs.reader import messages
+from kartci.logs.types import stamp_ns
+
+Row = dict[str, Any]
+
+
+def _yaw(q: Any) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def _odometry(m: Any) -> Row:
+    p, q = m.pose.pose.position, m.pose.pose.orientation
+    tw = m.twist.twist
+    return {"x": p.x, "y": p.y, "z": p.z, "yaw": _yaw(q), "vx": tw.linear.x, "vy": tw.linear.y,
+            "wz": tw.angular.z}
+
+
+def _joint_state(m: Any) -> Row:
+    row: Row = {}
+    for i, name in enumerate(m.name):
+        if i < len(m.velocity):
+            row[f"{name}.velocity"] = m.velocity[i]
+        if i < len(m.position):
+            row[f"{name}.position"] = m.position[i]
+    return row
+
+
+def _fields(*names: str) -> Callable[[Any], Row]:
+    return lambda m: {n: getattr(m, n) for n in names}
+
+
+FLATTENERS: dict[str, Callable[[Any], Row]] = {
+    "nav_msgs/msg/Odometry": _odometry,
+    "sensor_msgs/msg/JointState": _joint_state,
+    "sensor_msgs/msg/Range": _fields("range"),
+    "kartci_msgs/msg/LineSensor": _fields("left", "right"),
+    "kartci_msgs/msg/LineControllerState": _fields("distance_estimate_m", "u2", "integral",
+                                                   "sonar_stop"),
+    "std_msgs/msg/String": _fields("data"),
+}
+
+
+def tables(path: Path, wanted: Sequence[str] | None = None) -> dict[str, pd.DataFrame]:
+    """`t` (s, from the header stamp when there is one, else log time) plus flattened fields."""
+    rows: dict[str, list[Row]] = defaultdict(list)
+    for topic, t_ns, m in messages(path, wanted):
+        flat = FLATTENERS.get(m.__msgtype__)
+        if flat is None:
+            continue
+        hdr = getattr(m, "header", None)
+        t = stamp_ns(hdr) if hdr is not None else t_ns
+        rows[topic].append({"t": t * 1e-9, **flat(m)})
+    return {topic: pd.DataFrame(r) for topic, r in rows.items()}

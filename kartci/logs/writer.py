@@ -1,0 +1,64 @@
+"""Write a run log: one MCAP file, ROS 2 profile, CDR messages with embedded ros2msg schemas."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from types import TracebackType
+from typing import Any, BinaryIO
+
+from mcap.writer import CompressionType, Writer
+
+from kartci.logs.types import typestore
+
+
+class McapLogWriter:
+    """Writes to `<path>.partial` and renames on a clean close, so a failed run never leaves a
+    truncated log in place of a good one."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._tmp = path.with_name(path.name + ".partial")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._file: BinaryIO = self._tmp.open("wb")
+        self._writer = Writer(self._file, compression=CompressionType.ZSTD)
+        self._writer.start(profile="ros2", library="kartci")
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
+        self._seq: dict[int, int] = {}
+
+    def _channel(self, topic: str, typename: str) -> int:
+        cid = self._channels.get(topic)
+        if cid is None:
+            sid = self._schemas.get(typename)
+            if sid is None:
+                text, _ = typestore().generate_msgdef(typename, ros_version=2)
+                sid = self._writer.register_schema(typename, "ros2msg", text.encode())
+                self._schemas[typename] = sid
+            cid = self._writer.register_channel(topic, "cdr", sid)
+            self._channels[topic] = cid
+        return cid
+
+    def write(self, topic: str, message: Any, t_ns: int) -> None:
+        typename = message.__msgtype__
+        cid = self._channel(topic, typename)
+        data = typestore().serialize_cdr(message, typename)
+        seq = self._seq.get(cid, 0)
+        self._seq[cid] = seq + 1
+        self._writer.add_message(cid, log_time=t_ns, data=bytes(data), publish_time=t_ns,
+                                 sequence=seq)
+
+    def close(self, ok: bool = True) -> None:
+        self._writer.finish()
+        self._file.close()
+        if ok:
+            os.replace(self._tmp, self.path)
+        else:
+            self._tmp.unlink(missing_ok=True)
+
+    def __enter__(self) -> McapLogWriter:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.close(ok=exc_type is None)

@@ -1,0 +1,68 @@
+"""Line-tracker metrics, computed from a run log's tables and the scenario recorded in it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from kartci import geometry
+from kartci.metrics.base import DEFS, Metric
+from kartci.spec.models import Scenario, StraightCourse
+
+
+def _m(name: str, value: float, **extra: object) -> Metric:
+    return Metric(name, float(value), DEFS[name].unit, dict(extra))
+
+
+def sensor_track(scenario: Scenario, agent: str, odom: pd.DataFrame) -> pd.DataFrame:
+    """Time, sensor-point position, signed offset from the line and progress along the course."""
+    lever = scenario.agents[agent].model.sensor_point_x_m
+    x = odom["x"].to_numpy() + lever * np.cos(odom["yaw"].to_numpy())
+    y = odom["y"].to_numpy() + lever * np.sin(odom["yaw"].to_numpy())
+    pts = np.column_stack([x, y])
+    course = scenario.world.course
+    return pd.DataFrame({"t": odom["t"].to_numpy(), "x": x, "y": y,
+                         "offset": geometry.offset_m(course, pts),
+                         "progress": geometry.progress_m(course, pts),
+                         "vx": odom["vx"].to_numpy()})
+
+
+def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame) -> list[Metric]:
+    if odom.empty:
+        return []
+    tr = sensor_track(scenario, agent, odom)
+    spec = scenario.metrics
+    course = scenario.world.course
+    length = geometry.length_m(course)
+    t, off, prog = tr["t"].to_numpy(), tr["offset"].to_numpy(), tr["progress"].to_numpy()
+    on_course = prog <= length if isinstance(course, StraightCourse) else np.ones_like(t, bool)
+
+    lost_idx = np.flatnonzero((np.abs(off) > spec.lost_threshold_m) & on_course)
+    lost = lost_idx.size > 0
+    end = lost_idx[0] if lost else len(t)
+    start_prog = prog[0]
+    covered = float(np.max(prog[:end]) - start_prog) if end > 0 else 0.0
+    completion = min(1.0, max(0.0, covered / max(length - start_prog, 1e-9)))
+
+    window = (t >= spec.transient_s) & on_course
+    if lost:
+        window &= t < t[end]
+    err = off[window]
+    rms = math.sqrt(float(np.mean(err**2))) if err.size else math.nan
+    mx = float(np.max(np.abs(err))) if err.size else math.nan
+
+    outside = np.flatnonzero((np.abs(off) > spec.settle_band_m) & on_course)
+    settle = float(t[outside[-1] + 1]) if outside.size and outside[-1] + 1 < len(t) else (
+        math.nan if outside.size else float(t[0]))
+
+    lost_extra = {"time_s": round(float(t[end]), 6)} if lost else {}
+    return [
+        _m("cross_track_rms_m", rms),
+        _m("cross_track_max_m", mx),
+        _m("line_lost", 1.0 if lost else 0.0, **lost_extra),
+        _m("completion", completion),
+        _m("mean_speed_mps", float(np.mean(tr["vx"]))),
+        _m("settle_time_s", settle),
+    ]

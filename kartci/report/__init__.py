@@ -1,0 +1,51 @@
+"""Reports: self-contained HTML, Markdown for pull requests, JUnit XML, summary JSON."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from kartci.report.html import report_html
+from kartci.report.junit import junit_xml
+from kartci.report.markdown import summary_md
+from kartci.results import ScenarioResult, exit_code
+from kartci.verdict import write_json_atomic
+
+
+def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
+    return {
+        "exit_code": exit_code(results),
+        "scenarios": {
+            r.name: {
+                "status": r.status.value,
+                "error": r.error,
+                "metrics": {v.name: {"value": v.value, "unit": v.unit, "baseline": v.baseline,
+                                     "tolerance": v.tolerance, "direction": v.direction.value,
+                                     "status": v.status.value} for v in r.verdicts},
+                "criteria": {c.name: {"bound": c.bound, "value": c.value, "ok": c.ok}
+                             for c in r.criteria},
+            } for r in results
+        },
+    }
+
+
+def _write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def write_all(results: list[ScenarioResult], out: Path) -> dict[str, Path]:
+    """report.html, summary.md, summary.json and junit.xml in `out`."""
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"html": out / "report.html", "markdown": out / "summary.md",
+             "json": out / "summary.json", "junit": out / "junit.xml"}
+    _write_text(paths["html"], report_html(results))
+    _write_text(paths["markdown"], summary_md(results))
+    write_json_atomic(paths["json"], summary_json(results))
+    _write_text(paths["junit"], junit_xml(results, str(paths["html"])))
+    return paths
+
+
+__all__ = ["report_html", "junit_xml", "summary_json", "summary_md", "write_all"]

@@ -1,0 +1,71 @@
+"""The self-contained HTML report: verdict table per scenario and its plots, inline."""
+
+from __future__ import annotations
+
+import html
+from datetime import UTC, datetime
+
+from kartci.report import plots as figs
+from kartci.report.tables import MARK, delta, num, tolerance
+from kartci.results import ScenarioResult, exit_code
+from kartci.report.markdown import VERDICT_WORD
+
+CSS = """
+body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}
+table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;
+text-align:right}th{background:#f3f3f3}td:first-child{text-align:left;font-family:monospace}
+.pass,.improved{color:#176f2c}.regressed,.failed,.error,.missing{color:#b00020;font-weight:bold}
+.new{color:#555}.figs{display:flex;flex-wrap:wrap;gap:1em}.figs svg{max-width:560px;height:auto}
+section{border-top:2px solid #ddd;margin-top:1.5em}code{background:#f6f6f6;padding:0 3px}
+"""
+
+
+def _scenario(r: ScenarioResult) -> str:
+    st = r.status.value
+    out = [f'<section id="{html.escape(r.name)}"><h2>{html.escape(r.name)} '
+           f'<span class="{st}">{MARK[r.status]} {st}</span></h2>',
+           f"<p>{html.escape(r.description)}</p>"]
+    if r.error:
+        out.append(f'<p class="error">{html.escape(r.error)}</p></section>')
+        return "\n".join(out)
+    if r.run:
+        out.append(f"<p>sim time {num(r.run.get('sim_time_s'), 's')}, wall "
+                   f"{num(r.run.get('wall_s'), 's')}, real-time factor "
+                   f"{num(r.run.get('real_time_factor'))}; log <code>"
+                   f"{html.escape(str(r.run.get('log', '')))}</code></p>")
+    out.append("<table><tr><th>metric</th><th>value</th><th>baseline</th><th>delta</th>"
+               "<th>tolerance</th><th>verdict</th></tr>")
+    for v in r.verdicts:
+        out.append(f"<tr><td>{html.escape(v.name)}</td><td>{num(v.value, v.unit)}</td>"
+                   f"<td>{num(v.baseline, v.unit)}</td><td>{delta(v)}</td>"
+                   f"<td>{tolerance(v)}</td><td class=\"{v.status.value}\">{MARK[v.status]} "
+                   f"{v.status.value}</td></tr>")
+    out.append("</table>")
+    if r.criteria:
+        out.append("<table><tr><th>criterion</th><th>bound</th><th>value</th><th>result</th>"
+                   "</tr>")
+        for c in r.criteria:
+            cls = "pass" if c.ok else "failed"
+            out.append(f"<tr><td>{html.escape(c.name)}</td><td>{html.escape(c.bound)}</td>"
+                       f"<td>{num(c.value)}</td><td class=\"{cls}\">{cls}</td></tr>")
+        out.append("</table>")
+    if r.plots is not None:
+        out.append('<div class="figs">')
+        out += [figs.top_view(r.plots), figs.tracking_error(r.plots), figs.wheel_speeds(r.plots)]
+        out.append("</div>")
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def report_html(results: list[ScenarioResult], title: str = "kartci report") -> str:
+    code = exit_code(results)
+    rows = "".join(f'<tr><td><a href="#{html.escape(r.name)}">{html.escape(r.name)}</a></td>'
+                   f'<td class="{r.status.value}">{MARK[r.status]} {r.status.value}</td></tr>'
+                   for r in results)
+    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    body = "\n".join(_scenario(r) for r in results)
+    return (f"<!doctype html><html><head><meta charset=\"utf-8\"><title>{html.escape(title)}"
+            f"</title><style>{CSS}</style></head><body><h1>{html.escape(title)}: "
+            f"{VERDICT_WORD[code]}</h1><p>written {stamp}; exit code {code}</p>"
+            f"<table><tr><th>scenario</th><th>status</th></tr>{rows}</table>{body}"
+            "</body></html>\n")

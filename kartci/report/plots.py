@@ -1,0 +1,76 @@
+"""Report figures as inline SVG (matplotlib, Agg): no JavaScript, no network, opens anywhere."""
+
+from __future__ import annotations
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from kartci.results import Plots  # noqa: E402
+
+plt.rcParams.update({"svg.hashsalt": "kartci", "figure.dpi": 96, "font.size": 9})
+
+
+def _svg(fig: plt.Figure) -> str:
+    buf = io.StringIO()
+    fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
+    plt.close(fig)
+    text = buf.getvalue()
+    return text[text.index("<svg"):]
+
+
+def top_view(p: Plots) -> str:
+    fig, ax = plt.subplots(figsize=(5.5, 4.0))
+    ax.plot(p.course[:, 0], p.course[:, 1], color="black", lw=3, label="line", alpha=0.35)
+    for agent, tr in p.tracks.items():
+        ax.plot(tr["x"], tr["y"], lw=1.2, label=f"{agent} sensor point")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title("path seen from above")
+    ax.legend(loc="best", fontsize=8)
+    return _svg(fig)
+
+
+def tracking_error(p: Plots, band_m: float = 0.008) -> str:
+    fig, ax = plt.subplots(figsize=(5.5, 3.0))
+    for agent, tr in p.tracks.items():
+        ax.plot(tr["t"], tr["offset"] * 1000, lw=1, label=agent)
+    for s in (-1, 1):
+        ax.axhline(s * band_m * 1000, color="red", ls="--", lw=0.8)
+    ax.set_xlabel("sim time [s]")
+    ax.set_ylabel("cross-track error [mm]")
+    ax.set_title(f"tracking error (dashed: ±{band_m * 1000:g} mm sensor range)")
+    ax.legend(loc="best", fontsize=8)
+    return _svg(fig)
+
+
+def wheel_speeds(p: Plots) -> str:
+    fig, ax = plt.subplots(figsize=(5.5, 3.0))
+    for agent, w in p.wheels.items():
+        ax.plot(w["t"], w["left"], lw=1, label=f"{agent} left")
+        ax.plot(w["t"], w["right"], lw=1, label=f"{agent} right")
+    for agent, c in p.commands.items():
+        ax.plot(c["t"], c["left"], lw=0.7, ls=":", label=f"{agent} left cmd")
+        ax.plot(c["t"], c["right"], lw=0.7, ls=":", label=f"{agent} right cmd")
+    ax.set_xlabel("sim time [s]")
+    ax.set_ylabel("wheel speed [rad/s]")
+    ax.set_title("wheel speeds: measured (solid) and commanded (dotted)")
+    ax.legend(loc="best", fontsize=7, ncol=2)
+    return _svg(fig)
+
+
+def sensor_sweep(offsets_m: list[float], curves: dict[str, list[float]], title: str) -> str:
+    fig, ax = plt.subplots(figsize=(5.5, 3.5))
+    for label, ys in curves.items():
+        ax.plot([o * 1000 for o in offsets_m], ys, lw=1.2, label=label)
+    ax.axvline(-8, color="grey", ls="--", lw=0.8)
+    ax.axvline(8, color="grey", ls="--", lw=0.8)
+    ax.set_xlabel("offset of the sensor from the line axis [mm]")
+    ax.set_ylabel("luminance")
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    return _svg(fig)

@@ -1,0 +1,48 @@
+"""Neutral value types passed from the runner to the reports: what happened in each scenario."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from kartci.verdict import CriterionResult, MetricVerdict, Status, worst
+
+
+@dataclass(frozen=True)
+class Plots:
+    """Time series and geometry a report draws; all read back from the run log."""
+
+    course: np.ndarray  # (n, 2) line axis, m
+    line_width_m: float
+    tracks: dict[str, pd.DataFrame]  # agent -> t, x, y (sensor point), offset, progress, vx
+    wheels: dict[str, pd.DataFrame]  # agent -> t, left, right (measured, rad/s)
+    commands: dict[str, pd.DataFrame]  # agent -> t, left, right (commanded, rad/s)
+
+
+@dataclass(frozen=True)
+class ScenarioResult:
+    name: str
+    description: str
+    verdicts: list[MetricVerdict] = field(default_factory=list)
+    criteria: list[CriterionResult] = field(default_factory=list)
+    error: str | None = None
+    run: dict[str, Any] = field(default_factory=dict)  # sim_time_s, wall_s, rtf, log
+    plots: Plots | None = None
+
+    @property
+    def status(self) -> Status:
+        if self.error is not None:
+            return Status.ERROR
+        statuses = [v.status for v in self.verdicts]
+        statuses += [Status.FAILED for c in self.criteria if not c.ok]
+        return worst(statuses)
+
+
+def exit_code(results: list[ScenarioResult]) -> int:
+    """0 all pass, 1 a regression or a failed criterion, 2 a run error."""
+    if any(r.status is Status.ERROR for r in results):
+        return 2
+    return 1 if any(r.status.bad for r in results) else 0

@@ -1,0 +1,64 @@
+"""Reproduce the seed's line-sensor characterisation (Fig. 5.2.2.2, 6.3.1 and 5.2.2.3).
+
+The robot, parallel to a straight line, is placed at a series of lateral offsets across it (as
+the seed's plugin did with SetWorldPose) and both cameras are read at each, without noise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from kartci._bullet import pb
+from kartci.sim.line_tracker import LineTracker
+from kartci.sim.sensors import LineCamera
+from kartci.sim.world import World
+from kartci.spec import Scenario, project_root
+
+
+@dataclass(frozen=True)
+class Sweep:
+    offsets_m: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+
+    @property
+    def difference(self) -> np.ndarray:
+        return self.left - self.right
+
+    def fit(self, half_range_m: float = 0.008) -> tuple[float, float, float]:
+        """Least-squares line y = slope d + intercept over |d| <= half_range; and its R^2."""
+        m = np.abs(self.offsets_m) <= half_range_m + 1e-12
+        d, y = self.offsets_m[m], self.difference[m]
+        slope, intercept = np.polyfit(d, y, 1)
+        resid = y - (slope * d + intercept)
+        r2 = 1.0 - float(resid @ resid) / float(((y - y.mean()) ** 2).sum())
+        return float(slope), float(intercept), r2
+
+
+def sweep(scenario: Scenario, agent: str, offsets_m: np.ndarray, fov_rad: float | None = None,
+          mode: str | None = None) -> Sweep:
+    """Camera outputs with the sensor midpoint at each lateral offset (left of the line +)."""
+    spec = scenario.agents[agent]
+    sensor = spec.line_sensor.model_copy(update={
+        k: v for k, v in (("fov_rad", fov_rad), ("mode", mode)) if v is not None})
+    world = World(scenario.world, scenario.physics.dt_s)
+    try:
+        robot = LineTracker(world.client, spec, scenario.world,
+                            project_root() / "models" / spec.model.kind, scenario.physics.dt_s)
+        camera = LineCamera(world.client, sensor, scenario.world)
+        start = robot.state()
+        yaw = float(pb.getEulerFromQuaternion(start.quat)[2])
+        normal = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+        base0 = np.asarray(start.xyz) - spec.start.lateral_m * normal
+        left, right = [], []
+        for d in offsets_m:
+            pb.resetBasePositionAndOrientation(robot.body, (base0 + d * normal).tolist(),
+                                               start.quat, physicsClientId=world.client)
+            st = robot.state()
+            left.append(camera.luminance(*robot.frame_pose("line_camera_left", st)))
+            right.append(camera.luminance(*robot.frame_pose("line_camera_right", st)))
+        return Sweep(np.asarray(offsets_m, dtype=float), np.array(left), np.array(right))
+    finally:
+        world.close()

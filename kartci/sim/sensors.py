@@ -1,0 +1,90 @@
+"""Line-sensor cameras (rendered by PyBullet, or computed from the floor geometry) and the sonar."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from kartci._bullet import pb
+from numpy.typing import NDArray
+
+from kartci import geometry
+from kartci.sim.world import SENSED_GROUPS
+from kartci.spec.models import LineLabWorld, LineSensorSpec, SonarSpec
+
+# Eq. 5.1 of the line-tracker seed (ITU-R BT.709 luma weights).
+LUMA = np.array([0.2126, 0.7152, 0.0722])
+NEAR_M, FAR_M = 0.001, 0.05
+
+
+class LineCamera:
+    """One downward camera whose output is the mean luminance of its image (0 black, 1 white).
+
+    `geometric` samples the floor seen through each pixel and measures the ink under it exactly;
+    `rendered` asks PyBullet's TinyRenderer for the image. Both see the same light level.
+    """
+
+    def __init__(self, client: int, spec: LineSensorSpec, world: LineLabWorld) -> None:
+        self.client, self.spec, self.world = client, spec, world
+        n = spec.resolution_px
+        u = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+        uu, vv = np.meshgrid(u, u)
+        self._uv = np.stack([uu.ravel(), vv.ravel()], axis=1) * math.tan(spec.fov_rad / 2)
+        self._proj = pb.computeProjectionMatrixFOV(math.degrees(spec.fov_rad), 1.0, NEAR_M, FAR_M)
+
+    def luminance(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
+        """Mean image luminance for a camera at `pos` looking along its frame's x axis."""
+        if self.spec.mode == "rendered":
+            return self._rendered(pos, rot)
+        return self._geometric(pos, rot)
+
+    def _geometric(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
+        x_ax, y_ax, z_ax = rot[:, 0], rot[:, 1], rot[:, 2]
+        dirs = x_ax + self._uv[:, :1] * y_ax + self._uv[:, 1:] * z_ax
+        t = -pos[2] / dirs[:, 2]
+        ground = pos[:2] + t[:, None] * dirs[:, :2]
+        pixel_m = 2.0 * pos[2] * math.tan(self.spec.fov_rad / 2) / self.spec.resolution_px
+        ink = geometry.ink_coverage(self.world.course, self.world.line_width_m, ground, pixel_m)
+        return float(self.world.light_level * (1.0 - ink.mean()))
+
+    def _rendered(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
+        n = self.spec.resolution_px
+        view = pb.computeViewMatrix(pos.tolist(), (pos + 0.01 * rot[:, 0]).tolist(),
+                                    rot[:, 2].tolist())
+        img = pb.getCameraImage(n, n, view, self._proj, renderer=pb.ER_TINY_RENDERER,
+                                lightAmbientCoeff=self.world.light_level, lightDiffuseCoeff=0.0,
+                                lightSpecularCoeff=0.0, shadow=0,
+                                flags=pb.ER_NO_SEGMENTATION_MASK, physicsClientId=self.client)
+        rgb = np.asarray(img[2], dtype=np.float64).reshape(n, n, 4)[:, :, :3] / 255.0
+        return float((rgb @ LUMA).mean())
+
+
+class Sonar:
+    """HC-SR04: nearest hit within a cone, quantised to its resolution; +inf when nothing."""
+
+    def __init__(self, client: int, spec: SonarSpec) -> None:
+        self.client, self.spec = client, spec
+        half = math.atan2(spec.cone_radius_m, spec.max_range_m)
+        dirs = [np.array([1.0, 0.0, 0.0])]
+        ring = max(spec.rays - 1, 0)
+        for k in range(ring):
+            a = 2 * math.pi * k / ring
+            dirs.append(np.array([math.cos(half), math.sin(half) * math.cos(a),
+                                  math.sin(half) * math.sin(a)]))
+        self._dirs = np.array(dirs)
+
+    def range(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
+        s = self.spec
+        world_dirs = self._dirs @ rot.T
+        starts = pos + s.min_range_m * world_dirs
+        ends = pos + s.max_range_m * world_dirs
+        hits = pb.rayTestBatch(starts.tolist(), ends.tolist(), collisionFilterMask=SENSED_GROUPS,
+                              physicsClientId=self.client)
+        best = math.inf
+        span = s.max_range_m - s.min_range_m
+        for hit in hits:
+            if hit[0] >= 0:
+                best = min(best, s.min_range_m + hit[2] * span)
+        if math.isinf(best):
+            return best
+        return round(best / s.resolution_m) * s.resolution_m

@@ -1,0 +1,144 @@
+"""Load scenario YAML, resolve world/model references, apply `--set` overrides, validate."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import ValidationError
+
+from kartci.errors import SpecError
+from kartci.spec.models import Scenario
+
+
+def project_root() -> Path:
+    """The folder holding scenarios/, sims/, models/ and baselines/ (KARTCI_ROOT overrides)."""
+    env = os.environ.get("KARTCI_ROOT")
+    return Path(env) if env else Path(__file__).resolve().parents[2]
+
+
+def scenario_dir() -> Path:
+    return project_root() / "scenarios"
+
+
+def scenario_names() -> list[str]:
+    return sorted(p.stem for p in scenario_dir().glob("*.yaml"))
+
+
+def _read_yaml(path: Path) -> dict[str, Any]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SpecError(f"{path}: file not found") from None
+    except OSError as err:
+        raise SpecError(f"{path}: cannot read ({err.strerror})") from err
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" line {mark.line + 1}" if mark is not None else ""
+        problem = getattr(err, "problem", None) or "invalid YAML"
+        raise SpecError(f"{path}:{where}: {problem}") from None
+    if not isinstance(data, dict):
+        raise SpecError(f"{path}: expected a mapping of keys at the top level")
+    return data
+
+
+def scenario_path(name: str) -> Path:
+    """A scenario by name (scenarios/NAME.yaml) or by path to a YAML file."""
+    if name.endswith((".yaml", ".yml")) or "/" in name:
+        return Path(name)
+    path = scenario_dir() / f"{name}.yaml"
+    if not path.exists():
+        known = ", ".join(scenario_names()) or "none"
+        raise SpecError(f"unknown scenario '{name}' (known: {known}); see `kartci list`")
+    return path
+
+
+def _resolve_refs(data: dict[str, Any], path: Path) -> None:
+    root = project_root()
+    world = data.get("world")
+    if isinstance(world, str):
+        data["world"] = _read_yaml(root / "sims" / f"{world}.yaml")
+    agents = data.get("agents")
+    if isinstance(agents, dict):
+        for agent in agents.values():
+            if isinstance(agent, dict) and isinstance(agent.get("model"), str):
+                agent["model"] = _read_yaml(root / "models" / agent["model"] / "params.yaml")
+
+
+def apply_override(data: dict[str, Any], assignment: str) -> None:
+    """Apply one `dotted.key=value`; the value is parsed as YAML (numbers, booleans, lists)."""
+    key, sep, raw = assignment.partition("=")
+    if not sep or not key.strip():
+        raise SpecError(f"--set {assignment!r}: expected dotted.key=value")
+    parts = key.strip().split(".")
+    node: Any = data
+    for i, part in enumerate(parts[:-1]):
+        if not isinstance(node, dict):
+            raise SpecError(f"--set {key}: '{'.'.join(parts[:i])}' is not a mapping")
+        node = node.setdefault(part, {})
+    if not isinstance(node, dict):
+        raise SpecError(f"--set {key}: '{'.'.join(parts[:-1])}' is not a mapping")
+    try:
+        node[parts[-1]] = yaml.safe_load(raw)
+    except yaml.YAMLError:
+        node[parts[-1]] = raw
+
+
+def _one_line(err: ValidationError, path: Path, overrides: list[str]) -> str:
+    first = err.errors()[0]
+    loc = ".".join(str(p) for p in first["loc"] if not str(p).startswith(("function-", "tagged")))
+    loc = ".".join(p for p in loc.split(".") if p not in ("straight", "circle", "line_pid"))
+    source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
+    msg = first["msg"]
+    if first["type"] == "extra_forbidden":
+        msg = "unknown key"
+    elif first["type"] == "missing":
+        msg = "required key is missing"
+    got = first.get("input")
+    shown = "" if first["type"] in ("missing", "extra_forbidden") or isinstance(got, dict) else (
+        f" (got {json.dumps(got, default=str)[:60]})"
+    )
+    n = len(err.errors())
+    more = f" [+{n - 1} more]" if n > 1 else ""
+    return f"{path}: {loc or '<top>'}{source}: {msg}{shown}{more}"
+
+
+def load_scenario(name: str, overrides: list[str] | None = None) -> Scenario:
+    """Load and validate a scenario; every problem becomes one SpecError line."""
+    overrides = overrides or []
+    path = scenario_path(name)
+    data = _read_yaml(path)
+    data.setdefault("name", path.stem)
+    _resolve_refs(data, path)
+    for assignment in overrides:
+        apply_override(data, assignment)
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as err:
+        raise SpecError(_one_line(err, path, overrides)) from None
+
+
+def scenario_from_json(text: str) -> Scenario:
+    """Rebuild a resolved scenario from the JSON recorded in a run log."""
+    try:
+        return Scenario.model_validate_json(text)
+    except ValidationError as err:
+        raise SpecError(f"recorded scenario: {err.errors()[0]['msg']}") from None
+
+
+def json_schema() -> dict[str, Any]:
+    """JSON Schema of a scenario file; `world` and `model` may also name a file by string."""
+    schema = Scenario.model_json_schema()
+    props = schema["properties"]
+    props["world"] = {"anyOf": [{"type": "string", "description": "sims/<name>.yaml"},
+                                props["world"]]}
+    agent = schema["$defs"]["AgentSpec"]["properties"]
+    agent["model"] = {"anyOf": [{"type": "string", "description": "models/<name>/params.yaml"},
+                                agent["model"]]}
+    schema["required"] = [r for r in schema.get("required", []) if r != "name"]
+    return schema

@@ -1,0 +1,179 @@
+"""Typed, frozen scenario specs. Units are in the key names (SI, radians)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+
+class Frozen(BaseModel):
+    """Base for every spec: immutable, and unknown keys are errors, not silently ignored."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+# --- worlds -----------------------------------------------------------------------------------
+
+
+class StraightCourse(Frozen):
+    """A straight black line from `start_m` to `end_m`."""
+
+    type: Literal["straight"] = "straight"
+    start_m: tuple[float, float] = (0.0, 0.0)
+    end_m: tuple[float, float] = (2.5, 0.0)
+
+
+class CircleCourse(Frozen):
+    """A closed circular black line, driven counter-clockwise from angle `start_rad`."""
+
+    type: Literal["circle"] = "circle"
+    center_m: tuple[float, float] = (0.0, 0.0)
+    radius_m: float = Field(1.0, gt=0.05)
+    start_rad: float = -1.5707963267948966
+
+
+Course = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]
+
+
+class Box(Frozen):
+    """A static box obstacle standing on the floor."""
+
+    center_m: tuple[float, float]
+    size_m: tuple[float, float, float] = (0.1, 0.1, 0.1)
+    yaw_rad: float = 0.0
+
+
+class LineLabWorld(Frozen):
+    """White floor with one black line (seed 001, Sec. 5.2.1), plus optional obstacles."""
+
+    kind: Literal["line_lab"] = "line_lab"
+    description: str = ""
+    line_width_m: float = Field(0.014, gt=0.0, lt=0.2)
+    light_level: float = Field(
+        0.545, gt=0.0, le=1.0,
+        description="luminance of the white floor as the line cameras see it (0-1)",
+    )
+    floor_friction: float = Field(1.0, ge=0.0)
+    course: Course
+    obstacles: tuple[Box, ...] = ()
+
+
+# --- robots, sensors, controllers ----------------------------------------------------------
+
+
+class LineTrackerModel(Frozen):
+    """Differential-drive line tracker of seed 001 (annex model.sdf, Sec. 5.4)."""
+
+    kind: Literal["line_tracker"] = "line_tracker"
+    urdf: str = "line_tracker.urdf"
+    wheel_radius_m: float = 0.035
+    wheel_separation_m: float = 0.15
+    wheel_speed_limit_radps: float = 18.46
+    wheel_time_constant_s: float = Field(0.1, ge=0.0)
+    wheel_torque_limit_nm: float = Field(0.5, gt=0.0)
+    tire_friction: float = Field(1.0, ge=0.0)
+    sensor_point_x_m: float = Field(0.095, description="line-sensor midpoint ahead of base_link")
+
+
+class LineSensorSpec(Frozen):
+    """Two downward cameras averaging luminance (Eq. 5.1) over their image."""
+
+    mode: Literal["geometric", "rendered"] = "geometric"
+    fov_rad: float = Field(1.2, gt=0.05, lt=3.0)
+    resolution_px: int = Field(24, ge=4, le=256)
+    noise_std: float = Field(0.001, ge=0.0, description="luminance noise, 1 sigma (0-1 scale)")
+
+
+class SonarSpec(Frozen):
+    """HC-SR04 ultrasonic range finder (seed 001, Sec. 5.3)."""
+
+    enabled: bool = True
+    min_range_m: float = 0.02
+    max_range_m: float = 4.0
+    cone_radius_m: float = Field(1.07, description="cone radius at max range")
+    resolution_m: float = 0.003
+    rays: int = Field(9, ge=1, le=64)
+
+
+class LinePidController(Frozen):
+    """P / PI tracking controller of the seed's TestSensor.cc (Eq. 6.13, wheel-speed law)."""
+
+    type: Literal["line_pid"] = "line_pid"
+    kp: float = 50.0
+    ki: float = 0.0
+    period_s: float = Field(0.01, gt=0.0)
+    v1_mps: float = 0.1
+    stop_range_m: float = Field(0.1, description="stop when the sonar reads less than this")
+    slope_m: float = Field(0.0254, description="d = slope_m * y + offset_m (Eq. 6.13)")
+    offset_m: float = -0.000091365
+    half_track_m: float = Field(0.06, description="lever in the annex wheel-speed law")
+
+
+Controller = Annotated[LinePidController, Field(discriminator="type")]
+
+
+class Pose2D(Frozen):
+    """Start pose of the line-sensor midpoint relative to the course start, course frame."""
+
+    along_m: float = Field(0.0, ge=0.0, description="distance along the course from its start")
+    lateral_m: float = Field(0.0, description="left of the line is positive")
+    heading_rad: float = 0.0
+
+
+class AgentSpec(Frozen):
+    model: LineTrackerModel
+    controller: Controller
+    start: Pose2D = Pose2D()
+    line_sensor: LineSensorSpec = LineSensorSpec()
+    sonar: SonarSpec = SonarSpec()
+
+
+# --- scenario ---------------------------------------------------------------------------------
+
+
+class PhysicsSpec(Frozen):
+    dt_s: float = Field(0.002, gt=0.0, le=0.01)
+    odom_rate_hz: float = Field(50.0, gt=0.0)
+
+
+class MetricsSpec(Frozen):
+    transient_s: float = Field(5.0, ge=0.0, description="start-up transient excluded from errors")
+    lost_threshold_m: float = Field(0.021, gt=0.0, description="sensor range; beyond it = lost")
+    settle_band_m: float = Field(0.002, gt=0.0)
+
+
+class Criterion(Frozen):
+    """A pass criterion on one metric; any combination of bounds."""
+
+    max: float | None = None
+    min: float | None = None
+    equal: float | None = None
+
+
+class Scenario(Frozen):
+    name: str = Field(pattern=r"^[a-z0-9_]+$")
+    description: str
+    world: LineLabWorld
+    agents: dict[str, AgentSpec] = Field(min_length=1)
+    duration_s: float = Field(gt=0.0, le=3600.0)
+    seed: int = Field(0, ge=0)
+    physics: PhysicsSpec = PhysicsSpec()
+    metrics: MetricsSpec = MetricsSpec()
+    criteria: dict[str, Criterion] = {}
+    tags: tuple[str, ...] = ()
+
+    @model_validator(mode="after")
+    def _rates_are_multiples_of_the_physics_step(self) -> Scenario:
+        """Sensor and controller rates must be whole multiples of the physics step (sim time only)."""
+        dt = self.physics.dt_s
+        periods = {"physics.odom_rate_hz": 1.0 / self.physics.odom_rate_hz}
+        for name, agent in self.agents.items():
+            periods[f"agents.{name}.controller.period_s"] = agent.controller.period_s
+        for key, period in periods.items():
+            ratio = period / dt
+            if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+                raise ValueError(
+                    f"{key}: period {period:g} s is not a whole multiple of physics.dt_s {dt:g} s"
+                )
+        return self

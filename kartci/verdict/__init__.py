@@ -1,0 +1,17 @@
+"""Verdicts: baselines (load, compare, update) and pass criteria."""
+
+from kartci.verdict.baseline import (
+    Change,
+    CriterionResult,
+    MetricVerdict,
+    Status,
+    check_criteria,
+    compare,
+    load,
+    update,
+    worst,
+    write_json_atomic,
+)
+
+__all__ = ["Change", "CriterionResult", "MetricVerdict", "Status", "check_criteria", "compare",
+           "load", "update", "worst", "write_json_atomic"]

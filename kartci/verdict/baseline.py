@@ -1,0 +1,198 @@
+"""Baselines: the stored metrics a scenario is judged against, and the comparison rules.
+
+Only `update` writes a baseline file, atomically; a run never does.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+from typing import Any
+
+from kartci.errors import BaselineError
+from kartci.metrics.base import DEFS, Direction, MetricDef
+from kartci.spec.models import Criterion
+
+
+class Status(str, Enum):
+    PASS = "pass"
+    IMPROVED = "improved"
+    REGRESSED = "regressed"
+    FAILED = "failed"  # a pass criterion of the scenario is not met
+    NEW = "new"  # no baseline value yet
+    MISSING = "missing"  # in the baseline, not in the run
+    ERROR = "error"  # the run or the metric could not be computed
+
+    @property
+    def bad(self) -> bool:
+        return self in (Status.REGRESSED, Status.FAILED, Status.MISSING, Status.ERROR)
+
+
+SEVERITY = [Status.ERROR, Status.FAILED, Status.REGRESSED, Status.MISSING, Status.NEW,
+            Status.IMPROVED, Status.PASS]
+
+
+def worst(statuses: list[Status]) -> Status:
+    return min(statuses, key=SEVERITY.index, default=Status.PASS)
+
+
+@dataclass(frozen=True)
+class MetricVerdict:
+    name: str
+    value: float | None
+    unit: str
+    baseline: float | None
+    tolerance: float | None
+    direction: Direction
+    status: Status
+
+    @property
+    def delta(self) -> float | None:
+        if self.value is None or self.baseline is None:
+            return None
+        return self.value - self.baseline
+
+
+@dataclass(frozen=True)
+class CriterionResult:
+    name: str
+    value: float | None
+    bound: str
+    ok: bool
+
+
+def _num(x: Any) -> float | None:
+    return None if x is None or (isinstance(x, float) and math.isnan(x)) else float(x)
+
+
+def _definition(name: str) -> MetricDef | None:
+    return DEFS.get(name.rsplit(".", 1)[-1])
+
+
+def load(path: Path) -> dict[str, dict[str, Any]] | None:
+    """The baseline's metrics by name, or None when there is no baseline file."""
+    if not path.exists():
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        metrics = data["metrics"]
+        for name, entry in metrics.items():
+            Direction(entry["direction"])
+            if not isinstance(entry.get("tolerance"), int | float):
+                raise ValueError(f"{name}: tolerance must be a number")
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise BaselineError(f"{path}: malformed baseline ({err})") from None
+    return dict(metrics)
+
+
+def judge(value: float | None, unit: str, name: str,
+          entry: dict[str, Any] | None) -> MetricVerdict:
+    d = _definition(name)
+    direction = Direction(entry["direction"]) if entry else (d.direction if d else
+                                                             Direction.EQUAL)
+    if entry is None:
+        return MetricVerdict(name, value, unit, None, None, direction, Status.NEW)
+    base, tol = _num(entry.get("value")), float(entry["tolerance"])
+    if value is None and base is None:
+        status = Status.PASS
+    elif value is None or base is None:
+        status = Status.REGRESSED if value is None else Status.IMPROVED
+        if direction is Direction.EQUAL:
+            status = Status.REGRESSED
+    else:
+        delta = value - base
+        sign = {Direction.LOWER: 1.0, Direction.HIGHER: -1.0, Direction.EQUAL: 0.0}[direction]
+        if direction is Direction.EQUAL:
+            status = Status.REGRESSED if abs(delta) > tol else Status.PASS
+        elif sign * delta > tol:
+            status = Status.REGRESSED
+        elif sign * delta < -tol:
+            status = Status.IMPROVED
+        else:
+            status = Status.PASS
+    return MetricVerdict(name, value, unit, base, tol, direction, status)
+
+
+def compare(metrics: dict[str, dict[str, Any]],
+            baseline: dict[str, dict[str, Any]] | None) -> list[MetricVerdict]:
+    """One verdict per metric of the run, plus MISSING for baseline metrics the run lacks."""
+    out = [judge(_num(m.get("value")), str(m.get("unit", "")), name,
+                 None if baseline is None else baseline.get(name))
+           for name, m in sorted(metrics.items())]
+    for name, entry in sorted((baseline or {}).items()):
+        if name not in metrics:
+            out.append(MetricVerdict(name, None, str(entry.get("unit", "")), _num(entry.get(
+                "value")), float(entry["tolerance"]), Direction(entry["direction"]),
+                Status.MISSING))
+    return out
+
+
+def check_criteria(metrics: dict[str, dict[str, Any]],
+                   criteria: dict[str, Criterion]) -> list[CriterionResult]:
+    out = []
+    for name, c in sorted(criteria.items()):
+        value = _num(metrics.get(name, {}).get("value"))
+        parts, ok = [], value is not None
+        if c.max is not None:
+            parts.append(f"<= {c.max:g}")
+            ok = ok and value is not None and value <= c.max
+        if c.min is not None:
+            parts.append(f">= {c.min:g}")
+            ok = ok and value is not None and value >= c.min
+        if c.equal is not None:
+            parts.append(f"== {c.equal:g}")
+            ok = ok and value is not None and math.isclose(value, c.equal, abs_tol=1e-12)
+        out.append(CriterionResult(name, value, " and ".join(parts), bool(ok)))
+    return out
+
+
+def write_json_atomic(path: Path, data: Any) -> None:
+    """Write JSON via a temporary file and a rename: a crash never leaves half a file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            json.dump(data, f, indent=2, sort_keys=True, allow_nan=False)
+            f.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+@dataclass(frozen=True)
+class Change:
+    metric: str
+    old: float | None
+    new: float | None
+    kind: str  # "added", "changed", "removed", "unchanged"
+
+
+def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]]) -> list[Change]:
+    """Write a scenario's baseline from a run's metrics, keeping hand-set tolerances."""
+    old = load(path) or {}
+    new: dict[str, dict[str, Any]] = {}
+    changes = []
+    for name, m in sorted(metrics.items()):
+        value = _num(m.get("value"))
+        prev = old.get(name)
+        d = _definition(name)
+        if prev is not None:
+            tol, direction = prev["tolerance"], prev["direction"]
+        else:
+            tol = d.default_tolerance(value if value is not None else math.nan) if d else 0.0
+            direction = (d.direction if d else Direction.EQUAL).value
+        new[name] = {"value": value, "unit": m.get("unit", ""), "tolerance": tol,
+                     "direction": direction}
+        old_value = _num(prev.get("value")) if prev else None
+        kind = "added" if prev is None else ("unchanged" if old_value == value else "changed")
+        changes.append(Change(name, old_value, value, kind))
+    changes += [Change(n, _num(e.get("value")), None, "removed") for n, e in old.items()
+                if n not in new]
+    write_json_atomic(path, {"scenario": scenario, "metrics": new})
+    return changes
