@@ -22,8 +22,9 @@ app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_
                   help="Run robot scenarios headless, record them, score them against baselines.")
 baseline_app = typer.Typer(help="Inspect and update stored baselines.", no_args_is_help=True)
 app.add_typer(baseline_app, name="baseline")
-out_console = Console()
-err_console = Console(stderr=True)
+# In CI logs (no terminal) rich would wrap at 80 columns and cut metric names: use 160.
+out_console = Console(width=None if sys.stdout.isatty() else 160)
+err_console = Console(stderr=True, width=None if sys.stderr.isatty() else 160)
 
 SetOpt = Annotated[list[str] | None, typer.Option(
     "--set", help="Override a scenario value: dotted.key=value (repeatable).")]

@@ -60,7 +60,8 @@ def offset_m(course: Course, xy: Array) -> Array:
     if isinstance(course, StraightCourse):
         return _straight_frame(course, xy)[1]
     rel = xy - np.asarray(course.center_m)
-    return course.radius_m - np.hypot(rel[..., 0], rel[..., 1])
+    out: Array = course.radius_m - np.hypot(rel[..., 0], rel[..., 1])
+    return out
 
 
 def progress_m(course: Course, xy: Array) -> Array:
@@ -72,7 +73,8 @@ def progress_m(course: Course, xy: Array) -> Array:
     ang = np.unwrap(np.arctan2(rel[..., 1], rel[..., 0]) - course.start_rad)
     if ang.size:
         ang = ang - 2 * np.pi * np.round(ang[0] / (2 * np.pi))
-    return ang * course.radius_m
+    out: Array = ang * course.radius_m
+    return out
 
 
 def ink_coverage(course: Course, width_m: float, xy: Array, pixel_m: float) -> Array:

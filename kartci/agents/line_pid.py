@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
-from typing import Any
 
 from kartci.agents.base import Outbox
 from kartci.logs.types import header, msg
@@ -20,7 +20,7 @@ class LinePid:
     the wheels stop while the sonar reads less than `stop_range_m`.
     """
 
-    inputs = ("line_sensor", "sonar")
+    inputs: tuple[str, ...] = ("line_sensor", "sonar")
 
     def __init__(self, spec: LinePidController, model: LineTrackerModel) -> None:
         self.spec, self.model = spec, model

@@ -49,7 +49,7 @@ class McapLogWriter:
                                  sequence=seq)
 
     def close(self, ok: bool = True) -> None:
-        self._writer.finish()
+        self._writer.finish()  # type: ignore[no-untyped-call]
         self._file.close()
         if ok:
             os.replace(self._tmp, self.path)

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 from typing import Any
 
 
-class Direction(str, Enum):
+class Direction(StrEnum):
     LOWER = "lower"  # lower is better
     HIGHER = "higher"  # higher is better
     EQUAL = "equal"  # must equal the baseline (within tolerance)

@@ -48,4 +48,4 @@ def write_all(results: list[ScenarioResult], out: Path) -> dict[str, Path]:
     return paths
 
 
-__all__ = ["report_html", "junit_xml", "summary_json", "summary_md", "write_all"]
+__all__ = ["junit_xml", "report_html", "summary_json", "summary_md", "write_all"]

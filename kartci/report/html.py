@@ -6,9 +6,9 @@ import html
 from datetime import UTC, datetime
 
 from kartci.report import plots as figs
+from kartci.report.markdown import VERDICT_WORD
 from kartci.report.tables import MARK, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code
-from kartci.report.markdown import VERDICT_WORD
 
 CSS = """
 body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}

@@ -7,14 +7,15 @@ import io
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
 
-from kartci.results import Plots  # noqa: E402
+from kartci.results import Plots
 
 plt.rcParams.update({"svg.hashsalt": "kartci", "figure.dpi": 96, "font.size": 9})
 
 
-def _svg(fig: plt.Figure) -> str:
+def _svg(fig: Figure) -> str:
     buf = io.StringIO()
     fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
     plt.close(fig)

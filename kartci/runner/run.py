@@ -57,7 +57,9 @@ def score(folder: Path) -> dict[str, Any]:
 
 def plots(folder: Path, scenario: Scenario) -> Plots:
     t = tables(folder / LOG_NAME)
-    tracks, wheels, commands = {}, {}, {}
+    tracks: dict[str, pd.DataFrame] = {}
+    wheels: dict[str, pd.DataFrame] = {}
+    commands: dict[str, pd.DataFrame] = {}
     for agent in scenario.agents:
         odom = t.get(f"/{agent}/odom")
         if odom is not None:
@@ -104,8 +106,7 @@ def run_suite(names: list[str], overrides: list[str], out: Path, baselines: Path
     results = []
     for spec in specs:
         try:
-            run_one(spec, out, None if on_progress is None else
-                    (lambda t, n=spec.name: on_progress(n, t)))
+            run_one(spec, out, _bind(on_progress, spec.name))
             result = evaluate(out / spec.name, baselines)
         except KartciError as err:
             result = ScenarioResult(spec.name, spec.description, error=str(err))
@@ -116,6 +117,13 @@ def run_suite(names: list[str], overrides: list[str], out: Path, baselines: Path
         if on_done is not None:
             on_done(spec.name, result)
     return results
+
+
+def _bind(cb: Callable[[str, float], None] | None,
+          name: str) -> Callable[[float], None] | None:
+    if cb is None:
+        return None
+    return lambda t: cb(name, t)
 
 
 def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:

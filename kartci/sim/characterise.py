@@ -25,7 +25,8 @@ class Sweep:
 
     @property
     def difference(self) -> np.ndarray:
-        return self.left - self.right
+        out: np.ndarray = self.left - self.right
+        return out
 
     def fit(self, half_range_m: float = 0.008) -> tuple[float, float, float]:
         """Least-squares line y = slope d + intercept over |d| <= half_range; and its R^2."""

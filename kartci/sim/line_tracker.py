@@ -7,9 +7,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from kartci._bullet import pb, quiet_c_output
 
 from kartci import geometry
+from kartci._bullet import pb, quiet_c_output
 from kartci.sim.urdf import fixed_frames
 from kartci.spec.models import AgentSpec, LineLabWorld
 

@@ -113,7 +113,8 @@ def simulate(scenario: Scenario, log_path: Path,
                         _publish_state(r, t_ns, put)
                     if k % r.ctrl_every == 0:
                         _control(r, t_ns, put, rng)
-                if k % odom_every == 0 and end_m < math.inf and _past_end(robots, course, end_m):
+                if (k % odom_every == 0 and isinstance(course, StraightCourse)
+                        and _past_end(robots, course, end_m)):
                     finished = True
                     break
                 if k == steps:
@@ -168,11 +169,9 @@ def _publish_state(r: _Robot, t_ns: int, put: Callable[[str, Any, int], None]) -
 def _control(r: _Robot, t_ns: int, put: Callable[[str, Any, int], None],
              rng: np.random.Generator) -> None:
     ns = r.name
-    lum = []
     st = r.body.state()
-    for side in ("left", "right"):
-        pos, rot = r.body.frame_pose(f"line_camera_{side}", st)
-        lum.append(r.camera.luminance(pos, rot) + r.noise_std * float(rng.standard_normal()))
+    poses = [r.body.frame_pose(f"line_camera_{side}", st) for side in ("left", "right")]
+    lum = [v + r.noise_std * float(rng.standard_normal()) for v in r.camera.luminances(poses)]
     line = msg("kartci_msgs/msg/LineSensor", header=header(t_ns, f"{ns}/line_sensor"),
                left=lum[0], right=lum[1])
     put(f"/{ns}/line_sensor", line, t_ns)

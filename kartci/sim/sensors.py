@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from kartci._bullet import pb
 from numpy.typing import NDArray
 
 from kartci import geometry
+from kartci._bullet import pb
 from kartci.sim.world import SENSED_GROUPS
 from kartci.spec.models import LineLabWorld, LineSensorSpec, SonarSpec
 
@@ -29,23 +29,32 @@ class LineCamera:
         n = spec.resolution_px
         u = (np.arange(n) + 0.5) / n * 2.0 - 1.0
         uu, vv = np.meshgrid(u, u)
-        self._uv = np.stack([uu.ravel(), vv.ravel()], axis=1) * math.tan(spec.fov_rad / 2)
+        self._tan_half = math.tan(spec.fov_rad / 2)
+        self._uv = np.stack([uu.ravel(), vv.ravel()], axis=1) * self._tan_half
         self._proj = pb.computeProjectionMatrixFOV(math.degrees(spec.fov_rad), 1.0, NEAR_M, FAR_M)
 
     def luminance(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
         """Mean image luminance for a camera at `pos` looking along its frame's x axis."""
-        if self.spec.mode == "rendered":
-            return self._rendered(pos, rot)
-        return self._geometric(pos, rot)
+        return self.luminances([(pos, rot)])[0]
 
-    def _geometric(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
-        x_ax, y_ax, z_ax = rot[:, 0], rot[:, 1], rot[:, 2]
-        dirs = x_ax + self._uv[:, :1] * y_ax + self._uv[:, 1:] * z_ax
-        t = -pos[2] / dirs[:, 2]
-        ground = pos[:2] + t[:, None] * dirs[:, :2]
-        pixel_m = 2.0 * pos[2] * math.tan(self.spec.fov_rad / 2) / self.spec.resolution_px
-        ink = geometry.ink_coverage(self.world.course, self.world.line_width_m, ground, pixel_m)
-        return float(self.world.light_level * (1.0 - ink.mean()))
+    def luminances(self, poses: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
+                   ) -> list[float]:
+        """Several cameras of the same kind at once (one numpy pass for the geometric mode)."""
+        if self.spec.mode == "rendered":
+            return [self._rendered(pos, rot) for pos, rot in poses]
+        return self._geometric(poses)
+
+    def _geometric(self, poses: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
+                   ) -> list[float]:
+        grounds, pixel = [], 0.0
+        for pos, rot in poses:
+            dirs = self._uv @ rot[:, 1:].T + rot[:, 0]  # one ray per pixel, world frame
+            grounds.append(pos[:2] - (pos[2] / dirs[:, 2])[:, None] * dirs[:, :2])
+            pixel = max(pixel, 2.0 * pos[2] * self._tan_half / self.spec.resolution_px)
+        ink = geometry.ink_coverage(self.world.course, self.world.line_width_m,
+                                    np.concatenate(grounds), pixel)
+        means = ink.reshape(len(poses), -1).mean(axis=1)
+        return [float(self.world.light_level * (1.0 - m)) for m in means]
 
     def _rendered(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
         n = self.spec.resolution_px

@@ -39,12 +39,13 @@ def fixed_frames(path: Path, root: str = "base_link") -> dict[str, tuple[NDArray
         rpy = np.fromstring(origin.get("rpy", "0 0 0") if origin is not None else "0 0 0", sep=" ")
         children.setdefault(parent.get("link", ""), []).append(
             (child.get("link", ""), xyz, rpy_matrix(*rpy)))
+    frames: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]]
     frames = {root: (np.zeros(3), np.eye(3))}
     stack = [root]
     while stack:
-        name = stack.pop()
-        pos, rot = frames[name]
-        for child, xyz, r in children.get(name, []):
-            frames[child] = (pos + rot @ xyz, rot @ r)
-            stack.append(child)
+        link = stack.pop()
+        pos, rot = frames[link]
+        for child_link, xyz, r in children.get(link, []):
+            frames[child_link] = (pos + rot @ xyz, rot @ r)
+            stack.append(child_link)
     return frames

@@ -165,7 +165,7 @@ class Scenario(Frozen):
 
     @model_validator(mode="after")
     def _rates_are_multiples_of_the_physics_step(self) -> Scenario:
-        """Sensor and controller rates must be whole multiples of the physics step (sim time only)."""
+        """Controller and sensor periods must be whole multiples of the physics step."""
         dt = self.physics.dt_s
         periods = {"physics.odom_rate_hz": 1.0 / self.physics.odom_rate_hz}
         for name, agent in self.agents.items():

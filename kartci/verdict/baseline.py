@@ -10,7 +10,7 @@ import math
 import os
 import tempfile
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +19,7 @@ from kartci.metrics.base import DEFS, Direction, MetricDef
 from kartci.spec.models import Criterion
 
 
-class Status(str, Enum):
+class Status(StrEnum):
     PASS = "pass"
     IMPROVED = "improved"
     REGRESSED = "regressed"

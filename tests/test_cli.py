@@ -1,0 +1,141 @@
+"""The command line as a user meets it: exit codes, one-line errors, files written."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+SHORT = ["--set", "duration_s=6", "--set", "criteria={}", "--set", "metrics.transient_s=2"]
+
+
+def kartci(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "kartci.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def _one_clean_line(p: subprocess.CompletedProcess[str]) -> str:
+    assert p.returncode == 2, p.stderr
+    assert "Traceback" not in p.stderr + p.stdout
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, p.stderr
+    return lines[0]
+
+
+def test_help_on_every_command() -> None:
+    for cmd in ([], ["list"], ["show"], ["run"], ["report"], ["schema"], ["characterise"],
+                ["baseline"], ["baseline", "update"]):
+        p = kartci(*cmd, "--help")
+        assert p.returncode == 0, (cmd, p.stderr)
+        assert "Usage" in p.stdout
+
+
+def test_missing_scenario(tmp_path: Path) -> None:
+    line = _one_clean_line(kartci("run", "no_such_scenario", "--out", tmp_path))
+    assert "unknown scenario 'no_such_scenario'" in line
+
+
+def test_unknown_set_key(tmp_path: Path) -> None:
+    line = _one_clean_line(kartci("run", "line_straight", "--set", "agents.lt0.foo=1",
+                                  "--out", tmp_path))
+    assert "agents.lt0.foo" in line and "unknown key" in line
+
+
+def test_malformed_scenario_file(tmp_path: Path) -> None:
+    bad = tmp_path / "broken.yaml"
+    bad.write_text("description: [oops\n")
+    line = _one_clean_line(kartci("run", bad, "--out", tmp_path / "out"))
+    assert "broken.yaml" in line
+
+
+def test_run_twice_gives_byte_identical_metrics(tmp_path: Path) -> None:
+    """Same scenario and seed, two processes: identical metrics.json, byte for byte."""
+    base = tmp_path / "b"
+    for out in ("a", "b2"):
+        p = kartci("run", "line_straight", *SHORT, "--out", tmp_path / out, "--baselines", base)
+        assert p.returncode == 0, p.stderr
+    a = (tmp_path / "a" / "line_straight" / "metrics.json").read_bytes()
+    b = (tmp_path / "b2" / "line_straight" / "metrics.json").read_bytes()
+    assert a == b
+    other = kartci("run", "line_straight", *SHORT, "--set", "seed=2", "--out", tmp_path / "c",
+                   "--baselines", base)
+    assert other.returncode == 0
+    c = (tmp_path / "c" / "line_straight" / "metrics.json").read_bytes()
+    assert c != a  # the seed drives the sensor noise
+
+
+def test_baseline_cycle_and_a_tightened_baseline_fails(tmp_path: Path) -> None:
+    out, base = tmp_path / "out", tmp_path / "baselines"
+    assert kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base
+                  ).returncode == 0
+    assert not base.exists() or not any(base.iterdir())  # a run never writes baselines
+    upd = kartci("baseline", "update", out, "--baselines", base)
+    assert upd.returncode == 0, upd.stderr
+    assert "added" in upd.stdout
+    stored = json.loads((base / "line_straight.json").read_text())
+    assert stored["metrics"]["cross_track_rms_m"]["direction"] == "lower"
+
+    again = kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base)
+    assert again.returncode == 0, again.stdout
+    # tighten: pretend the baseline was 10x better with a tiny tolerance
+    entry = stored["metrics"]["cross_track_rms_m"]
+    entry["value"], entry["tolerance"] = entry["value"] / 10, 1e-9
+    (base / "line_straight.json").write_text(json.dumps(stored))
+    before = (base / "line_straight.json").read_text()
+    worse = kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base)
+    assert worse.returncode == 1
+    assert "cross_track_rms_m" in worse.stdout and "regressed" in worse.stdout
+    assert (base / "line_straight.json").read_text() == before  # untouched by the run
+    html = (out / "report.html").read_text()
+    assert "cross_track_rms_m" in html and 'class="regressed"' in html and "<svg" in html
+    md = (out / "summary.md").read_text()
+    assert "`cross_track_rms_m`" in md and "regressed" in md
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["exit_code"] == 1
+    assert summary["scenarios"]["line_straight"]["metrics"]["cross_track_rms_m"]["status"] == (
+        "regressed")
+    suite = ET.parse(out / "junit.xml").getroot()
+    assert suite.get("tests") == "1" and suite.get("failures") == "1"
+    assert "cross_track_rms_m" in (suite.find("testcase/failure").get("message") or "")  # type: ignore[union-attr]
+
+
+def test_report_rebuilds_from_logs_alone(tmp_path: Path) -> None:
+    out, base = tmp_path / "out", tmp_path / "baselines"
+    assert kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base
+                  ).returncode == 0
+    metrics = (out / "line_straight" / "metrics.json").read_bytes()
+    for name in ("metrics.json",):
+        (out / "line_straight" / name).unlink()
+    for name in ("report.html", "summary.md", "summary.json", "junit.xml"):
+        (out / name).unlink()
+    p = kartci("report", out, "--baselines", base)
+    assert p.returncode == 0, p.stderr
+    assert (out / "line_straight" / "metrics.json").read_bytes() == metrics
+    for name in ("report.html", "summary.md", "summary.json", "junit.xml"):
+        assert (out / name).exists()
+
+
+def test_report_on_a_folder_without_logs(tmp_path: Path) -> None:
+    line = _one_clean_line(kartci("report", tmp_path))
+    assert "no <scenario>/run.mcap logs found" in line
+
+
+@pytest.mark.parametrize("cmd", [["show", "line_circle", "--set", "seed=3"], ["schema"]])
+def test_show_and_schema_print_json(cmd: list[str]) -> None:
+    p = kartci(*cmd)
+    assert p.returncode == 0, p.stderr
+    doc = json.loads(p.stdout)
+    assert doc.get("seed", 3) == 3
+
+
+def test_characterise_writes_csv_and_plot(tmp_path: Path) -> None:
+    p = kartci("characterise", "--out", tmp_path, "--fovs", "0.75,1.2", "--step-m", "0.001")
+    assert p.returncode == 0, p.stderr
+    assert "geometric: y = " in p.stdout
+    header = (tmp_path / "sweep.csv").read_text().splitlines()[0]
+    assert header.startswith("offset_m,left,right,difference")
+    assert "<svg" in (tmp_path / "characterisation.html").read_text()

@@ -1,0 +1,117 @@
+"""Round trips through real files: kartci's writer, rosbags' and mcap's readers, real bags."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from rosbags.highlevel import AnyReader
+
+from kartci.errors import LogError
+from kartci.logs import McapLogWriter, header, messages, msg, tables, topics, typestore
+
+
+def _write_sample(path: Path) -> None:
+    with McapLogWriter(path) as log:
+        for k in range(5):
+            t = k * 10_000_000
+            log.write("/lt0/line_sensor", msg("kartci_msgs/msg/LineSensor",
+                                              header=header(t, "lt0/line_sensor"),
+                                              left=0.1 * k, right=0.5), t)
+            log.write("/lt0/sonar", msg("sensor_msgs/msg/Range", header=header(t, "lt0/sonar"),
+                                        radiation_type=0, field_of_view=0.5, min_range=0.02,
+                                        max_range=4.0, range=1.0 + k), t)
+
+
+def test_mcap_round_trip_through_rosbags_and_mcap(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    _write_sample(path)
+    assert not (tmp_path / "run.mcap.partial").exists()
+    with AnyReader([path], default_typestore=typestore()) as reader:
+        got = [(c.topic, t, reader.deserialize(raw, c.msgtype))
+               for c, t, raw in reader.messages()]
+    assert len(got) == 10
+    sensor = [m for topic, _, m in got if topic == "/lt0/line_sensor"]
+    assert [m.left for m in sensor] == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4])  # type: ignore[attr-defined]
+    with path.open("rb") as f:
+        reader2 = make_reader(f)
+        summary = reader2.get_summary()
+        assert summary is not None
+        assert {s.name for s in summary.schemas.values()} == {"kartci_msgs/msg/LineSensor",
+                                                              "sensor_msgs/msg/Range"}
+        assert {s.encoding for s in summary.schemas.values()} == {"ros2msg"}
+        assert summary.statistics is not None and summary.statistics.message_count == 10
+    df = tables(path)["/lt0/sonar"]
+    assert df["range"].tolist() == pytest.approx([1.0, 2.0, 3.0, 4.0, 5.0])
+    assert df["t"].tolist() == pytest.approx([0.0, 0.01, 0.02, 0.03, 0.04])
+
+
+def test_failed_write_leaves_no_log(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    with pytest.raises(RuntimeError), McapLogWriter(path):
+        raise RuntimeError("controller crashed")
+    assert not path.exists()
+    assert not (tmp_path / "run.mcap.partial").exists()
+
+
+def test_truncated_mcap_is_one_clear_error(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    _write_sample(path)
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.raises(LogError, match=r"cut\.mcap: "):
+        tables(cut)
+
+
+def test_missing_log(tmp_path: Path) -> None:
+    with pytest.raises(LogError, match="no such file"):
+        topics(tmp_path / "nope.bag")
+
+
+def test_real_ros1_bag_imu_and_odometry(bags: Path) -> None:
+    t = tables(bags / "jackal_imu_odom.bag", ["/jackal_velocity_controller/odom"])
+    odom = t["/jackal_velocity_controller/odom"]
+    assert len(odom) == 3060
+    dt = np.diff(odom["t"].to_numpy())
+    assert np.median(dt) == pytest.approx(0.02, rel=0.05)  # a 50 Hz controller, real jitter
+    assert dt.min() >= 0
+
+
+def test_real_bare_mcap_twist_stamped(bags: Path) -> None:
+    info = {i.topic: i for i in topics(bags / "cmd_vel_twiststamped.mcap")}
+    assert info["/vehicle/cmd_vel"].msgtype == "geometry_msgs/msg/TwistStamped"
+    assert info["/vehicle/cmd_vel"].count == 51
+
+
+def test_real_rosbag2_mcap_directory(bags: Path) -> None:
+    info = {i.topic: i for i in topics(bags / "rosbag2_talker_mcap")}
+    assert any(i.msgtype == "std_msgs/msg/String" for i in info.values())
+    assert any(i.count == 0 for i in info.values())
+
+
+def test_ros1_bag_without_messages(bags: Path) -> None:
+    assert all(i.count == 0 for i in topics(bags / "ros1_no_messages.bag"))
+
+
+def test_types_defined_only_inside_the_bag(bags: Path) -> None:
+    """test_msgs is in no standard type store; the rosbag2 sqlite file carries the definitions."""
+    got = [(topic, m) for topic, _, m in messages(bags / "rosbag2_cdr_test_db3")]
+    assert {topic for topic, _ in got} == {"/array_topic", "/test_topic"}
+    assert [m.__msgtype__ for t, m in got if t == "/test_topic"] == ["test_msgs/msg/BasicTypes"] * 3
+
+
+def test_unknown_message_type_is_one_clear_error(tmp_path: Path) -> None:
+    from mcap.writer import Writer
+
+    path = tmp_path / "unknown.mcap"
+    with path.open("wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2")
+        sid = w.register_schema("foo_msgs/msg/Bar", "ros2msg", b"foo_msgs/Baz inner")
+        cid = w.register_channel("/foo", "cdr", sid)
+        w.add_message(cid, log_time=0, data=b"\x00\x01\x00\x00\x05", publish_time=0)
+        w.finish()  # type: ignore[no-untyped-call]
+    with pytest.raises(LogError, match=r"unknown\.mcap: "):
+        list(messages(path))

@@ -1,0 +1,50 @@
+"""The seed's closed-loop results, reproduced by runs (seed 001, Sec. 7)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from kartci.metrics import Metric, compute
+from kartci.sim import simulate
+from kartci.spec import load_scenario
+
+
+def _run(tmp_path: Path, name: str, *sets: str) -> dict[str, Metric]:
+    log = tmp_path / f"{name}.mcap"
+    simulate(load_scenario(name, list(sets)), log)
+    return compute(log)[1]
+
+
+def test_straight_line_converges_from_5_mm_off(tmp_path: Path) -> None:
+    m = _run(tmp_path, "line_straight")
+    assert m["line_lost"].value == 0
+    assert m["completion"].value == pytest.approx(1.0)
+    assert m["settle_time_s"].value < 5.0  # inside +-1 mm within a few seconds
+    assert m["cross_track_max_m"].value < 0.001
+    assert m["mean_speed_mps"].value == pytest.approx(0.1, rel=0.05)
+
+
+def test_circle_at_10_ms_stays_within_8_mm(tmp_path: Path) -> None:
+    m = _run(tmp_path, "line_circle")
+    assert m["line_lost"].value == 0
+    assert m["completion"].value > 0.95
+    assert m["cross_track_max_m"].value < 0.008
+
+
+def test_gain_too_low_for_the_curve_loses_the_line(tmp_path: Path) -> None:
+    """A P controller needs an offset to turn: Kp 20 cannot hold a 0.5 m circle in range."""
+    m = _run(tmp_path, "line_circle", "agents.lt0.controller.kp=20", "duration_s=15")
+    assert m["line_lost"].value == 1
+    assert m["line_lost"].extra["time_s"] < 15
+    assert m["completion"].value < 0.5
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "seed Sec. 7.2 reports the circle unstable at ts 0.06 s; in this model the loop's bandwidth "
+    "(~2.5 rad/s) is far below 1/ts, so 0.06 s holds the circle like 0.01 s does. Known gap, "
+    "see the issue notes; strict so that a change which reproduces it is noticed."))
+def test_circle_at_60_ms_leaves_the_band_as_the_seed_reports(tmp_path: Path) -> None:
+    m = _run(tmp_path, "line_circle", "agents.lt0.controller.period_s=0.06")
+    assert m["line_lost"].value == 1 or m["cross_track_max_m"].value > 0.008

@@ -1,0 +1,67 @@
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from kartci.errors import SpecError
+from kartci.spec import json_schema, load_scenario, scenario_names
+
+
+@pytest.mark.parametrize("name", scenario_names())
+def test_every_scenario_validates(name: str) -> None:
+    spec = load_scenario(name)
+    assert spec.name == name
+    assert spec.description
+    assert spec.agents
+
+
+def test_set_overrides_any_value() -> None:
+    spec = load_scenario("line_circle", ["agents.lt0.controller.period_s=0.06",
+                                         "agents.lt0.controller.kp=20", "seed=7",
+                                         "world.course.radius_m=0.8"])
+    ctrl = spec.agents["lt0"].controller
+    assert (ctrl.period_s, ctrl.kp, spec.seed) == (0.06, 20.0, 7)
+    assert spec.world.course.radius_m == 0.8  # type: ignore[union-attr]
+
+
+def test_unknown_set_key_names_the_key() -> None:
+    with pytest.raises(SpecError, match=r"agents\.lt0\.controller\.kpp.*unknown key"):
+        load_scenario("line_straight", ["agents.lt0.controller.kpp=3"])
+
+
+def test_bad_value_names_key_and_expectation() -> None:
+    with pytest.raises(SpecError, match=r"controller\.kp \(from --set\): Input should be a "
+                                        r"valid number.*\"fast\""):
+        load_scenario("line_straight", ["agents.lt0.controller.kp=fast"])
+
+
+def test_period_must_be_a_multiple_of_the_physics_step() -> None:
+    with pytest.raises(SpecError, match=r"not a whole multiple of physics\.dt_s"):
+        load_scenario("line_straight", ["agents.lt0.controller.period_s=0.0031"])
+
+
+def test_missing_scenario_lists_known_ones() -> None:
+    with pytest.raises(SpecError, match=r"unknown scenario 'nope'.*line_straight"):
+        load_scenario("nope")
+
+
+def test_malformed_yaml_names_file_and_line(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("description: x\nagents: [unclosed\n")
+    with pytest.raises(SpecError, match=r"bad\.yaml: line \d+"):
+        load_scenario(str(bad))
+
+
+def test_missing_required_key(tmp_path: Path) -> None:
+    bad = tmp_path / "nodur.yaml"
+    bad.write_text("description: x\nworld: line_lab/straight\nagents:\n  lt0:\n"
+                   "    model: line_tracker\n    controller: {type: line_pid}\n")
+    with pytest.raises(SpecError, match=r"nodur\.yaml: duration_s: required key is missing"):
+        load_scenario(str(bad))
+
+
+def test_schema_describes_scenarios() -> None:
+    schema = json_schema()
+    assert {"world", "agents", "duration_s", "seed"} <= set(schema["properties"])
+    assert "anyOf" in schema["properties"]["world"]
