@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from kartci.errors import LogError
 from kartci.logs import tables
@@ -11,17 +13,17 @@ from kartci.metrics.line import line_metrics, sensor_track
 from kartci.spec import Scenario, scenario_from_json
 
 
-def recorded_scenario(log_tables: dict[str, object], path: Path) -> Scenario:
+def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
     table = log_tables.get("/kartci/scenario")
     if table is None or getattr(table, "empty", True):
         raise LogError(f"{path}: no /kartci/scenario message; not a kartci run log")
-    return scenario_from_json(str(table["data"].iloc[0]))  # type: ignore[index]
+    return scenario_from_json(str(table["data"].iloc[0]))
 
 
 def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
     """All metrics of a run log, keyed by name (single agent) or `agent.name` (several)."""
     log_tables = tables(log_path)
-    scenario = recorded_scenario(log_tables, log_path)  # type: ignore[arg-type]
+    scenario = recorded_scenario(log_tables, log_path)
     out: dict[str, Metric] = {}
     many = len(scenario.agents) > 1
     for agent in scenario.agents:

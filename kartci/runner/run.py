@@ -94,7 +94,7 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
 
 def _recorded(folder: Path) -> tuple[Scenario, dict[str, pd.DataFrame]]:
     t = tables(folder / LOG_NAME, ["/kartci/scenario"])
-    return metrics.recorded_scenario(t, folder / LOG_NAME), t  # type: ignore[arg-type]
+    return metrics.recorded_scenario(t, folder / LOG_NAME), t
 
 
 def run_suite(names: list[str], overrides: list[str], out: Path, baselines: Path,
