@@ -20,6 +20,7 @@ class Plots:
     tracks: dict[str, pd.DataFrame]  # agent -> t, x, y (sensor point), offset, progress, vx
     wheels: dict[str, pd.DataFrame]  # agent -> t, left, right (measured, rad/s)
     commands: dict[str, pd.DataFrame]  # agent -> t, left, right (commanded, rad/s)
+    transient_s: float = 0.0  # start-up transient the metrics leave out
 
 
 @dataclass(frozen=True)

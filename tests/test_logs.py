@@ -115,3 +115,25 @@ def test_unknown_message_type_is_one_clear_error(tmp_path: Path) -> None:
         w.finish()  # type: ignore[no-untyped-call]
     with pytest.raises(LogError, match=r"unknown\.mcap: "):
         list(messages(path))
+
+
+def test_run_log_decodes_with_mcap_ros2_too(tmp_path: Path) -> None:
+    """A second, independent decoder (mcap_ros2) reads every topic of a real run log."""
+    from mcap_ros2.decoder import DecoderFactory
+
+    from kartci.sim import simulate
+    from kartci.spec import load_scenario
+
+    log = tmp_path / "run.mcap"
+    simulate(load_scenario("line_straight", ["duration_s=1"]), log)
+    counts: dict[str, int] = {}
+    with log.open("rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for _, channel, _, decoded in reader.iter_decoded_messages():
+            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+            if channel.topic == "/lt0/odom":
+                assert decoded.child_frame_id == "lt0/base_link"
+    assert counts["/lt0/odom"] == 51  # 50 Hz over 1 s, both ends included
+    assert counts["/lt0/line_sensor"] == counts["/lt0/wheel_cmd"] == 17  # ts 0.06 s
+    assert {"/tf", "/tf_static", "/lt0/sonar", "/lt0/joint_states", "/lt0/controller/state",
+            "/kartci/scenario", "/kartci/course"} <= set(counts)

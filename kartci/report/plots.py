@@ -42,6 +42,8 @@ def tracking_error(p: Plots, band_m: float = 0.008) -> str:
         ax.plot(tr["t"], tr["offset"] * 1000, lw=1, label=agent)
     for s in (-1, 1):
         ax.axhline(s * band_m * 1000, color="red", ls="--", lw=0.8)
+    if p.transient_s > 0:
+        ax.axvspan(0, p.transient_s, color="grey", alpha=0.15, label="transient (not scored)")
     ax.set_xlabel("sim time [s]")
     ax.set_ylabel("cross-track error [mm]")
     ax.set_title(f"tracking error (dashed: ±{band_m * 1000:g} mm sensor range)")

@@ -72,7 +72,8 @@ def plots(folder: Path, scenario: Scenario) -> Plots:
                                               "left": df["left_wheel_hinge.velocity"],
                                               "right": df["right_wheel_hinge.velocity"]})
     course = geometry.polyline(scenario.world.course, 400)
-    return Plots(np.asarray(course), scenario.world.line_width_m, tracks, wheels, commands)
+    return Plots(np.asarray(course), scenario.world.line_width_m, tracks, wheels, commands,
+                 scenario.metrics.transient_s)
 
 
 def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> ScenarioResult:

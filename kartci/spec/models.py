@@ -81,7 +81,7 @@ class LineSensorSpec(Frozen):
 
     mode: Literal["geometric", "rendered"] = "geometric"
     fov_rad: float = Field(1.2, gt=0.05, lt=3.0)
-    resolution_px: int = Field(24, ge=4, le=256)
+    resolution_px: int = Field(24, ge=4, le=256, description="rendered image side, pixels")
     noise_std: float = Field(0.001, ge=0.0, description="luminance noise, 1 sigma (0-1 scale)")
 
 
