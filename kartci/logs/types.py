@@ -14,10 +14,13 @@ from rosbags.typesys.store import Typestore
 def typestore() -> Typestore:
     store = get_typestore(Stores.ROS2_HUMBLE)
     extra: dict[str, Any] = {}
-    for item in resources.files("kartci.logs").joinpath("msg").iterdir():
-        if item.name.endswith(".msg"):
-            name = f"kartci_msgs/msg/{item.name.removesuffix('.msg')}"
-            extra.update(get_types_from_msg(item.read_text(encoding="utf-8"), name))
+    for package in resources.files("kartci.logs").joinpath("msg").iterdir():
+        if not package.is_dir():
+            continue
+        for item in package.iterdir():
+            if item.name.endswith(".msg"):
+                name = f"{package.name}/msg/{item.name.removesuffix('.msg')}"
+                extra.update(get_types_from_msg(item.read_text(encoding="utf-8"), name))
     store.register(extra)
     return store
 

@@ -34,7 +34,8 @@ class Sweep:
         d, y = self.offsets_m[m], self.difference[m]
         slope, intercept = np.polyfit(d, y, 1)
         resid = y - (slope * d + intercept)
-        r2 = 1.0 - float(resid @ resid) / float(((y - y.mean()) ** 2).sum())
+        total = float(((y - y.mean()) ** 2).sum())
+        r2 = 1.0 - float(resid @ resid) / total if total > 0 else 0.0  # flat: no relation
         return float(slope), float(intercept), r2
 
 
@@ -55,8 +56,7 @@ def sweep(scenario: Scenario, agent: str, offsets_m: np.ndarray, fov_rad: float 
         base0 = np.asarray(start.xyz) - spec.start.lateral_m * normal
         left, right = [], []
         for d in offsets_m:
-            pb.resetBasePositionAndOrientation(robot.body, (base0 + d * normal).tolist(),
-                                               start.quat, physicsClientId=world.client)
+            robot.reset_pose(base0 + d * normal, start.quat)
             st = robot.state()
             left.append(camera.luminance(*robot.frame_pose("line_camera_left", st)))
             right.append(camera.luminance(*robot.frame_pose("line_camera_right", st)))

@@ -10,7 +10,7 @@ import numpy as np
 
 from kartci import geometry
 from kartci._bullet import pb, quiet_c_output
-from kartci.sim.urdf import fixed_frames
+from kartci.sim.urdf import fixed_frames, physics_urdf
 from kartci.spec.models import AgentSpec, LineLabWorld
 
 
@@ -40,19 +40,17 @@ class LineTracker:
         yaw = yaw0 + spec.start.heading_rad
         base = (sx - m.sensor_point_x_m * math.cos(yaw), sy - m.sensor_point_x_m * math.sin(yaw))
         with quiet_c_output():
-            self.body = int(pb.loadURDF(str(model_dir / m.urdf), [base[0], base[1], 0.0],
-                pb.getQuaternionFromEuler([0, 0, yaw]),
-                flags=pb.URDF_USE_INERTIA_FROM_FILE | pb.URDF_MERGE_FIXED_LINKS,
+            self.body = int(pb.loadURDF(
+                str(physics_urdf(model_dir / m.urdf)), [base[0], base[1], 0.0],
+                pb.getQuaternionFromEuler([0, 0, yaw]), flags=pb.URDF_USE_INERTIA_FROM_FILE,
                 physicsClientId=client))
-        # Fixed links (caster, sensor mounts) are merged into base_link, which halves the cost of
-        # a physics step; their frames come from the URDF instead.
         self.frames = fixed_frames(model_dir / m.urdf)
         links = {pb.getJointInfo(self.body, j, physicsClientId=client)[12].decode(): j
                  for j in range(pb.getNumJoints(self.body, physicsClientId=client))}
         self.wheels = [links["left_wheel"], links["right_wheel"]]
         for j in self.wheels:
             pb.changeDynamics(self.body, j, lateralFriction=m.tire_friction, physicsClientId=client)
-        # Only the caster touches the floor among the merged base shapes: make it frictionless.
+        # Of base_link's shapes only the caster sphere touches the floor: make it frictionless.
         pb.changeDynamics(self.body, -1, lateralFriction=0.0, rollingFriction=0.0,
                           spinningFriction=0.0, physicsClientId=client)
         self._alpha = 1.0 - math.exp(-dt_s / m.wheel_time_constant_s) if (
@@ -85,6 +83,12 @@ class LineTracker:
                                         w[0] * off[1] - w[1] * off[0]])
         return BodyState(_t3(pos), (quat[0], quat[1], quat[2], quat[3]), _t3(rot.T @ v),
                          _t3(rot.T @ w))
+
+    def reset_pose(self, xyz: np.ndarray, quat: tuple[float, float, float, float]) -> None:
+        """Place base_link at `xyz` (PyBullet positions the centre of mass)."""
+        rot = np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
+        pb.resetBasePositionAndOrientation(self.body, (xyz + rot @ self._com_offset).tolist(),
+                                           quat, physicsClientId=self.client)
 
     def wheel_speeds(self) -> tuple[float, float]:
         js = pb.getJointStates(self.body, self.wheels, physicsClientId=self.client)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
+import os
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -49,3 +52,36 @@ def fixed_frames(path: Path, root: str = "base_link") -> dict[str, tuple[NDArray
             frames[child_link] = (pos + rot @ xyz, rot @ r)
             stack.append(child_link)
     return frames
+
+
+def physics_urdf(path: Path) -> Path:
+    """The URDF with its frame-only links (fixed joint, no collision: sensor mounts) removed.
+
+    Such links cost a third of a physics step each robot, and PyBullet's own
+    URDF_MERGE_FIXED_LINKS loses the base's centre of mass (seen with 3.2.7), so they are
+    dropped here and their frames come from `fixed_frames` instead. Written once to a cache
+    folder, named by content.
+    """
+    try:
+        tree = ET.parse(path)
+    except (OSError, ET.ParseError) as err:
+        raise SpecError(f"{path}: cannot read URDF ({err})") from None
+    root = tree.getroot()
+    links = {link.get("name"): link for link in root.findall("link")}
+    for joint in root.findall("joint"):
+        child = joint.find("child")
+        name = child.get("link") if child is not None else None
+        link = links.get(name)
+        if (joint.get("type") == "fixed" and link is not None
+                and link.find("collision") is None):
+            root.remove(joint)
+            root.remove(link)
+    text = ET.tostring(root, encoding="unicode")
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    out = Path(tempfile.gettempdir()) / "kartci-urdf" / f"{path.stem}-{digest}.urdf"
+    if not out.exists():
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, out)
+    return out

@@ -6,7 +6,8 @@ import numpy as np
 
 from kartci import geometry
 from kartci._bullet import pb
-from kartci.spec.models import LineLabWorld, StraightCourse
+from kartci.sim.hall import blocks
+from kartci.spec.models import HallWorld, LineLabWorld, StraightCourse
 
 FLOOR_GROUP = 4  # collision-filter group of the floor; range sensors use SENSED_GROUPS
 SENSED_GROUPS = 0xFFFF & ~FLOOR_GROUP
@@ -16,7 +17,7 @@ LINE_Z_M = 0.0002  # the line's visual sits 0.2 mm above the floor so the render
 class World:
     """Owns one PyBullet physics client; every body lives in it."""
 
-    def __init__(self, spec: LineLabWorld, dt_s: float) -> None:
+    def __init__(self, spec: LineLabWorld | HallWorld, dt_s: float) -> None:
         self.spec = spec
         self.client = pb.connect(pb.DIRECT)
         c = self.client
@@ -24,14 +25,28 @@ class World:
         pb.setGravity(0, 0, -9.81, physicsClientId=c)
         pb.setTimeStep(dt_s, physicsClientId=c)
         pb.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=c)
-        self.floor = self._floor()
-        self._line()
-        self.obstacles = [self._box(b.center_m, b.size_m, b.yaw_rad) for b in spec.obstacles]
+        self.names: dict[int, str] = {}  # body id -> name, for collision reports
+        if isinstance(spec, LineLabWorld):
+            pts = geometry.polyline(spec.course)
+            self.floor = self._floor(pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0,
+                                     spec.floor_friction)
+            self._line(spec)
+            for i, b in enumerate(spec.obstacles):
+                self.names[self._box(b.center_m, b.size_m, b.yaw_rad)] = f"obstacle_{i}"
+        else:
+            self.floor = self._floor(np.zeros(2), np.asarray(spec.size_m), 1.0)
+            for blk in blocks(spec):
+                self.names[self._box(blk.center, blk.size, blk.yaw)] = blk.name
+            sx, sy = spec.size_m
+            ceiling = self._box((sx / 2, sy / 2), (sx, sy, 0.1), 0.0)
+            pb.resetBasePositionAndOrientation(ceiling, [sx / 2, sy / 2,
+                                                         spec.wall_height_m + 0.05],
+                                               [0, 0, 0, 1], physicsClientId=c)
+            self.names[ceiling] = "ceiling"
+        self.names[self.floor] = "floor"
 
-    def _floor(self) -> int:
+    def _floor(self, lo: np.ndarray, hi: np.ndarray, friction: float) -> int:
         c = self.client
-        pts = geometry.polyline(self.spec.course)
-        lo, hi = pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0
         centre, half = (lo + hi) / 2, (hi - lo) / 2
         col = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=c)
         vis = pb.createVisualShape(pb.GEOM_BOX, halfExtents=[half[0], half[1], 0.001],
@@ -39,14 +54,14 @@ class World:
                                    visualFramePosition=[centre[0], centre[1], -0.001],
                                    physicsClientId=c)
         body = pb.createMultiBody(0, col, vis, physicsClientId=c)
-        pb.changeDynamics(body, -1, lateralFriction=self.spec.floor_friction, physicsClientId=c)
+        pb.changeDynamics(body, -1, lateralFriction=friction, physicsClientId=c)
         # The floor is in its own collision group so range sensors can ignore it (a flat floor
         # at grazing incidence returns no ultrasonic echo); bodies still stand on it.
         pb.setCollisionFilterGroupMask(body, -1, FLOOR_GROUP, 0xFFFF, physicsClientId=c)
         return int(body)
 
-    def _line(self) -> None:
-        c, course, w = self.client, self.spec.course, self.spec.line_width_m
+    def _line(self, spec: LineLabWorld) -> None:
+        c, course, w = self.client, spec.course, spec.line_width_m
         if isinstance(course, StraightCourse):
             x0, y0, yaw = geometry.start_pose(course)
             length = geometry.length_m(course)

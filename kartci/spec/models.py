@@ -59,6 +59,34 @@ class LineLabWorld(Frozen):
     obstacles: tuple[Box, ...] = ()
 
 
+class FloorZone(Frozen):
+    """A rectangle of floor with its own friction coefficient (mu = pull force / weight)."""
+
+    name: str
+    min_m: tuple[float, float]
+    max_m: tuple[float, float]
+    friction: float = Field(ge=0.0)
+
+
+class HallWorld(Frozen):
+    """An indoor hall: walls, pillars, a ceiling, floor zones and a closed TUMFTM track."""
+
+    kind: Literal["hall"] = "hall"
+    description: str = ""
+    size_m: tuple[float, float] = Field((32.0, 20.0), description="interior, from (0, 0)")
+    wall_height_m: float = Field(4.0, gt=0.5)
+    wall_thickness_m: float = 0.3
+    pillars_m: tuple[tuple[float, float], ...] = ()
+    pillar_size_m: float = 0.5
+    floor_friction: float = Field(0.9, ge=0.0, description="tire on concrete")
+    zones: tuple[FloorZone, ...] = ()
+    track: str = Field(description="TUMFTM CSV, relative to sims/ (or absolute)")
+    obstacles: tuple[Box, ...] = ()
+
+
+World = Annotated[LineLabWorld | HallWorld, Field(discriminator="kind")]
+
+
 # --- robots, sensors, controllers ----------------------------------------------------------
 
 
@@ -110,7 +138,114 @@ class LinePidController(Frozen):
     half_track_m: float = Field(0.06, description="lever in the annex wheel-speed law")
 
 
-Controller = Annotated[LinePidController, Field(discriminator="type")]
+class GokartModel(Frozen):
+    """The ETH go-kart (seed 000, Tables 3.1, 3.2, 3.4); limits from REFERENCE.md."""
+
+    kind: Literal["gokart"] = "gokart"
+    variant: Literal["bumblebee", "herbie"] = "bumblebee"
+    urdf: str = "bumblebee.urdf"
+    rear_wheel_radius_m: float = 0.127
+    front_wheel_radius_m: float = 0.117
+    wheel_torque_limit_nm: float = Field(95.0, description="per rear wheel")
+    max_speed_mps: float = 10.0
+    max_accel_mps2: float = 5.0
+    max_brake_mps2: float = 8.0
+    reverse_speed_mps: float = 2.0
+    steering: Literal["measured", "ackermann"] = "measured"
+    steering_limit_rad: tuple[float, float] = Field((-1.84, 1.73), description="column angle")
+    steering_rate_radps: float = Field(4.0, description="column angle slew rate")
+    wheelbase_m: float = Field(1.27, description="l of Eq. 3.1/3.2 (Ackermann option)")
+    track_m: float = Field(0.94, description="w of Eq. 3.1/3.2 (Ackermann option)")
+    tire_friction: float = 1.0
+    wheel_xy_m: tuple[tuple[float, float], ...] = Field(
+        ((-0.077, 0.5625), (-0.077, -0.5625), (1.129, 0.47), (1.129, -0.47)),
+        description="rl, rr, fl, fr wheel centres in base_link (Table 3.2)")
+
+
+class LidarSpec(Frozen):
+    """Velodyne VLP-16 or HDL-32E (Table 3.5) on velodyne_link."""
+
+    enabled: bool = False
+    model: Literal["vlp16", "hdl32e"] = "vlp16"
+    rate_hz: float = Field(10.0, gt=0.0)
+    range_m: float = 100.0
+    range_noise_std_m: float | None = Field(None, description="default: Table 3.5 accuracy")
+    record_every: int = Field(10, ge=1, description="write every Nth scan to the log")
+
+
+class ImuSpec(Frozen):
+    """IMU on imu_link (Table 3.6): specific force including gravity, angular rate."""
+
+    enabled: bool = True
+    rate_hz: float = Field(100.0, gt=0.0)
+    accel_noise_std_mps2: float | None = Field(None, description="default: Table 3.6")
+    gyro_noise_std_radps: float | None = None
+
+
+class CameraSpec(Frozen):
+    enabled: bool = False
+    rate_hz: float = 5.0
+    width_px: int = 80
+    height_px: int = 60
+    fov_rad: float = 1.2
+
+
+class LogSource(Frozen):
+    """Messages recorded in a log (ROS 1 bag, rosbag2 folder or MCAP), re-based to sim time."""
+
+    log: str = Field(description="path, relative to the project root or absolute")
+    topic: str | None = Field(None, description="default: the only topic of a suitable type")
+    time_offset_s: float = Field(0.0, description="sim time of the log's first message")
+
+
+class ManualController(Frozen):
+    """The manual agent (seed Sec. 5.1.2): Joy axes/buttons mapped to kart commands."""
+
+    type: Literal["manual"] = "manual"
+    mapping: str = Field("ps4", description="models/gokart/joy/<mapping>.yaml")
+    source: LogSource
+    period_s: float = 0.02
+
+
+class CommandsController(Frozen):
+    """Replays a command stream: AckermannDriveStamped, Twist or TwistStamped."""
+
+    type: Literal["commands"] = "commands"
+    source: LogSource
+    period_s: float = 0.02
+    speed_gain_per_s: float = Field(2.0, description="accel = gain * (v_cmd - v)")
+
+
+class ScriptStep(Frozen):
+    t_s: float = Field(ge=0.0)
+    steering_rad: float = 0.0
+    accel_mps2: float = 0.0
+    brake_mps2: float = 0.0
+
+
+class ScriptController(Frozen):
+    """A fixed command timeline (for tests and crash scenarios)."""
+
+    type: Literal["script"] = "script"
+    steps: tuple[ScriptStep, ...] = Field(min_length=1)
+    period_s: float = 0.02
+
+
+class JoyDriverController(Frozen):
+    """A scripted human: pure pursuit on the centreline, expressed as joystick messages
+    through a mapping, so that the manual agent drives. Used to record joystick logs."""
+
+    type: Literal["joy_driver"] = "joy_driver"
+    mapping: str = "ps4"
+    target_speed_mps: float = 5.0
+    lookahead_m: float = 3.5
+    max_lateral_accel_mps2: float = 4.0
+    period_s: float = 0.02
+
+
+Controller = Annotated[LinePidController | ManualController | CommandsController
+                       | ScriptController | JoyDriverController, Field(discriminator="type")]
+Model = Annotated[LineTrackerModel | GokartModel, Field(discriminator="kind")]
 
 
 class Pose2D(Frozen):
@@ -122,11 +257,14 @@ class Pose2D(Frozen):
 
 
 class AgentSpec(Frozen):
-    model: LineTrackerModel
+    model: Model
     controller: Controller
     start: Pose2D = Pose2D()
     line_sensor: LineSensorSpec = LineSensorSpec()
     sonar: SonarSpec = SonarSpec()
+    lidar: LidarSpec = LidarSpec()
+    imu: ImuSpec = ImuSpec()
+    camera: CameraSpec = CameraSpec()
 
 
 # --- scenario ---------------------------------------------------------------------------------
@@ -139,6 +277,7 @@ class PhysicsSpec(Frozen):
 
 class MetricsSpec(Frozen):
     transient_s: float = Field(5.0, ge=0.0, description="start-up transient excluded from errors")
+    laps: int = Field(1, ge=0, description="laps a kart run is expected to drive")
     lost_threshold_m: float = Field(0.021, gt=0.0, description="sensor range; beyond it = lost")
     settle_band_m: float = Field(0.002, gt=0.0)
 
@@ -154,7 +293,7 @@ class Criterion(Frozen):
 class Scenario(Frozen):
     name: str = Field(pattern=r"^[a-z0-9_]+$")
     description: str
-    world: LineLabWorld
+    world: World
     agents: dict[str, AgentSpec] = Field(min_length=1)
     duration_s: float = Field(gt=0.0, le=3600.0)
     seed: int = Field(0, ge=0)

@@ -1,0 +1,98 @@
+"""Joystick mappings (seed Sec. 5.1.2): which Joy axes and buttons mean throttle, brake,
+steering, reverse and emergency stop. One YAML file per controller in models/gokart/joy/."""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from kartci.errors import SpecError
+from kartci.logs.types import header, msg
+from kartci.vehicle import KartInput
+from kartci.spec import project_root
+from kartci.spec.models import GokartModel
+
+
+class _M(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class SteeringAxis(_M):
+    axis: int = Field(ge=0)
+    scale_rad: float = Field(description="steering-column angle at axis value +1 (full left)")
+
+
+class PedalAxis(_M):
+    axis: int = Field(ge=0)
+    rest: float = 1.0
+    full: float = -1.0
+
+
+class Button(_M):
+    button: int = Field(ge=0)
+
+
+class JoyMapping(_M):
+    name: str
+    steering: SteeringAxis
+    throttle: PedalAxis
+    brake: PedalAxis
+    reverse: Button
+    emergency_stop: Button
+    axes: int = Field(ge=1, description="axes in a Joy message of this controller")
+    buttons: int = Field(ge=1)
+
+
+@cache
+def load_mapping(name: str) -> JoyMapping:
+    path = project_root() / "models" / "gokart" / "joy" / f"{name}.yaml"
+    if not path.exists():
+        known = sorted(p.stem for p in path.parent.glob("*.yaml"))
+        raise SpecError(f"unknown joystick mapping '{name}' (known: {', '.join(known)})")
+    try:
+        return JoyMapping.model_validate(yaml.safe_load(path.read_text(encoding="utf-8")))
+    except (ValidationError, yaml.YAMLError) as err:
+        raise SpecError(f"{path}: invalid joystick mapping ({str(err).splitlines()[0]})") from None
+
+
+def _pedal(p: PedalAxis, axes: Any) -> float:
+    v = float(axes[p.axis]) if p.axis < len(axes) else p.rest
+    return float(np.clip((v - p.rest) / (p.full - p.rest), 0.0, 1.0))
+
+
+def to_command(m: JoyMapping, model: GokartModel, joy: Any) -> KartInput:
+    """A Joy message as a kart command, scaled to the kart's limits."""
+    axes, buttons = joy.axes, joy.buttons
+    steer = float(axes[m.steering.axis]) if m.steering.axis < len(axes) else 0.0
+
+    def pressed(b: Button) -> bool:
+        return b.button < len(buttons) and bool(buttons[b.button])
+
+    return KartInput(steering_rad=steer * m.steering.scale_rad,
+                     accel_mps2=_pedal(m.throttle, axes) * model.max_accel_mps2,
+                     brake_mps2=_pedal(m.brake, axes) * model.max_brake_mps2,
+                     reverse=pressed(m.reverse), estop=pressed(m.emergency_stop))
+
+
+def to_joy(m: JoyMapping, model: GokartModel, cmd: KartInput, t_ns: int, frame: str) -> Any:
+    """The Joy message a person would produce for a command (the inverse of to_command)."""
+    axes = np.zeros(m.axes, dtype=np.float32)
+    buttons = np.zeros(m.buttons, dtype=np.int32)
+    axes[m.steering.axis] = np.clip(cmd.steering_rad / m.steering.scale_rad, -1, 1)
+    for pedal, value, limit in ((m.throttle, cmd.accel_mps2, model.max_accel_mps2),
+                                (m.brake, cmd.brake_mps2, model.max_brake_mps2)):
+        frac = float(np.clip(value / limit, 0.0, 1.0))
+        axes[pedal.axis] = pedal.rest + frac * (pedal.full - pedal.rest)
+    buttons[m.reverse.button] = int(cmd.reverse)
+    buttons[m.emergency_stop.button] = int(cmd.estop)
+    return msg("sensor_msgs/msg/Joy", header=header(t_ns, frame), axes=axes, buttons=buttons)
+
+
+def kart_command(cmd: KartInput, t_ns: int, frame: str) -> Any:
+    return msg("kartci_msgs/msg/KartCommand", header=header(t_ns, frame),
+               steering_wheel_angle_rad=cmd.steering_rad, acceleration_mps2=cmd.accel_mps2,
+               brake_mps2=cmd.brake_mps2, reverse=cmd.reverse, emergency_stop=cmd.estop)

@@ -1,0 +1,148 @@
+"""Go-kart agents: the manual agent (joystick log), command-stream playback, a command script,
+and a scripted driver that produces joystick messages (pure pursuit on the centreline)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from kartci.agents.base import Outbox
+from kartci.agents.joy import kart_command, load_mapping, to_command, to_joy
+from kartci.agents.source import Recorded
+from kartci.track import Track
+from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle
+from kartci.spec.models import (
+    CommandsController,
+    GokartModel,
+    JoyDriverController,
+    ManualController,
+    ScriptController,
+)
+
+JOY = ("sensor_msgs/msg/Joy",)
+COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",
+            "geometry_msgs/msg/Twist")
+
+
+class ManualAgent:
+    """Joy messages from a log, through a controller mapping, to kart commands. The Joy stream
+    is republished on the agent's namespace so the run log holds what the driver did."""
+
+    inputs: tuple[str, ...] = ()
+
+    def __init__(self, spec: ManualController, model: GokartModel) -> None:
+        self.period_s, self.model = spec.period_s, model
+        self.mapping = load_mapping(spec.mapping)
+        self.source = Recorded(spec.source, JOY)
+        self._last: Any = None
+
+    def on_message(self, topic: str, message: Any) -> None:
+        pass
+
+    def step(self, t_ns: int) -> Outbox:
+        joy = self.source.at(t_ns)
+        if joy is None:
+            return [("cmd", kart_command(KartInput(), t_ns, "base_link"))]
+        out: Outbox = []
+        if joy is not self._last:
+            out.append(("joy", joy))
+            self._last = joy
+        return [*out, ("cmd", kart_command(to_command(self.mapping, self.model, joy), t_ns,
+                                           "base_link"))]
+
+
+def _speed_to_pedals(v_cmd: float, v: float, gain: float) -> tuple[float, float, bool]:
+    reverse = v_cmd < 0
+    a = gain * (abs(v_cmd) - abs(v))
+    return max(a, 0.0), max(-a, 0.0), reverse
+
+
+class CommandsAgent:
+    """AckermannDriveStamped, Twist or TwistStamped from a log, as kart commands: the speed
+    through a proportional speed loop on the measured speed, the steering through the kart's
+    steering map (Ackermann) or the bicycle relation delta = atan(L w / v) (Twist)."""
+
+    inputs: tuple[str, ...] = ("odom",)
+
+    def __init__(self, spec: CommandsController, model: GokartModel) -> None:
+        self.spec, self.model, self.period_s = spec, model, spec.period_s
+        self.source = Recorded(spec.source, COMMANDS)
+        self._v = 0.0
+
+    def on_message(self, topic: str, message: Any) -> None:
+        if topic == "odom":
+            self._v = float(message.twist.twist.linear.x)
+
+    def step(self, t_ns: int) -> Outbox:
+        m = self.source.at(t_ns)
+        if m is None:
+            return [("cmd", kart_command(KartInput(), t_ns, "base_link"))]
+        if self.source.msgtype.startswith("ackermann"):
+            v_cmd, delta = float(m.drive.speed), float(m.drive.steering_angle)
+        else:
+            tw = m.twist if self.source.msgtype.endswith("Stamped") else m
+            v_cmd, w = float(tw.linear.x), float(tw.angular.z)
+            v_eff = v_cmd if abs(v_cmd) >= 0.5 else math.copysign(0.5, v_cmd)
+            delta = math.atan(axle_distance_m(self.model) * w / v_eff)
+        accel, brake, reverse = _speed_to_pedals(v_cmd, self._v, self.spec.speed_gain_per_s)
+        cmd = KartInput(column_for_wheel_angle(self.model, delta), accel, brake, reverse)
+        return [("cmd", kart_command(cmd, t_ns, "base_link"))]
+
+
+class ScriptAgent:
+    inputs: tuple[str, ...] = ()
+
+    def __init__(self, spec: ScriptController) -> None:
+        self.steps = sorted(spec.steps, key=lambda s: s.t_s)
+        self.period_s = spec.period_s
+
+    def on_message(self, topic: str, message: Any) -> None:
+        pass
+
+    def step(self, t_ns: int) -> Outbox:
+        current = self.steps[0]
+        for s in self.steps:
+            if s.t_s * 1e9 <= t_ns:
+                current = s
+        cmd = KartInput(current.steering_rad, current.accel_mps2, current.brake_mps2)
+        return [("cmd", kart_command(cmd, t_ns, "base_link"))]
+
+
+class JoyDriver:
+    """A driver that steers by pure pursuit on the centreline and sets its speed from the
+    curvature ahead, and who only touches the joystick: its Joy messages go through the same
+    mapping as the manual agent's, so replaying them reproduces the drive."""
+
+    inputs: tuple[str, ...] = ("odom",)
+
+    def __init__(self, spec: JoyDriverController, model: GokartModel, track: Track) -> None:
+        self.spec, self.model, self.track, self.period_s = spec, model, track, spec.period_s
+        self.mapping = load_mapping(spec.mapping)
+        self._pose: tuple[float, float, float, float] | None = None
+
+    def on_message(self, topic: str, message: Any) -> None:
+        if topic == "odom":
+            p, q = message.pose.pose.position, message.pose.pose.orientation
+            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            self._pose = (p.x, p.y, yaw, float(message.twist.twist.linear.x))
+
+    def step(self, t_ns: int) -> Outbox:
+        if self._pose is None:
+            return []
+        x, y, yaw, v = self._pose
+        sp = self.spec
+        s, _, _, _ = self.track.project(np.array([[x, y]]))
+        gx, gy, _ = self.track.pose_at(float(s[0]) + sp.lookahead_m)
+        alpha = math.atan2(gy - y, gx - x) - yaw
+        lw = axle_distance_m(self.model)
+        delta = math.atan2(2 * lw * math.sin(alpha), sp.lookahead_m)
+        ahead = (self.track.s - s[0]) % self.track.length_m < max(8.0, 2 * v)
+        kappa = float(np.abs(self.track.curvature[ahead]).max(initial=1e-3))
+        v_target = min(sp.target_speed_mps, math.sqrt(sp.max_lateral_accel_mps2 / kappa))
+        accel, brake, _ = _speed_to_pedals(v_target, v, 2.0)
+        wish = KartInput(column_for_wheel_angle(self.model, delta), accel, brake)
+        joy = to_joy(self.mapping, self.model, wish, t_ns, "joy")
+        cmd = to_command(self.mapping, self.model, joy)
+        return [("joy", joy), ("cmd", kart_command(cmd, t_ns, "base_link"))]

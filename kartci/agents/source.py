@@ -1,0 +1,56 @@
+"""Input streams recorded in a log, re-based onto sim time."""
+
+from __future__ import annotations
+
+import bisect
+from pathlib import Path
+from typing import Any
+
+from kartci.errors import LogError
+from kartci.logs import messages, topics
+from kartci.spec import project_root
+from kartci.spec.models import LogSource
+
+
+def resolve(path: str) -> Path:
+    p = Path(path)
+    return p if p.is_absolute() else project_root() / p
+
+
+class Recorded:
+    """The messages of one topic; `at(t_ns)` is the latest one at or before sim time t."""
+
+    def __init__(self, source: LogSource, types: tuple[str, ...]) -> None:
+        path = resolve(source.log)
+        info = topics(path)
+        if source.topic is not None:
+            match = [i for i in info if i.topic == source.topic]
+            if not match:
+                known = ", ".join(f"{i.topic} ({i.msgtype})" for i in info) or "none"
+                raise LogError(f"{path}: no topic {source.topic} (topics: {known})")
+            if match[0].msgtype not in types:
+                raise LogError(f"{path}: {source.topic} is {match[0].msgtype}; expected one of "
+                               f"{', '.join(types)}")
+        else:
+            match = [i for i in info if i.msgtype in types and i.count > 0]
+            if len(match) != 1:
+                found = "none" if not match else ", ".join(i.topic for i in match)
+                raise LogError(f"{path}: needs exactly one topic of type {' or '.join(types)} "
+                               f"with messages (found: {found}); name one with a topic option")
+        self.topic, self.msgtype = match[0].topic, match[0].msgtype
+        stream = [(t, m) for _, t, m in messages(path, [self.topic])]
+        if not stream:
+            raise LogError(f"{path}: topic {self.topic} has no messages")
+        t0 = stream[0][0]
+        offset = round(source.time_offset_s * 1e9)
+        self.times = [t - t0 + offset for t, _ in stream]
+        self.msgs = [m for _, m in stream]
+        self.path = path
+
+    @property
+    def duration_s(self) -> float:
+        return (self.times[-1] - self.times[0]) * 1e-9
+
+    def at(self, t_ns: int) -> Any | None:
+        i = bisect.bisect_right(self.times, t_ns) - 1
+        return self.msgs[i] if i >= 0 else None

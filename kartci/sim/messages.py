@@ -1,0 +1,64 @@
+"""Building the ROS 2 messages the simulator publishes."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from kartci.logs import header, msg
+from kartci.sim.line_tracker import BodyState
+
+WORLD_FRAME = "map"
+
+
+def vec(x: float, y: float, z: float) -> Any:
+    return msg("geometry_msgs/msg/Vector3", x=x, y=y, z=z)
+
+
+def quat_msg(q: Any) -> Any:
+    return msg("geometry_msgs/msg/Quaternion", x=q[0], y=q[1], z=q[2], w=q[3])
+
+
+def pose(xyz: Any, q: Any) -> Any:
+    return msg("geometry_msgs/msg/Pose",
+               position=msg("geometry_msgs/msg/Point", x=xyz[0], y=xyz[1], z=xyz[2]),
+               orientation=quat_msg(q))
+
+
+def transform(t_ns: int, parent: str, child: str, xyz: Any, q: Any) -> Any:
+    tr = msg("geometry_msgs/msg/Transform", translation=vec(*xyz), rotation=quat_msg(q))
+    return msg("geometry_msgs/msg/TransformStamped", header=header(t_ns, parent),
+               child_frame_id=child, transform=tr)
+
+
+def quat_from_matrix(r: np.ndarray) -> tuple[float, float, float, float]:
+    w = math.sqrt(max(0.0, 1 + r[0, 0] + r[1, 1] + r[2, 2])) / 2
+    x = math.copysign(math.sqrt(max(0.0, 1 + r[0, 0] - r[1, 1] - r[2, 2])) / 2, r[2, 1] - r[1, 2])
+    y = math.copysign(math.sqrt(max(0.0, 1 - r[0, 0] + r[1, 1] - r[2, 2])) / 2, r[0, 2] - r[2, 0])
+    z = math.copysign(math.sqrt(max(0.0, 1 - r[0, 0] - r[1, 1] + r[2, 2])) / 2, r[1, 0] - r[0, 1])
+    return x, y, z, w
+
+
+def odometry(t_ns: int, ns: str, st: BodyState) -> Any:
+    zeros36 = np.zeros(36)
+    return msg("nav_msgs/msg/Odometry", header=header(t_ns, WORLD_FRAME),
+               child_frame_id=f"{ns}/base_link",
+               pose=msg("geometry_msgs/msg/PoseWithCovariance", pose=pose(st.xyz, st.quat),
+                        covariance=zeros36),
+               twist=msg("geometry_msgs/msg/TwistWithCovariance",
+                         twist=msg("geometry_msgs/msg/Twist", linear=vec(*st.v_body),
+                                   angular=vec(*st.w_body)),
+                         covariance=zeros36))
+
+
+def joint_state(t_ns: int, frame: str, names: list[str], position: list[float],
+                velocity: list[float]) -> Any:
+    return msg("sensor_msgs/msg/JointState", header=header(t_ns, frame), name=names,
+               position=np.asarray(position, dtype=float),
+               velocity=np.asarray(velocity, dtype=float), effort=np.zeros(0))
+
+
+def tf_message(transforms: list[Any]) -> Any:
+    return msg("tf2_msgs/msg/TFMessage", transforms=transforms)

@@ -1,0 +1,305 @@
+"""Robots in the loop: a body, its sensors and its agent, publishing under one namespace."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from kartci import geometry
+from kartci.agents import Agent
+from kartci.errors import RunError
+from kartci.logs import header, msg
+from kartci.sim import lidar as lidar_mod
+from kartci.sim.gokart import Gokart
+from kartci.sim.hall import Block, blocks
+from kartci.sim.line_tracker import BodyState, LineTracker
+from kartci.sim.messages import (
+    WORLD_FRAME,
+    joint_state,
+    odometry,
+    quat_from_matrix,
+    tf_message,
+    transform,
+)
+from kartci.sim.sensors import LineCamera, Sonar
+from kartci.sim.world import World
+from kartci.spec.models import AgentSpec, HallWorld, LineLabWorld
+from kartci.track import Track
+from kartci.vehicle import KartInput
+
+Put = Callable[[str, Any, int], None]  # (topic relative to the namespace, message, t ns)
+
+
+def every(period_s: float, dt_s: float) -> int:
+    return max(1, round(period_s / dt_s))
+
+
+@dataclass
+class Robot:
+    name: str
+    agent: Agent
+    ctrl_every: int
+    frames: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    def static_tf(self, frames: tuple[str, ...]) -> list[Any]:
+        out = []
+        for frame in frames:
+            rel, rot = self.frames[frame]
+            out.append(transform(0, f"{self.name}/base_link", f"{self.name}/{frame}", rel,
+                                 quat_from_matrix(rot)))
+        return out
+
+    def publish_pose(self, st: BodyState, t_ns: int, put: Put) -> None:
+        if not all(math.isfinite(v) for v in (*st.xyz, *st.v_body)):
+            raise RunError(f"agent {self.name}: non-finite state at t={t_ns * 1e-9:.3f} s")
+        put("odom", odometry(t_ns, self.name, st), t_ns)
+        put("/tf", tf_message([transform(t_ns, WORLD_FRAME, f"{self.name}/base_link", st.xyz,
+                                         st.quat)]), t_ns)
+
+
+class LineTrackerRobot(Robot):
+    STATIC = ("line_sensor", "line_camera_left", "line_camera_right", "sonar")
+
+    def __init__(self, name: str, spec: AgentSpec, world: World, agent: Agent, dt_s: float,
+                 model_dir: Path, odom_every: int, rng: np.random.Generator) -> None:
+        assert isinstance(world.spec, LineLabWorld)
+        self.body = LineTracker(world.client, spec, world.spec, model_dir, dt_s)
+        super().__init__(name, agent, every(agent.period_s, dt_s), self.body.frames)
+        self.camera = LineCamera(world.client, spec.line_sensor, world.spec)
+        self.sonar = Sonar(world.client, spec.sonar) if spec.sonar.enabled else None
+        self.noise_std, self.odom_every, self.rng = spec.line_sensor.noise_std, odom_every, rng
+
+    def static_transforms(self) -> list[Any]:
+        return self.static_tf(self.STATIC)
+
+    def sense(self, k: int, t_ns: int, put: Put) -> None:
+        st = self.body.state()
+        if k % self.odom_every == 0:
+            self.publish_pose(st, t_ns, put)
+            wl, wr = self.body.wheel_speeds()
+            put("joint_states", joint_state(t_ns, f"{self.name}/base_link",
+                                            ["left_wheel_hinge", "right_wheel_hinge"], [],
+                                            [wl, wr]), t_ns)
+        if k % self.ctrl_every:
+            return  # the line cameras and the sonar run with the controller (seed Sec. 6.6)
+        poses = [self.body.frame_pose(f"line_camera_{s}", st) for s in ("left", "right")]
+        lum = [v + self.noise_std * float(self.rng.standard_normal())
+               for v in self.camera.luminances(poses)]
+        put("line_sensor", msg("kartci_msgs/msg/LineSensor",
+                               header=header(t_ns, f"{self.name}/line_sensor"),
+                               left=lum[0], right=lum[1]), t_ns)
+        if self.sonar is not None:
+            s = self.sonar.spec
+            put("sonar", msg("sensor_msgs/msg/Range", header=header(t_ns, f"{self.name}/sonar"),
+                             radiation_type=0,
+                             field_of_view=2 * math.atan2(s.cone_radius_m, s.max_range_m),
+                             min_range=s.min_range_m, max_range=s.max_range_m,
+                             range=self.sonar.range(*self.body.frame_pose("sonar", st))), t_ns)
+
+    def apply(self, topic: str, m: Any) -> None:
+        if topic == "wheel_cmd":
+            self.body.command(float(m.velocity[0]), float(m.velocity[1]))
+
+    def pre_step(self, k: int) -> None:
+        self.body.pre_step()
+
+    def past_end(self, course: Any, end_m: float) -> bool:
+        pt = self.body.frame_pose("line_sensor")[0][:2]
+        return bool(geometry.progress_m(course, pt[None, :])[0] > end_m + 0.02)
+
+
+@dataclass
+class _Contact:
+    start_ns: int
+    last_ns: int
+    impulse: float
+    position: tuple[float, float, float]
+
+
+class KartRobot(Robot):
+    STATIC = ("cog_link", "imu_link", "velodyne_link", "camera_link")
+    JOINTS = ["front_left_wheel_steer_joint", "front_right_wheel_steer_joint",
+              "rear_left_wheel_joint", "rear_right_wheel_joint", "front_left_wheel_joint",
+              "front_right_wheel_joint"]
+    CONTACT_GAP_NS = 100_000_000  # contacts closer than 0.1 s apart are one collision
+
+    def __init__(self, name: str, spec: AgentSpec, world: World, agent: Agent, dt_s: float,
+                 model_dir: Path, odom_every: int, rng: np.random.Generator, track: Track,
+                 names: dict[int, str]) -> None:
+        assert isinstance(world.spec, HallWorld)
+        self.spec, self.world_spec, self.rng, self.dt = spec, world.spec, rng, dt_s
+        model = spec.model
+        assert model.kind == "gokart"
+        self.body = Gokart(world.client, model, model_dir,
+                           track.pose_at(spec.start.along_m, spec.start.lateral_m), dt_s)
+        super().__init__(name, agent, every(agent.period_s, dt_s), self.body.frames)
+        self.client, self.odom_every, self.names, self.floor = (world.client, odom_every, names,
+                                                                world.floor)
+        self.imu_every = every(1.0 / spec.imu.rate_hz, dt_s)
+        self.lidar_every = every(1.0 / spec.lidar.rate_hz, dt_s)
+        self.lidar = lidar_mod.MODELS[spec.lidar.model]
+        self.azimuths = self.lidar.azimuths(spec.lidar.rate_hz)
+        self.blocks = blocks(self.world_spec)
+        self._imu_prev: np.ndarray | None = None
+        self._scans = 0
+        self.contacts: dict[str, _Contact] = {}
+        self.others: list[KartRobot] = []
+
+    def static_transforms(self) -> list[Any]:
+        return self.static_tf(self.STATIC)
+
+    def footprint(self) -> Block:
+        st = self.body.state()
+        yaw = math.atan2(2 * (st.quat[3] * st.quat[2] + st.quat[0] * st.quat[1]),
+                         1 - 2 * (st.quat[1] ** 2 + st.quat[2] ** 2))
+        c = (st.xyz[0] + 0.6 * math.cos(yaw), st.xyz[1] + 0.6 * math.sin(yaw))
+        return Block(self.name, c, (2.0, 1.2, 0.45), yaw)
+
+    def sense(self, k: int, t_ns: int, put: Put) -> None:
+        st = self.body.state()
+        ns = self.name
+        if k % self.odom_every == 0:
+            self.publish_pose(st, t_ns, put)
+            steer, speeds = self.body.wheel_states()
+            put("joint_states", joint_state(
+                t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
+                [*steer, 0.0, 0.0, 0.0, 0.0, self.body.column], [0.0, 0.0, *speeds, 0.0]), t_ns)
+            self._zone_friction(st)
+        if self.spec.imu.enabled and k % self.imu_every == 0:
+            self._imu(st, t_ns, put)
+        if self.spec.lidar.enabled and k % self.lidar_every == 0:
+            self._lidar(st, t_ns, put)
+
+    def _imu(self, st: BodyState, t_ns: int, put: Put) -> None:
+        """Specific force (gravity included) and angular rate in imu_link, from the finite
+        difference of the IMU point's velocity over one IMU period."""
+        rot = np.array(_rotation(st.quat))
+        rel, rel_rot = self.frames["imu_link"]
+        w_world = rot @ np.asarray(st.w_body)
+        v_world = rot @ np.asarray(st.v_body) + np.cross(w_world, rot @ rel)
+        period = self.imu_every * self.dt
+        acc = np.zeros(3) if self._imu_prev is None else (v_world - self._imu_prev) / period
+        self._imu_prev = v_world
+        to_imu = (rot @ rel_rot).T
+        f = to_imu @ (acc + np.array([0.0, 0.0, 9.81]))
+        g = to_imu @ w_world
+        acc_std, gyro_std = _imu_noise(self.spec)
+        f = f + acc_std * self.rng.standard_normal(3)
+        g = g + gyro_std * self.rng.standard_normal(3)
+        cov_a, cov_g = np.diag([acc_std**2] * 3).ravel(), np.diag([gyro_std**2] * 3).ravel()
+        no_orientation = np.zeros(9)
+        no_orientation[0] = -1.0  # REP 145: this IMU gives no orientation estimate
+        put("imu", msg("sensor_msgs/msg/Imu", header=header(t_ns, f"{self.name}/imu_link"),
+                       orientation=msg("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0,
+                                       w=1.0),
+                       orientation_covariance=no_orientation,
+                       angular_velocity=msg("geometry_msgs/msg/Vector3", x=g[0], y=g[1], z=g[2]),
+                       angular_velocity_covariance=cov_g,
+                       linear_acceleration=msg("geometry_msgs/msg/Vector3", x=f[0], y=f[1],
+                                               z=f[2]),
+                       linear_acceleration_covariance=cov_a), t_ns)
+
+    def _lidar(self, st: BodyState, t_ns: int, put: Put) -> None:
+        pos, _ = self.body.frame_pose("velodyne_link", st)
+        yaw = _yaw(st.quat)
+        extra = [o.footprint() for o in self.others]
+        ranges = lidar_mod.scan_fast(self.lidar, self.azimuths, pos, yaw, self.blocks + extra,
+                                     self.world_spec.wall_height_m, self.spec.lidar.range_m)
+        std = self.spec.lidar.range_noise_std_m
+        std = self.lidar.range_accuracy_m if std is None else std
+        ranges = ranges + std * self.rng.standard_normal(ranges.shape)
+        self._scans += 1
+        if (self._scans - 1) % self.spec.lidar.record_every:
+            return
+        pts = lidar_mod.to_points(self.lidar, self.azimuths, ranges)
+        fields = [msg("sensor_msgs/msg/PointField", name=n, offset=o, datatype=d, count=1)
+                  for n, o, d in (("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 12, 7),
+                                  ("ring", 16, 4))]
+        put("velodyne_points", msg(
+            "sensor_msgs/msg/PointCloud2", header=header(t_ns, f"{self.name}/velodyne_link"),
+            height=1, width=len(pts), fields=fields, is_bigendian=False,
+            point_step=pts.dtype.itemsize, row_step=pts.dtype.itemsize * len(pts),
+            data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns)
+
+    def _zone_friction(self, st: BodyState) -> None:
+        w = self.world_spec
+        mu = []
+        for x, y in self.body.wheel_contacts_xy(st):
+            f = w.floor_friction
+            for z in w.zones:
+                if z.min_m[0] <= x <= z.max_m[0] and z.min_m[1] <= y <= z.max_m[1]:
+                    f = z.friction
+            mu.append(f)
+        self.body.set_wheel_friction(mu)
+
+    def track_contacts(self, t_ns: int, put: Put) -> None:
+        """Contacts with anything but the floor, grouped into collisions (episodes)."""
+        from kartci._bullet import pb
+
+        seen: set[str] = set()
+        for c in pb.getContactPoints(bodyA=self.body.body, physicsClientId=self.client):
+            if c[2] == self.floor or c[2] == self.body.body:
+                continue
+            other = self.names.get(c[2], f"body_{c[2]}")
+            seen.add(other)
+            cur = self.contacts.get(other)
+            impulse = c[9] * self.dt
+            if cur is None:
+                self.contacts[other] = _Contact(t_ns, t_ns, impulse, tuple(c[5]))
+            else:
+                cur.last_ns, cur.impulse = t_ns, cur.impulse + impulse
+        for other in [o for o in self.contacts if o not in seen]:
+            if t_ns - self.contacts[other].last_ns > self.CONTACT_GAP_NS:
+                self._report(other, put)
+
+    def flush_contacts(self, put: Put) -> None:
+        for other in list(self.contacts):
+            self._report(other, put)
+
+    def _report(self, other: str, put: Put) -> None:
+        c = self.contacts.pop(other)
+        put("collision", msg("kartci_msgs/msg/Collision", header=header(c.start_ns, WORLD_FRAME),
+                             other=other, impulse_ns=c.impulse,
+                             duration_s=(c.last_ns - c.start_ns) * 1e-9,
+                             position=msg("geometry_msgs/msg/Point", x=c.position[0],
+                                          y=c.position[1], z=c.position[2])), c.start_ns)
+
+    def apply(self, topic: str, m: Any) -> None:
+        if topic == "cmd":
+            self.body.command(KartInput(m.steering_wheel_angle_rad, m.acceleration_mps2,
+                                        m.brake_mps2, m.reverse, m.emergency_stop))
+
+    def pre_step(self, k: int) -> None:
+        self.body.pre_step()
+
+
+def _rotation(q: tuple[float, float, float, float]) -> list[list[float]]:
+    x, y, z, w = q
+    return [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+
+
+def _yaw(q: tuple[float, float, float, float]) -> float:
+    x, y, z, w = q
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+# Table 3.6, read as 1-sigma white noise: accuracy x default full scale.
+IMU_NOISE = {"bumblebee": (0.01 * 8 * 9.81, 0.015 * math.radians(245)),  # IRIMU-V2
+             "herbie": (0.0002 * 8 * 9.81, 0.0002 * math.radians(300))}  # 3DM-GX5-AHRS
+
+
+def _imu_noise(spec: AgentSpec) -> tuple[float, float]:
+    variant = getattr(spec.model, "variant", "bumblebee")
+    acc, gyro = IMU_NOISE[variant]
+    if spec.imu.accel_noise_std_mps2 is not None:
+        acc = spec.imu.accel_noise_std_mps2
+    if spec.imu.gyro_noise_std_radps is not None:
+        gyro = spec.imu.gyro_noise_std_radps
+    return acc, gyro

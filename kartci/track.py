@@ -1,0 +1,102 @@
+"""Closed race tracks in the TUMFTM racetrack-database CSV format, and where a point is on one.
+
+`# x_m,y_m,w_tr_right_m,w_tr_left_m`: centreline points of a closed loop (no repeated point) with
+the free width to each side. The centreline is a periodic cubic spline through the points
+(scipy), sampled densely; projections use a KD-tree over the samples.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.interpolate import CubicSpline
+from scipy.spatial import cKDTree
+
+from kartci.errors import SpecError
+
+Array = NDArray[np.float64]
+SAMPLE_M = 0.05  # spacing of the dense centreline samples
+
+
+@dataclass(frozen=True)
+class Track:
+    """A closed track: dense centreline samples, arc length, headings and widths."""
+
+    name: str
+    s: Array  # arc length of each sample, m (0 at the first CSV point = start/finish line)
+    xy: Array  # (n, 2) centreline, m
+    heading: Array  # rad
+    curvature: Array  # 1/m, left turn positive
+    w_right: Array  # m
+    w_left: Array  # m
+    length_m: float
+    _tree: cKDTree = field(repr=False, compare=False, hash=False)
+
+    def pose_at(self, s_m: float, lateral_m: float = 0.0) -> tuple[float, float, float]:
+        """Point `lateral_m` left of the centreline at arc length `s_m`, and the heading there."""
+        i = int(round((s_m % self.length_m) / self.length_m * len(self.s))) % len(self.s)
+        h = self.heading[i]
+        x, y = self.xy[i]
+        return float(x - np.sin(h) * lateral_m), float(y + np.cos(h) * lateral_m), float(h)
+
+    def project(self, xy: Array) -> tuple[Array, Array, Array, Array]:
+        """Arc length, signed lateral offset (left +), and the widths right / left there."""
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        _, idx = self._tree.query(xy)
+        rel = xy - self.xy[idx]
+        h = self.heading[idx]
+        along = rel[:, 0] * np.cos(h) + rel[:, 1] * np.sin(h)
+        lateral = -rel[:, 0] * np.sin(h) + rel[:, 1] * np.cos(h)
+        s = (self.s[idx] + along) % self.length_m
+        return s, lateral, self.w_right[idx], self.w_left[idx]
+
+    def bounds(self) -> tuple[Array, Array]:
+        """Left and right edges as (n, 2) polylines."""
+        n = np.column_stack([-np.sin(self.heading), np.cos(self.heading)])
+        return self.xy + n * self.w_left[:, None], self.xy - n * self.w_right[:, None]
+
+
+def parse_csv(path: Path) -> Array:
+    try:
+        rows = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+    except (OSError, ValueError) as err:
+        raise SpecError(f"{path}: not a TUMFTM track CSV (x_m,y_m,w_tr_right_m,w_tr_left_m): "
+                        f"{err}") from None
+    if rows.shape[1] != 4 or len(rows) < 4:
+        raise SpecError(f"{path}: expected at least 4 rows of x_m,y_m,w_tr_right_m,w_tr_left_m")
+    if np.allclose(rows[0, :2], rows[-1, :2]):
+        raise SpecError(f"{path}: the loop repeats its first point at the end; drop the last row")
+    if (rows[:, 2:] <= 0).any():
+        raise SpecError(f"{path}: track widths must be positive")
+    return rows
+
+
+@cache
+def load_track(path: Path) -> Track:
+    rows = parse_csv(path)
+    pts = np.vstack([rows, rows[:1]])
+    seg = np.hypot(*np.diff(pts[:, :2], axis=0).T)
+    if (seg < 1e-6).any():
+        raise SpecError(f"{path}: two consecutive points coincide")
+    knots = np.concatenate([[0.0], np.cumsum(seg)])
+    spline = CubicSpline(knots, pts, bc_type="periodic")
+    u = np.arange(0.0, knots[-1], SAMPLE_M)
+    p, d1, d2 = spline(u), spline(u, 1), spline(u, 2)
+    step = np.hypot(*np.diff(np.vstack([p[:, :2], p[:1, :2]]), axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(step)[:-1]])
+    speed = np.hypot(d1[:, 0], d1[:, 1])
+    curvature = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / speed**3
+    xy = p[:, :2]
+    return Track(path.stem, s, xy, np.arctan2(d1[:, 1], d1[:, 0]), curvature, p[:, 2], p[:, 3],
+                 float(step.sum()), cKDTree(xy))
+
+
+def write_csv(path: Path, rows: Array, comment: str = "") -> None:
+    header = "x_m,y_m,w_tr_right_m,w_tr_left_m"
+    if comment:
+        header = comment.rstrip("\n") + "\n" + header
+    np.savetxt(path, rows, delimiter=",", fmt="%.4f", header=header, comments="# ")

@@ -1,0 +1,48 @@
+"""Go-kart commands and steering geometry, shared by agents and the simulator so that neither
+imports the other."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from kartci.spec.models import GokartModel
+
+
+@dataclass(frozen=True)
+class KartInput:
+    """A go-kart command in the seed's simulation format (Sec. 5.2)."""
+
+    steering_rad: float = 0.0  # steering-column (steering-wheel) angle, left +
+    accel_mps2: float = 0.0  # motor: acceleration
+    brake_mps2: float = 0.0  # brake: deceleration
+    reverse: bool = False
+    estop: bool = False
+
+
+def wheel_angles(model: GokartModel, beta_c: float) -> tuple[float, float]:
+    """Left and right front-wheel angles (rad) for a steering-column angle beta_c (rad)."""
+    if model.steering == "measured":  # Eq. 3.4 / 3.5, fitted to Table 3.3
+        right = -0.0355 * beta_c**3 + 0.0455 * beta_c**2 + 0.36 * beta_c
+        left = -0.0355 * beta_c**3 - 0.0455 * beta_c**2 + 0.36 * beta_c
+        return left, right
+    # Eq. 3.1 / 3.2: ideal Ackermann with beta_c as the angle of a virtual centre wheel
+    t, lw, w = math.tan(beta_c), model.wheelbase_m, model.track_m
+    return math.atan2(lw * t, lw + 0.5 * w * t), math.atan2(lw * t, lw - 0.5 * w * t)
+
+
+def column_for_wheel_angle(model: GokartModel, delta: float) -> float:
+    """Steering-column angle whose mean front-wheel angle is `delta` (bisection; monotonic)."""
+    lo, hi = model.steering_limit_rad
+    for _ in range(40):
+        mid = (lo + hi) / 2
+        if sum(wheel_angles(model, mid)) / 2 < delta:
+            lo = mid
+        else:
+            hi = mid
+    return (lo + hi) / 2
+
+
+def axle_distance_m(model: GokartModel) -> float:
+    """Distance between the rear and front axles (Table 3.2), m."""
+    return model.wheel_xy_m[2][0] - model.wheel_xy_m[0][0]
