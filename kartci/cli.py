@@ -33,9 +33,11 @@ BaselinesOpt = Annotated[Path | None, typer.Option(
     help="Folder of baseline files (default: the project's baselines/).")]
 
 
-def _baselines(path: Path | None) -> Path:
+def _baselines(path: Path | None, must_exist: bool = True) -> Path:
     from kartci.runner import default_baselines
 
+    if path is not None and must_exist and not path.is_dir():
+        raise SpecError(f"--baselines {path}: no such folder")
     return path or default_baselines()
 
 
@@ -116,10 +118,15 @@ def run(
     run error. Reports: OUT/report.html, summary.md, summary.json, junit.xml.
     """
     from kartci.runner import run_suite
-    from kartci.spec import scenario_names
+    from kartci.spec import load_scenario, scenario_names
 
-    selected = names or scenario_names()
+    selected = names or [n for n in scenario_names() if "tool" not in
+                         load_scenario(n).tags]
+    if not selected:
+        raise SpecError("no scenarios to run: scenarios/ is empty (set KARTCI_ROOT to the "
+                        "project folder)")
     quiet = not out_console.is_terminal or bool(os.environ.get("CI"))
+    out.mkdir(parents=True, exist_ok=True)  # an unusable --out fails here, before any run
 
     def done(name: str, r: ScenarioResult) -> None:
         rtf = r.run.get("real_time_factor")
@@ -133,6 +140,72 @@ def run(
 
     results = run_suite(selected, set_ or [], out, _baselines(baselines), done, progress)
     _finish(results, out)
+
+
+@app.command()
+def replay(
+    log: Annotated[Path, typer.Argument(help="ROS 1 .bag, rosbag2 folder or .mcap file.")],
+    scenario: Annotated[str, typer.Option(help="Scenario whose world and kart replay the log.")]
+    = "kart_manual",
+    topic: Annotated[str | None, typer.Option(
+        help="Input topic (default: the log's only Joy or command topic).")] = None,
+    mapping: Annotated[str, typer.Option(help="Joystick mapping for Joy logs: "
+                                              "models/gokart/joy/<name>.yaml.")] = "ps4",
+    agent: Annotated[str | None, typer.Option(help="Agent to drive (default: the first).")]
+    = None,
+    set_: SetOpt = None,
+    out: OutOpt = Path("reports/replay"),
+    baselines: BaselinesOpt = None,
+) -> None:
+    """Run a scenario with a recorded input stream driving one kart: sensor_msgs/Joy through a
+    joystick mapping (the manual agent), or AckermannDriveStamped / Twist / TwistStamped
+    commands. Log time is re-based so the first message is at sim time 0."""
+    from kartci.agents.kart import COMMANDS, JOY
+    from kartci.logs import topics
+    from kartci.runner import run_specs
+    from kartci.spec import load_scenario
+    from kartci.spec.models import CommandsController, LogSource, ManualController
+
+    spec = load_scenario(scenario, set_ or [])
+    name = agent or next(iter(spec.agents))
+    if name not in spec.agents:
+        raise SpecError(f"scenario {spec.name} has no agent '{name}' "
+                        f"(agents: {', '.join(spec.agents)})")
+    info = topics(log)
+    candidates = [i for i in info if (topic is None or i.topic == topic)
+                  and i.msgtype in (*JOY, *COMMANDS) and i.count > 0]
+    if len(candidates) != 1:
+        listed = ", ".join(f"{i.topic} ({i.msgtype}, {i.count})" for i in info) or "none"
+        what = f"topic {topic}" if topic else "exactly one Joy or drive-command topic"
+        raise SpecError(f"{log}: needs {what} with messages; it has: {listed}"
+                        + ("" if topic else "; choose one with --topic"))
+    chosen = candidates[0]
+    source = LogSource(log=str(log.resolve()), topic=chosen.topic)
+    controller: ManualController | CommandsController
+    if chosen.msgtype in JOY:
+        controller = ManualController(mapping=mapping, source=source)
+    else:
+        controller = CommandsController(source=source)
+    agents = dict(spec.agents)
+    agents[name] = agents[name].model_copy(update={"controller": controller})
+    spec = spec.model_copy(update={"agents": agents})
+    out.mkdir(parents=True, exist_ok=True)
+    err_console.print(f"replaying {chosen.topic} ({chosen.msgtype}, {chosen.count} messages) "
+                      f"into {spec.name}/{name}", highlight=False)
+    _finish(run_specs([spec], out, _baselines(baselines)), out)
+
+
+@app.command()
+def extract(
+    log: Annotated[Path, typer.Argument(help="Any log: .bag, rosbag2 folder or .mcap.")],
+    topic: Annotated[list[str], typer.Option("--topic", "-t", help="Topic to keep (repeat).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="The new .mcap file.")],
+) -> None:
+    """Copy some topics of a log into a new MCAP file (ROS 2 types), e.g. a joystick stream."""
+    from kartci.logs import extract as copy_topics
+
+    n = copy_topics(log, topic, out)
+    out_console.print(f"wrote {out}: {n} messages", highlight=False)
 
 
 @app.command()
@@ -152,22 +225,22 @@ def baseline_update(
     baselines: BaselinesOpt = None,
 ) -> None:
     """Store a run's metrics as the baselines; the only command that writes baselines."""
-    from kartci.verdict import update
+    from kartci.runner import ERROR_NAME
+    from kartci.verdict import load, read_metrics, update
 
     folders = [out / n for n in names] if names else sorted(
         p.parent for p in out.glob("*/metrics.json"))
     if not folders:
         raise SpecError(f"{out}: no <scenario>/metrics.json found; run `kartci run` first")
-    target = _baselines(baselines)
-    for folder in folders:
-        path = folder / "metrics.json"
-        if not path.exists():
-            raise SpecError(f"{path}: not found (scenario '{folder.name}' not in this run)")
-        try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-            values = doc["metrics"]
-        except (ValueError, KeyError) as err:
-            raise SpecError(f"{path}: malformed metrics file ({err})") from None
+    target = _baselines(baselines, must_exist=False)
+    checked = []
+    for folder in folders:  # check everything before writing anything
+        if (folder / ERROR_NAME).exists():
+            raise SpecError(f"{folder}: the last run of this scenario failed; its metrics are "
+                            "stale and will not become a baseline")
+        load(target / f"{folder.name}.json")
+        checked.append((folder, read_metrics(folder / "metrics.json")))
+    for folder, values in checked:
         changes = update(target / f"{folder.name}.json", folder.name, values)
         moved = [c for c in changes if c.kind != "unchanged"]
         out_console.print(f"{folder.name}: {len(moved)} of {len(changes)} metrics changed",
@@ -199,6 +272,8 @@ def characterise(
         fov_list = [float(f) for f in fovs.split(",") if f.strip()]
     except ValueError:
         raise SpecError(f"--fovs {fovs!r}: expected comma-separated numbers") from None
+    if not fov_list or not all(0.05 < f < 3.0 for f in fov_list):
+        raise SpecError(f"--fovs {fovs!r}: each field of view must be in (0.05, 3.0) rad")
     if not 0 < step_m <= 0.005:
         raise SpecError(f"--step-m {step_m}: expected 0 < step <= 0.005")
     offsets = np.round(np.arange(-0.03, 0.03 + step_m / 2, step_m), 9)
@@ -250,6 +325,10 @@ def main() -> None:
         app()
     except KartciError as err:
         print(f"kartci: error: {err}", file=sys.stderr)
+        sys.exit(2)
+    except OSError as err:
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"kartci: error: {where}{err.strerror or err}", file=sys.stderr)
         sys.exit(2)
     except KeyboardInterrupt:
         print("kartci: interrupted", file=sys.stderr)

@@ -15,11 +15,13 @@ from kartci.verdict import CriterionResult, MetricVerdict, Status, worst
 class Plots:
     """Time series and geometry a report draws; all read back from the run log."""
 
-    course: np.ndarray  # (n, 2) line axis, m
-    line_width_m: float
-    tracks: dict[str, pd.DataFrame]  # agent -> t, x, y (sensor point), offset, progress, vx
+    kind: str  # "line" (a line lab) or "track" (a race track)
+    course: np.ndarray  # (n, 2) line axis or track centreline, m
+    edges: list[np.ndarray]  # track bounds (left, right), empty for a line
+    tracks: dict[str, pd.DataFrame]  # agent -> t, x, y, offset, speed (+ line: progress)
     wheels: dict[str, pd.DataFrame]  # agent -> t, left, right (measured, rad/s)
     commands: dict[str, pd.DataFrame]  # agent -> t, left, right (commanded, rad/s)
+    collisions: dict[str, pd.DataFrame]  # agent -> t, x, y, other, impulse_ns
     transient_s: float = 0.0  # start-up transient the metrics leave out
 
 

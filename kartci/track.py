@@ -7,6 +7,7 @@ the free width to each side. The centreline is a periodic cubic spline through t
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
@@ -38,7 +39,7 @@ class Track:
 
     def pose_at(self, s_m: float, lateral_m: float = 0.0) -> tuple[float, float, float]:
         """Point `lateral_m` left of the centreline at arc length `s_m`, and the heading there."""
-        i = int(round((s_m % self.length_m) / self.length_m * len(self.s))) % len(self.s)
+        i = round((s_m % self.length_m) / self.length_m * len(self.s)) % len(self.s)
         h = self.heading[i]
         x, y = self.xy[i]
         return float(x - np.sin(h) * lateral_m), float(y + np.cos(h) * lateral_m), float(h)
@@ -60,9 +61,11 @@ class Track:
         return self.xy + n * self.w_left[:, None], self.xy - n * self.w_right[:, None]
 
 
-def parse_csv(path: Path) -> Array:
+def parse_csv(path: Path, text: str | None = None) -> Array:
+    """Rows of a TUMFTM CSV file (or of its text, as recorded in a run log)."""
     try:
-        rows = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+        rows = np.loadtxt(io.StringIO(text) if text is not None else path, delimiter=",",
+                          comments="#", ndmin=2)
     except (OSError, ValueError) as err:
         raise SpecError(f"{path}: not a TUMFTM track CSV (x_m,y_m,w_tr_right_m,w_tr_left_m): "
                         f"{err}") from None
@@ -77,7 +80,14 @@ def parse_csv(path: Path) -> Array:
 
 @cache
 def load_track(path: Path) -> Track:
-    rows = parse_csv(path)
+    return track_from_rows(parse_csv(path), path)
+
+
+def track_from_text(text: str, name: str) -> Track:
+    return track_from_rows(parse_csv(Path(name), text), Path(name))
+
+
+def track_from_rows(rows: Array, path: Path) -> Track:
     pts = np.vstack([rows, rows[:1]])
     seg = np.hypot(*np.diff(pts[:, :2], axis=0).T)
     if (seg < 1e-6).any():
@@ -91,6 +101,8 @@ def load_track(path: Path) -> Track:
     speed = np.hypot(d1[:, 0], d1[:, 1])
     curvature = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / speed**3
     xy = p[:, :2]
+    if (p[:, 2:] <= 0).any():
+        raise SpecError(f"{path}: the spline through the widths goes non-positive somewhere")
     return Track(path.stem, s, xy, np.arctan2(d1[:, 1], d1[:, 0]), curvature, p[:, 2], p[:, 3],
                  float(step.sum()), cKDTree(xy))
 

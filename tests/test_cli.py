@@ -55,6 +55,7 @@ def test_malformed_scenario_file(tmp_path: Path) -> None:
 def test_run_twice_gives_byte_identical_metrics(tmp_path: Path) -> None:
     """Same scenario and seed, two processes: identical metrics.json, byte for byte."""
     base = tmp_path / "b"
+    base.mkdir()
     for out in ("a", "b2"):
         p = kartci("run", "line_straight", *SHORT, "--out", tmp_path / out, "--baselines", base)
         assert p.returncode == 0, p.stderr
@@ -70,9 +71,10 @@ def test_run_twice_gives_byte_identical_metrics(tmp_path: Path) -> None:
 
 def test_baseline_cycle_and_a_tightened_baseline_fails(tmp_path: Path) -> None:
     out, base = tmp_path / "out", tmp_path / "baselines"
+    base.mkdir()
     assert kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base
                   ).returncode == 0
-    assert not base.exists() or not any(base.iterdir())  # a run never writes baselines
+    assert not any(base.iterdir())  # a run never writes baselines
     upd = kartci("baseline", "update", out, "--baselines", base)
     assert upd.returncode == 0, upd.stderr
     assert "added" in upd.stdout
@@ -105,6 +107,7 @@ def test_baseline_cycle_and_a_tightened_baseline_fails(tmp_path: Path) -> None:
 
 def test_report_rebuilds_from_logs_alone(tmp_path: Path) -> None:
     out, base = tmp_path / "out", tmp_path / "baselines"
+    base.mkdir()
     assert kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base
                   ).returncode == 0
     metrics = (out / "line_straight" / "metrics.json").read_bytes()
@@ -139,3 +142,54 @@ def test_characterise_writes_csv_and_plot(tmp_path: Path) -> None:
     header = (tmp_path / "sweep.csv").read_text().splitlines()[0]
     assert header.startswith("offset_m,left,right,difference")
     assert "<svg" in (tmp_path / "characterisation.html").read_text()
+
+
+def test_bad_inputs_found_in_review_are_one_line_each(tmp_path: Path) -> None:
+    binary = tmp_path / "bin.yaml"
+    binary.write_bytes(b"\xff\xfe\x00")
+    assert "not a UTF-8 text file" in _one_clean_line(kartci("show", binary))
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    _one_clean_line(kartci("run", "line_straight", *SHORT, "--out", afile / "sub"))
+    assert "no such folder" in _one_clean_line(kartci("report", tmp_path, "--baselines",
+                                                      tmp_path / "typo"))
+    crit = tmp_path / "crit.yaml"
+    crit.write_text((Path(__file__).parents[1] / "scenarios" / "line_straight.yaml").read_text()
+                    + "\n" + "tags: []\n")
+    assert "unknown metrics: cross_track_maxx_m" in _one_clean_line(kartci(
+        "run", crit, "--set", "criteria={cross_track_maxx_m: {max: 1}}", "--out", tmp_path / "o"))
+
+
+def test_a_failed_run_is_marked_and_never_becomes_a_baseline(tmp_path: Path) -> None:
+    out, base = tmp_path / "out", tmp_path / "baselines"
+    base.mkdir()
+    assert kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base
+                  ).returncode == 0
+    good = (out / "line_straight" / "metrics.json").read_bytes()
+    # a broken URDF path makes the run itself fail
+    bad = kartci("run", "line_straight", *SHORT, "--set", "agents.lt0.model.urdf=nope.urdf",
+                 "--out", out, "--baselines", base)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr + bad.stdout
+    assert (out / "line_straight" / "metrics.json").read_bytes() == good  # kept...
+    assert (out / "line_straight" / "error.json").exists()  # ...but marked stale
+    assert kartci("report", out, "--baselines", base).returncode == 2
+    refused = _one_clean_line(kartci("baseline", "update", out, "--baselines", base))
+    assert "last run of this scenario failed" in refused
+    assert not any(base.iterdir())
+
+
+def test_corrupt_files_for_baseline_update(tmp_path: Path) -> None:
+    out, base = tmp_path / "out", tmp_path / "baselines"
+    (out / "a").mkdir(parents=True)
+    (out / "b").mkdir(parents=True)
+    (out / "a" / "metrics.json").write_text('{"metrics": {"x": {"value": 1.0}}}')
+    (out / "b" / "metrics.json").write_text('{"metrics": {"x": {"value": "abc"}}}')
+    line = _one_clean_line(kartci("baseline", "update", out, "--baselines", base))
+    assert "b/metrics.json" in line
+    assert not base.exists() or not any(base.iterdir())  # nothing half-written
+    (out / "b" / "metrics.json").write_text('{"metrics": {"x": {"value": 2.0}}}')
+    base.mkdir(exist_ok=True)
+    (base / "a.json").write_text('{"metrics": {"x": {"value": 1, "tolerance": NaN, '
+                                 '"direction": "lower"}}}')
+    assert "a.json: malformed baseline" in _one_clean_line(
+        kartci("baseline", "update", out, "--baselines", base))

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from kartci.errors import SpecError
-from kartci.spec import json_schema, load_scenario, scenario_names
+from kartci.spec import LinePidController, json_schema, load_scenario, scenario_names
 
 
 @pytest.mark.parametrize("name", scenario_names())
@@ -21,6 +21,7 @@ def test_set_overrides_any_value() -> None:
                                          "agents.lt0.controller.kp=20", "seed=7",
                                          "world.course.radius_m=0.8"])
     ctrl = spec.agents["lt0"].controller
+    assert isinstance(ctrl, LinePidController)
     assert (ctrl.period_s, ctrl.kp, spec.seed) == (0.06, 20.0, 7)
     assert spec.world.course.radius_m == 0.8  # type: ignore[union-attr]
 

@@ -12,9 +12,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from kartci.errors import SpecError
 from kartci.logs.types import header, msg
-from kartci.vehicle import KartInput
 from kartci.spec import project_root
 from kartci.spec.models import GokartModel
+from kartci.vehicle import KartInput
 
 
 class _M(BaseModel):

@@ -11,8 +11,6 @@ import numpy as np
 from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command, load_mapping, to_command, to_joy
 from kartci.agents.source import Recorded
-from kartci.track import Track
-from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle
 from kartci.spec.models import (
     CommandsController,
     GokartModel,
@@ -20,6 +18,8 @@ from kartci.spec.models import (
     ManualController,
     ScriptController,
 )
+from kartci.track import Track
+from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle
 
 JOY = ("sensor_msgs/msg/Joy",)
 COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",

@@ -14,12 +14,14 @@ from pathlib import Path
 from typing import Any
 
 from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.rosbag1 import ReaderError as Ros1ReaderError
+from rosbags.rosbag2 import ReaderError as Ros2ReaderError
 
 from kartci.errors import LogError
 from kartci.logs.types import typestore
 
-_READ_ERRORS = (AnyReaderError, AssertionError, struct.error, EOFError, ValueError, KeyError,
-                IndexError, OSError, TypeError)
+_READ_ERRORS = (AnyReaderError, Ros1ReaderError, Ros2ReaderError, AssertionError, struct.error,
+                EOFError, ValueError, KeyError, IndexError, OSError, TypeError)
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,14 @@ FLATTENERS: dict[str, Callable[[Any], Row]] = {
     "kartci_msgs/msg/LineControllerState": _fields("distance_estimate_m", "u2", "integral",
                                                    "sonar_stop"),
     "std_msgs/msg/String": _fields("data"),
+    "kartci_msgs/msg/Collision": lambda m: {"other": m.other, "impulse_ns": m.impulse_ns,
+                                            "duration_s": m.duration_s, "x": m.position.x,
+                                            "y": m.position.y},
+    "kartci_msgs/msg/KartCommand": _fields("steering_wheel_angle_rad", "acceleration_mps2",
+                                           "brake_mps2", "reverse", "emergency_stop"),
+    "sensor_msgs/msg/Imu": lambda m: {"ax": m.linear_acceleration.x,
+                                      "ay": m.linear_acceleration.y,
+                                      "az": m.linear_acceleration.z, "wz": m.angular_velocity.z},
 }
 
 

@@ -9,8 +9,11 @@ from typing import Any
 from kartci.errors import LogError
 from kartci.logs import tables
 from kartci.metrics.base import DEFS, Direction, Metric, MetricDef
+from kartci.metrics.kart import kart_metrics, kart_track
 from kartci.metrics.line import line_metrics, sensor_track
 from kartci.spec import Scenario, scenario_from_json
+from kartci.spec.models import HallWorld
+from kartci.track import Track, track_from_text
 
 
 def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
@@ -26,14 +29,27 @@ def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
     scenario = recorded_scenario(log_tables, log_path)
     out: dict[str, Metric] = {}
     many = len(scenario.agents) > 1
+    track = recorded_track(log_tables, log_path) if isinstance(scenario.world, HallWorld) else None
     for agent in scenario.agents:
         odom = log_tables.get(f"/{agent}/odom")
-        if odom is None:
-            raise LogError(f"{log_path}: no /{agent}/odom topic")
-        for m in line_metrics(scenario, agent, odom):
+        if odom is None or odom.empty:
+            raise LogError(f"{log_path}: no /{agent}/odom messages")
+        if track is None:
+            values = line_metrics(scenario, agent, odom)
+        else:
+            values = kart_metrics(scenario, agent, track, odom,
+                                  log_tables.get(f"/{agent}/collision"))
+        for m in values:
             out[f"{agent}.{m.name}" if many else m.name] = m
     return scenario, out
 
 
-__all__ = ["DEFS", "Direction", "Metric", "MetricDef", "compute", "line_metrics",
-           "recorded_scenario", "sensor_track"]
+def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
+    table = log_tables.get("/kartci/track")
+    if table is None or getattr(table, "empty", True):
+        raise LogError(f"{path}: no /kartci/track message; cannot score laps")
+    return track_from_text(str(table["data"].iloc[0]), "recorded track")
+
+
+__all__ = ["DEFS", "Direction", "Metric", "MetricDef", "compute", "kart_metrics", "kart_track",
+           "line_metrics", "recorded_scenario", "recorded_track", "sensor_track"]

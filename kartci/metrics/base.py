@@ -23,7 +23,8 @@ class MetricDef:
     description: str
 
     def default_tolerance(self, value: float) -> float:
-        return max(self.abs_tol, self.rel_tol * abs(value)) if math.isfinite(value) else 0.0
+        return max(self.abs_tol, self.rel_tol * abs(value)) if math.isfinite(value) else (
+            self.abs_tol)
 
 
 @dataclass(frozen=True)
@@ -34,14 +35,15 @@ class Metric:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        value: float | None = self.value if math.isfinite(self.value) else None
+        """10 significant digits: identical across CPUs whose last float bits differ."""
+        value: float | None = float(f"{self.value:.10g}") if math.isfinite(self.value) else None
         return {"value": value, "unit": self.unit, **self.extra}
 
 
 DEFS: dict[str, MetricDef] = {
     "cross_track_rms_m": MetricDef("m", Direction.LOWER, 0.0002, 0.10,
-                                   "RMS distance of the line-sensor point from the line axis "
-                                   "after the start-up transient"),
+                                   "RMS distance from the line axis (line tracker: of the "
+                                   "sensor point, after the transient) or from the centreline"),
     "cross_track_max_m": MetricDef("m", Direction.LOWER, 0.0005, 0.10,
                                    "largest such distance after the transient"),
     "line_lost": MetricDef("bool", Direction.EQUAL, 0.0, 0.0,
@@ -52,4 +54,14 @@ DEFS: dict[str, MetricDef] = {
                                 "mean forward speed of base_link"),
     "settle_time_s": MetricDef("s", Direction.LOWER, 0.5, 0.10,
                                "time after which the cross-track error stays in the settle band"),
+    "laps_completed": MetricDef("laps", Direction.HIGHER, 0.0, 0.0, "full laps from the start"),
+    "lap_times_s": MetricDef("s", Direction.LOWER, 0.2, 0.03,
+                             "mean lap time; every lap's time under `laps`"),
+    "best_lap_s": MetricDef("s", Direction.LOWER, 0.2, 0.03, "fastest full lap"),
+    "collisions": MetricDef("count", Direction.LOWER, 0.0, 0.0,
+                            "contacts with anything but the floor; each under `events`"),
+    "off_track_s": MetricDef("s", Direction.LOWER, 0.1, 0.10,
+                             "time with any wheel outside the track bounds"),
+    "max_speed_mps": MetricDef("m/s", Direction.EQUAL, 0.2, 0.03, "top speed of base_link"),
+    "progress_m": MetricDef("m", Direction.HIGHER, 0.5, 0.01, "arc length driven along the track"),
 }

@@ -9,7 +9,7 @@ import pandas as pd
 
 from kartci import geometry
 from kartci.metrics.base import DEFS, Metric
-from kartci.spec.models import Scenario, StraightCourse
+from kartci.spec.models import Scenario, StraightCourse, line_parts
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:
@@ -18,11 +18,12 @@ def _m(name: str, value: float, **extra: object) -> Metric:
 
 def sensor_track(scenario: Scenario, agent: str, odom: pd.DataFrame) -> pd.DataFrame:
     """Time, sensor-point position, signed offset from the line and progress along the course."""
-    lever = scenario.agents[agent].model.sensor_point_x_m
+    world, model = line_parts(scenario, agent)
+    lever = model.sensor_point_x_m
     x = odom["x"].to_numpy() + lever * np.cos(odom["yaw"].to_numpy())
     y = odom["y"].to_numpy() + lever * np.sin(odom["yaw"].to_numpy())
     pts = np.column_stack([x, y])
-    course = scenario.world.course
+    course = world.course
     return pd.DataFrame({"t": odom["t"].to_numpy(), "x": x, "y": y,
                          "offset": geometry.offset_m(course, pts),
                          "progress": geometry.progress_m(course, pts),
@@ -34,7 +35,7 @@ def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame) -> list[Met
         return []
     tr = sensor_track(scenario, agent, odom)
     spec = scenario.metrics
-    course = scenario.world.course
+    course = line_parts(scenario, agent)[0].course
     length = geometry.length_m(course)
     t, off, prog = tr["t"].to_numpy(), tr["offset"].to_numpy(), tr["progress"].to_numpy()
     on_course = prog <= length if isinstance(course, StraightCourse) else np.ones_like(t, bool)
@@ -42,9 +43,10 @@ def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame) -> list[Met
     lost_idx = np.flatnonzero((np.abs(off) > spec.lost_threshold_m) & on_course)
     lost = lost_idx.size > 0
     end = lost_idx[0] if lost else len(t)
-    start_prog = prog[0]
-    covered = float(np.max(prog[:end]) - start_prog) if end > 0 else 0.0
-    completion = min(1.0, max(0.0, covered / max(length - start_prog, 1e-9)))
+    covered = float(np.max(prog[:end]) - prog[0]) if end > 0 else 0.0
+    # a straight is covered from where the robot starts; a circle is one lap from anywhere
+    todo = length - prog[0] if isinstance(course, StraightCourse) else length
+    completion = min(1.0, max(0.0, covered / max(todo, 1e-9)))
 
     window = (t >= spec.transient_s) & on_course
     if lost:

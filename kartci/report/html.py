@@ -51,7 +51,11 @@ def _scenario(r: ScenarioResult) -> str:
         out.append("</table>")
     if r.plots is not None:
         out.append('<div class="figs">')
-        out += [figs.top_view(r.plots), figs.tracking_error(r.plots), figs.wheel_speeds(r.plots)]
+        if r.plots.kind == "track":
+            out += [figs.top_view(r.plots), figs.speed(r.plots), figs.wheel_speeds(r.plots)]
+        else:
+            out += [figs.top_view(r.plots), figs.tracking_error(r.plots),
+                    figs.wheel_speeds(r.plots)]
         out.append("</div>")
     out.append("</section>")
     return "\n".join(out)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -25,13 +26,46 @@ def _svg(fig: Figure) -> str:
 
 def top_view(p: Plots) -> str:
     fig, ax = plt.subplots(figsize=(5.5, 4.0))
-    ax.plot(p.course[:, 0], p.course[:, 1], color="black", lw=3, label="line", alpha=0.35)
-    for agent, tr in p.tracks.items():
-        ax.plot(tr["x"], tr["y"], lw=1.2, label=f"{agent} sensor point")
+    if p.kind == "track":
+        for edge in p.edges:
+            ax.plot(*_closed(edge), color="black", lw=1)
+        ax.plot(*_closed(p.course), color="grey", lw=0.6, ls="--", label="centreline")
+        ax.plot(*p.course[0], marker="|", color="black", ms=14, label="start / finish")
+        vmax = max([float(tr["speed"].max()) for tr in p.tracks.values()] + [1.0])
+        for agent, tr in p.tracks.items():
+            sc = ax.scatter(tr["x"], tr["y"], c=tr["speed"], s=2, cmap="viridis", vmin=0,
+                            vmax=vmax, label=f"{agent} path")
+        if p.tracks:
+            fig.colorbar(sc, ax=ax, label="speed [m/s]", shrink=0.8)
+        for agent, col in p.collisions.items():
+            ax.scatter(col["x"], col["y"], marker="x", color="red", s=60, zorder=5,
+                       label=f"{agent} collisions ({len(col)})")
+    else:
+        ax.plot(p.course[:, 0], p.course[:, 1], color="black", lw=3, label="line", alpha=0.35)
+        for agent, tr in p.tracks.items():
+            ax.plot(tr["x"], tr["y"], lw=1.2, label=f"{agent} sensor point")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title("path seen from above")
+    ax.legend(loc="best", fontsize=8)
+    return _svg(fig)
+
+
+def _closed(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return np.append(a[:, 0], a[0, 0]), np.append(a[:, 1], a[0, 1])
+
+
+def speed(p: Plots) -> str:
+    fig, ax = plt.subplots(figsize=(5.5, 3.0))
+    for agent, tr in p.tracks.items():
+        ax.plot(tr["t"], tr["speed"], lw=1, label=agent)
+    for col in p.collisions.values():
+        for t in col["t"]:
+            ax.axvline(t, color="red", lw=0.8, ls=":")
+    ax.set_xlabel("sim time [s]")
+    ax.set_ylabel("speed [m/s]")
+    ax.set_title("speed (dotted red: collisions)")
     ax.legend(loc="best", fontsize=8)
     return _svg(fig)
 

@@ -16,14 +16,16 @@ import numpy as np
 import pandas as pd
 
 from kartci import geometry, metrics
-from kartci.errors import KartciError, LogError
+from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
 from kartci.results import Plots, ScenarioResult
 from kartci.sim import simulate
 from kartci.spec import Scenario, load_scenario, project_root
-from kartci.verdict import check_criteria, compare, load, write_json_atomic
+from kartci.spec.models import HallWorld, line_parts
+from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
 
 LOG_NAME = "run.mcap"
+ERROR_NAME = "error.json"  # marks a scenario whose last run failed (older outputs are kept)
 
 
 def default_baselines() -> Path:
@@ -35,7 +37,12 @@ def run_one(scenario: Scenario, out: Path,
     """Simulate one scenario and score its log; returns the run facts (raises KartciError)."""
     folder = out / scenario.name
     t0 = time.perf_counter()
-    info = simulate(scenario, folder / LOG_NAME, on_progress)
+    try:
+        info = simulate(scenario, folder / LOG_NAME, on_progress)
+    except Exception as err:
+        write_json_atomic(folder / ERROR_NAME, {"scenario": scenario.name, "error": str(err)})
+        raise
+    (folder / ERROR_NAME).unlink(missing_ok=True)
     wall = time.perf_counter() - t0
     score(folder)
     run = {"sim_time_s": round(info.sim_time_s, 6), "wall_s": round(wall, 3),
@@ -60,29 +67,53 @@ def plots(folder: Path, scenario: Scenario) -> Plots:
     tracks: dict[str, pd.DataFrame] = {}
     wheels: dict[str, pd.DataFrame] = {}
     commands: dict[str, pd.DataFrame] = {}
+    collisions: dict[str, pd.DataFrame] = {}
+    is_track = isinstance(scenario.world, HallWorld)
+    track = metrics.recorded_track(t, folder / LOG_NAME) if is_track else None
     for agent in scenario.agents:
         odom = t.get(f"/{agent}/odom")
-        if odom is not None:
-            tracks[agent] = metrics.sensor_track(scenario, agent, odom)
-        for topic, target in ((f"/{agent}/joint_states", wheels), (f"/{agent}/wheel_cmd",
-                                                                    commands)):
-            df = t.get(topic)
-            if df is not None:
-                target[agent] = pd.DataFrame({"t": df["t"],
-                                              "left": df["left_wheel_hinge.velocity"],
-                                              "right": df["right_wheel_hinge.velocity"]})
-    course = geometry.polyline(scenario.world.course, 400)
-    return Plots(np.asarray(course), scenario.world.line_width_m, tracks, wheels, commands,
-                 scenario.metrics.transient_s)
+        if odom is not None and not odom.empty:
+            if track is not None:
+                tracks[agent] = metrics.kart_track(track, odom)
+            else:
+                tr = metrics.sensor_track(scenario, agent, odom)
+                tracks[agent] = tr.assign(speed=tr["vx"])
+        js = t.get(f"/{agent}/joint_states")
+        if js is not None:
+            cols = ([("left", "rear_left_wheel_joint"), ("right", "rear_right_wheel_joint")]
+                    if is_track else [("left", "left_wheel_hinge"),
+                                      ("right", "right_wheel_hinge")])
+            wheels[agent] = pd.DataFrame({"t": js["t"], **{k: js[f"{j}.velocity"]
+                                                           for k, j in cols}})
+        cmd = t.get(f"/{agent}/wheel_cmd")
+        if cmd is not None:
+            commands[agent] = pd.DataFrame({"t": cmd["t"],
+                                            "left": cmd["left_wheel_hinge.velocity"],
+                                            "right": cmd["right_wheel_hinge.velocity"]})
+        col = t.get(f"/{agent}/collision")
+        if col is not None:
+            collisions[agent] = col
+    if track is not None:
+        return Plots("track", track.xy, list(track.bounds()), tracks, wheels, commands,
+                     collisions)
+    world, _ = line_parts(scenario, next(iter(scenario.agents)))
+    return Plots("line", np.asarray(geometry.polyline(world.course, 400)), [], tracks, wheels,
+                 commands, collisions, scenario.metrics.transient_s)
 
 
 def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> ScenarioResult:
     """Judge one scenario folder (metrics.json + log) against its baseline and criteria."""
     name = folder.name
+    marker = folder / ERROR_NAME
+    if marker.exists():
+        try:
+            reason = json.loads(marker.read_text(encoding="utf-8")).get("error", "")
+        except (OSError, ValueError, AttributeError):
+            reason = ""
+        return ScenarioResult(name, "", error=f"the last run failed: {reason}".rstrip(": "))
     try:
-        doc = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
         scenario, _ = _recorded(folder)
-        values = doc["metrics"]
+        values = read_metrics(folder / "metrics.json")
         verdicts = compare(values, load(baselines / f"{name}.json"))
         crit = check_criteria(values, scenario.criteria)
         run_path = folder / "run.json"
@@ -103,7 +134,18 @@ def run_suite(names: list[str], overrides: list[str], out: Path, baselines: Path
               on_progress: Callable[[str, float], None] | None = None) -> list[ScenarioResult]:
     """Validate every scenario first (bad input stops everything), then run each; a run that
     fails is an ERROR result for that scenario only, and its earlier outputs stay in place."""
-    specs = [load_scenario(n, overrides) for n in names]
+    return run_specs([load_scenario(n, overrides) for n in names], out, baselines, on_done,
+                     on_progress)
+
+
+def run_specs(specs: list[Scenario], out: Path, baselines: Path,
+              on_done: Callable[[str, ScenarioResult], None] | None = None,
+              on_progress: Callable[[str, float], None] | None = None) -> list[ScenarioResult]:
+    for spec in specs:
+        unknown = sorted(set(spec.criteria) - set(metrics.DEFS))
+        if unknown:
+            raise SpecError(f"scenario {spec.name}: criteria on unknown metrics: "
+                            f"{', '.join(unknown)} (known: {', '.join(sorted(metrics.DEFS))})")
     results = []
     for spec in specs:
         try:
@@ -134,9 +176,15 @@ def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:
         raise LogError(f"{out}: no <scenario>/{LOG_NAME} logs found")
     results = []
     for folder in folders:
+        if (folder / ERROR_NAME).exists():
+            results.append(evaluate(folder, baselines))
+            continue
         try:
             score(folder)
             results.append(evaluate(folder, baselines))
         except KartciError as err:
             results.append(ScenarioResult(folder.name, "", error=str(err)))
+        except Exception as err:  # a log that breaks a reader in a new way: this scenario only
+            results.append(ScenarioResult(folder.name, "",
+                                          error=f"{type(err).__name__}: {err}"))
     return results

@@ -15,6 +15,7 @@ from kartci.sim.line_tracker import LineTracker
 from kartci.sim.sensors import LineCamera
 from kartci.sim.world import World
 from kartci.spec import Scenario, project_root
+from kartci.spec.models import line_parts
 
 
 @dataclass(frozen=True)
@@ -43,13 +44,14 @@ def sweep(scenario: Scenario, agent: str, offsets_m: np.ndarray, fov_rad: float 
           mode: str | None = None) -> Sweep:
     """Camera outputs with the sensor midpoint at each lateral offset (left of the line +)."""
     spec = scenario.agents[agent]
+    lab, _ = line_parts(scenario, agent)
     sensor = spec.line_sensor.model_copy(update={
         k: v for k, v in (("fov_rad", fov_rad), ("mode", mode)) if v is not None})
     world = World(scenario.world, scenario.physics.dt_s)
     try:
-        robot = LineTracker(world.client, spec, scenario.world,
+        robot = LineTracker(world.client, spec, lab,
                             project_root() / "models" / spec.model.kind, scenario.physics.dt_s)
-        camera = LineCamera(world.client, sensor, scenario.world)
+        camera = LineCamera(world.client, sensor, lab)
         start = robot.state()
         yaw = float(pb.getEulerFromQuaternion(start.quat)[2])
         normal = np.array([-np.sin(yaw), np.cos(yaw), 0.0])

@@ -10,8 +10,8 @@ import numpy as np
 from kartci._bullet import pb, quiet_c_output
 from kartci.sim.line_tracker import BodyState, _t3
 from kartci.sim.urdf import fixed_frames, physics_urdf
-from kartci.vehicle import KartInput, wheel_angles
 from kartci.spec.models import GokartModel
+from kartci.vehicle import KartInput, wheel_angles
 
 ROLLING_DECEL_MPS2 = 0.15  # coasting: rolling resistance and drivetrain drag
 AIR_DRAG_PER_M = 0.004  # aerodynamic deceleration = this * v^2
@@ -89,7 +89,7 @@ class Gokart:
 
     def rear_speed(self) -> float:
         js = pb.getJointStates(self.body, self.rear, physicsClientId=self.client)
-        return (js[0][1] + js[1][1]) / 2 * self.model.rear_wheel_radius_m
+        return float(js[0][1] + js[1][1]) / 2 * self.model.rear_wheel_radius_m
 
     def wheel_states(self) -> tuple[list[float], list[float]]:
         """Steer-joint angles (rad) and the four wheel speeds (rad/s: rl, rr, fl, fr)."""

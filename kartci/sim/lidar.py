@@ -31,15 +31,16 @@ class LidarModel:
 
     def azimuths(self, rate_hz: float) -> Array:
         n = round(360.0 / (self.resolution_per_hz_deg * rate_hz))
-        out: Array = np.arange(n) * (2 * np.pi / n)
-        return out
+        return np.arange(n, dtype=float) * (2 * np.pi / n)
 
 
 MODELS = {
     # 16 channels, +-15 deg every 2 deg; 0.1 deg at 5 Hz .. 0.4 deg at 20 Hz; +-3 cm
-    "vlp16": LidarModel("VLP-16", np.radians(np.arange(-15.0, 15.01, 2.0)), 0.02, 0.03),
+    "vlp16": LidarModel("VLP-16", np.radians(np.arange(-15.0, 15.01, 2.0)).astype(float), 0.02,
+                        0.03),
     # 32 channels, -30.67 .. +10.67 deg every 1.333 deg; 0.08 deg at 5 Hz .. 0.33 at 20 Hz; +-2 cm
-    "hdl32e": LidarModel("HDL-32E", np.radians(np.linspace(-30.67, 10.67, 32)), 0.0165, 0.02),
+    "hdl32e": LidarModel("HDL-32E", np.radians(np.linspace(-30.67, 10.67, 32)).astype(float),
+                         0.0165, 0.02),
 }
 
 

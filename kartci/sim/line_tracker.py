@@ -10,8 +10,9 @@ import numpy as np
 
 from kartci import geometry
 from kartci._bullet import pb, quiet_c_output
+from kartci.errors import SpecError
 from kartci.sim.urdf import fixed_frames, physics_urdf
-from kartci.spec.models import AgentSpec, LineLabWorld
+from kartci.spec.models import AgentSpec, LineLabWorld, LineTrackerModel
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,9 @@ class LineTracker:
                  dt_s: float) -> None:
         self.client, self.spec = client, spec
         m = spec.model
+        if not isinstance(m, LineTrackerModel):
+            raise SpecError(f"model {m.kind} is not a line tracker")
+        self.model = m
         sx, sy, yaw0 = geometry.pose_at(world.course, spec.start.along_m, spec.start.lateral_m)
         yaw = yaw0 + spec.start.heading_rad
         base = (sx - m.sensor_point_x_m * math.cos(yaw), sy - m.sensor_point_x_m * math.sin(yaw))
@@ -60,12 +64,12 @@ class LineTracker:
         self.actual_target = np.zeros(2)  # after the first-order lag
 
     def command(self, left_radps: float, right_radps: float) -> None:
-        lim = self.spec.model.wheel_speed_limit_radps
+        lim = self.model.wheel_speed_limit_radps
         self.target = np.clip([left_radps, right_radps], -lim, lim)
 
     def pre_step(self) -> None:
         self.actual_target += self._alpha * (self.target - self.actual_target)
-        tau = self.spec.model.wheel_torque_limit_nm
+        tau = self.model.wheel_torque_limit_nm
         pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
                                      targetVelocities=self.actual_target.tolist(),
                                      forces=[tau, tau], physicsClientId=self.client)

@@ -29,12 +29,14 @@ class RunInfo:
     finished_course: bool
 
 
+def track_path(world: HallWorld) -> Path:
+    p = Path(world.track)
+    return (p if p.is_absolute() else project_root() / "sims" / p).resolve()
+
+
 def track_of(scenario: Scenario) -> Track | None:
     w = scenario.world
-    if not isinstance(w, HallWorld):
-        return None
-    p = Path(w.track)
-    return load_track((p if p.is_absolute() else project_root() / "sims" / p).resolve())
+    return load_track(track_path(w)) if isinstance(w, HallWorld) else None
 
 
 def simulate(scenario: Scenario, log_path: Path,
@@ -86,6 +88,10 @@ def simulate(scenario: Scenario, log_path: Path,
             log.write("/kartci/scenario", msg("std_msgs/msg/String",
                                               data=scenario.model_dump_json()), 0)
             log.write("/kartci/course", _course_path(scenario, track), 0)
+            if isinstance(scenario.world, HallWorld):  # the log carries its track: self-contained
+                log.write("/kartci/track", msg("std_msgs/msg/String", data=track_path(
+                    scenario.world).read_text(encoding="utf-8")), 0)
+                count += 1
             log.write("/tf_static", tf_message([t for r in robots
                                                 for t in r.static_transforms()]), 0)
             count += 3
@@ -107,14 +113,14 @@ def simulate(scenario: Scenario, log_path: Path,
                 for r in robots:
                     r.pre_step(k)
                 world.step()
-                for kart, put in zip(robots, puts, strict=True):
-                    if isinstance(kart, KartRobot):
-                        kart.track_contacts(t_ns + dt_ns, put)
+                for r, put in zip(robots, puts, strict=True):
+                    if isinstance(r, KartRobot):
+                        r.track_contacts(t_ns + dt_ns, put)
                 if on_progress is not None and k % 500 == 0:
                     on_progress(t_ns * 1e-9)
-            for kart, put in zip(robots, puts, strict=True):
-                if isinstance(kart, KartRobot):
-                    kart.flush_contacts(put)
+            for r, put in zip(robots, puts, strict=True):
+                if isinstance(r, KartRobot):
+                    r.flush_contacts(put)
     finally:
         world.close()
     return RunInfo(k * dt_ns * 1e-9, k, count, finished)

@@ -123,9 +123,9 @@ class _Contact:
 
 class KartRobot(Robot):
     STATIC = ("cog_link", "imu_link", "velodyne_link", "camera_link")
-    JOINTS = ["front_left_wheel_steer_joint", "front_right_wheel_steer_joint",
+    JOINTS = ("front_left_wheel_steer_joint", "front_right_wheel_steer_joint",
               "rear_left_wheel_joint", "rear_right_wheel_joint", "front_left_wheel_joint",
-              "front_right_wheel_joint"]
+              "front_right_wheel_joint")
     CONTACT_GAP_NS = 100_000_000  # contacts closer than 0.1 s apart are one collision
 
     def __init__(self, name: str, spec: AgentSpec, world: World, agent: Agent, dt_s: float,

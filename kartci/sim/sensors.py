@@ -52,7 +52,8 @@ class LineCamera:
                    ) -> list[float]:
         grounds, pixel = [], 0.0
         for pos, rot in poses:
-            dirs = self._uv @ rot[:, 1:].T + rot[:, 0]  # one ray per pixel, world frame
+            # one ray per pixel, world frame; elementwise, not `@`: BLAS kernels differ by CPU
+            dirs = self._uv[:, :1] * rot[:, 1] + self._uv[:, 1:] * rot[:, 2] + rot[:, 0]
             grounds.append(pos[:2] - (pos[2] / dirs[:, 2])[:, None] * dirs[:, :2])
             pixel = max(pixel, 2.0 * pos[2] * self._tan_half / GEOMETRIC_GRID_PX)
         ink = geometry.ink_coverage(self.world.course, self.world.line_width_m,

@@ -35,6 +35,8 @@ def _read_yaml(path: Path) -> dict[str, Any]:
         raise SpecError(f"{path}: file not found") from None
     except OSError as err:
         raise SpecError(f"{path}: cannot read ({err.strerror})") from err
+    except UnicodeDecodeError:
+        raise SpecError(f"{path}: not a UTF-8 text file") from None
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as err:
@@ -117,6 +119,7 @@ def load_scenario(name: str, overrides: list[str] | None = None) -> Scenario:
     _resolve_refs(data, path)
     for assignment in overrides:
         apply_override(data, assignment)
+        _resolve_refs(data, path)  # `--set world=line_lab/circle` names a file too
     try:
         return Scenario.model_validate(data)
     except ValidationError as err:

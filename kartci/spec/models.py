@@ -6,6 +6,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from kartci.errors import SpecError
+
 
 class Frozen(BaseModel):
     """Base for every spec: immutable, and unknown keys are errors, not silently ignored."""
@@ -22,6 +24,12 @@ class StraightCourse(Frozen):
     type: Literal["straight"] = "straight"
     start_m: tuple[float, float] = (0.0, 0.0)
     end_m: tuple[float, float] = (2.5, 0.0)
+
+    @model_validator(mode="after")
+    def _has_length(self) -> StraightCourse:
+        if (self.end_m[0] - self.start_m[0]) ** 2 + (self.end_m[1] - self.start_m[1]) ** 2 < 1e-4:
+            raise ValueError("end_m must be at least 0.01 m from start_m")
+        return self
 
 
 class CircleCourse(Frozen):
@@ -271,13 +279,12 @@ class AgentSpec(Frozen):
 
 
 class PhysicsSpec(Frozen):
-    dt_s: float = Field(0.002, gt=0.0, le=0.01)
+    dt_s: float = Field(0.002, ge=1e-5, le=0.01)
     odom_rate_hz: float = Field(50.0, gt=0.0)
 
 
 class MetricsSpec(Frozen):
     transient_s: float = Field(5.0, ge=0.0, description="start-up transient excluded from errors")
-    laps: int = Field(1, ge=0, description="laps a kart run is expected to drive")
     lost_threshold_m: float = Field(0.021, gt=0.0, description="sensor range; beyond it = lost")
     settle_band_m: float = Field(0.002, gt=0.0)
 
@@ -316,3 +323,12 @@ class Scenario(Frozen):
                     f"{key}: period {period:g} s is not a whole multiple of physics.dt_s {dt:g} s"
                 )
         return self
+
+
+def line_parts(scenario: Scenario, agent: str) -> tuple[LineLabWorld, LineTrackerModel]:
+    """The line lab and the line tracker of a line-tracker scenario, or a SpecError."""
+    world, model = scenario.world, scenario.agents[agent].model
+    if not isinstance(world, LineLabWorld) or not isinstance(model, LineTrackerModel):
+        raise SpecError(f"scenario {scenario.name}: agent {agent} is not a line tracker in a "
+                        "line lab")
+    return world, model

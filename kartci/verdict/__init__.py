@@ -8,10 +8,11 @@ from kartci.verdict.baseline import (
     check_criteria,
     compare,
     load,
+    read_metrics,
     update,
     worst,
     write_json_atomic,
 )
 
 __all__ = ["Change", "CriterionResult", "MetricVerdict", "Status", "check_criteria", "compare",
-           "load", "update", "worst", "write_json_atomic"]
+           "load", "read_metrics", "update", "worst", "write_json_atomic"]

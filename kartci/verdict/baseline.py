@@ -74,19 +74,57 @@ def _definition(name: str) -> MetricDef | None:
     return DEFS.get(name.rsplit(".", 1)[-1])
 
 
+def _no_constants(name: str) -> float:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _is_number(x: Any) -> bool:
+    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def read_json(path: Path) -> Any:
+    """JSON without NaN / Infinity; any problem is a ValueError or OSError."""
+    return json.loads(path.read_text(encoding="utf-8"), parse_constant=_no_constants)
+
+
 def load(path: Path) -> dict[str, dict[str, Any]] | None:
     """The baseline's metrics by name, or None when there is no baseline file."""
     if not path.exists():
         return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        metrics = data["metrics"]
+        data = read_json(path)
+        metrics = data.get("metrics") if isinstance(data, dict) else None
+        if not isinstance(metrics, dict):
+            raise ValueError('expected {"metrics": {NAME: {...}}}')
         for name, entry in metrics.items():
-            Direction(entry["direction"])
-            if not isinstance(entry.get("tolerance"), int | float):
-                raise ValueError(f"{name}: tolerance must be a number")
-    except (OSError, ValueError, KeyError, TypeError) as err:
+            if not isinstance(entry, dict):
+                raise ValueError(f"{name}: expected a mapping")
+            Direction(str(entry.get("direction")))
+            tol: Any = entry.get("tolerance")
+            if not _is_number(tol) or float(tol) < 0:
+                raise ValueError(f"{name}: tolerance must be a number >= 0")
+            if entry.get("value") is not None and not _is_number(entry["value"]):
+                raise ValueError(f"{name}: value must be a number or null")
+    except (OSError, ValueError, UnicodeDecodeError) as err:
         raise BaselineError(f"{path}: malformed baseline ({err})") from None
+    return dict(metrics)
+
+
+def read_metrics(path: Path) -> dict[str, dict[str, Any]]:
+    """The metrics of a run's metrics.json, checked: {NAME: {"value": number|null, ...}}."""
+    try:
+        data = read_json(path)
+        metrics = data.get("metrics") if isinstance(data, dict) else None
+        if not isinstance(metrics, dict):
+            raise ValueError('expected {"metrics": {NAME: {"value": ...}}}')
+        for name, entry in metrics.items():
+            if not isinstance(entry, dict) or not (entry.get("value") is None
+                                                   or _is_number(entry["value"])):
+                raise ValueError(f"{name}: expected {{\"value\": number or null, ...}}")
+    except FileNotFoundError:
+        raise BaselineError(f"{path}: not found; run `kartci run` first") from None
+    except (OSError, ValueError, UnicodeDecodeError) as err:
+        raise BaselineError(f"{path}: malformed metrics file ({err})") from None
     return dict(metrics)
 
 
@@ -134,21 +172,28 @@ def compare(metrics: dict[str, dict[str, Any]],
 
 def check_criteria(metrics: dict[str, dict[str, Any]],
                    criteria: dict[str, Criterion]) -> list[CriterionResult]:
+    """Each criterion on its metric; with several agents, on every agent's (`agent.name`)."""
     out = []
-    for name, c in sorted(criteria.items()):
-        value = _num(metrics.get(name, {}).get("value"))
-        parts, ok = [], value is not None
-        if c.max is not None:
-            parts.append(f"<= {c.max:g}")
-            ok = ok and value is not None and value <= c.max
-        if c.min is not None:
-            parts.append(f">= {c.min:g}")
-            ok = ok and value is not None and value >= c.min
-        if c.equal is not None:
-            parts.append(f"== {c.equal:g}")
-            ok = ok and value is not None and math.isclose(value, c.equal, abs_tol=1e-12)
-        out.append(CriterionResult(name, value, " and ".join(parts), bool(ok)))
+    for key, c in sorted(criteria.items()):
+        names = [key] if key in metrics else sorted(n for n in metrics
+                                                     if n.rsplit(".", 1)[-1] == key)
+        out += [_criterion(name, c, metrics) for name in names or [key]]
     return out
+
+
+def _criterion(name: str, c: Criterion, metrics: dict[str, dict[str, Any]]) -> CriterionResult:
+    value = _num(metrics.get(name, {}).get("value"))
+    parts, ok = [], value is not None
+    if c.max is not None:
+        parts.append(f"<= {c.max:g}")
+        ok = ok and value is not None and value <= c.max
+    if c.min is not None:
+        parts.append(f">= {c.min:g}")
+        ok = ok and value is not None and value >= c.min
+    if c.equal is not None:
+        parts.append(f"== {c.equal:g}")
+        ok = ok and value is not None and math.isclose(value, c.equal, abs_tol=1e-12)
+    return CriterionResult(name, value, " and ".join(parts), bool(ok))
 
 
 def write_json_atomic(path: Path, data: Any) -> None:
@@ -183,8 +228,8 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]]) -> lis
         value = _num(m.get("value"))
         prev = old.get(name)
         d = _definition(name)
-        if prev is not None:
-            tol, direction = prev["tolerance"], prev["direction"]
+        if prev is not None and prev.get("value") is not None:
+            tol, direction = prev["tolerance"], prev["direction"]  # hand-set: kept
         else:
             tol = d.default_tolerance(value if value is not None else math.nan) if d else 0.0
             direction = (d.direction if d else Direction.EQUAL).value

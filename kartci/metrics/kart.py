@@ -1,0 +1,72 @@
+"""Go-kart metrics from a run log: laps, collisions, time off track, speed, progress."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from kartci.metrics.base import DEFS, Metric
+from kartci.spec.models import GokartModel, Scenario
+from kartci.track import Track
+
+
+def _m(name: str, value: float, **extra: object) -> Metric:
+    return Metric(name, float(value), DEFS[name].unit, dict(extra))
+
+
+def kart_track(track: Track, odom: pd.DataFrame) -> pd.DataFrame:
+    """Time, position, speed, lateral offset and unwrapped progress (m) of base_link."""
+    xy = odom[["x", "y"]].to_numpy()
+    s, lateral, _, _ = track.project(xy)
+    ds = np.diff(s)
+    ds = (ds + track.length_m / 2) % track.length_m - track.length_m / 2
+    start = s[0] - track.length_m if s[0] > track.length_m / 2 else s[0]
+    total = start + np.concatenate([[0.0], np.cumsum(ds)])  # arc length from the line
+    return pd.DataFrame({"t": odom["t"].to_numpy(), "x": xy[:, 0], "y": xy[:, 1],
+                         "speed": np.hypot(odom["vx"], odom["vy"]), "offset": lateral,
+                         "s_total": total, "yaw": odom["yaw"].to_numpy()})
+
+
+def kart_metrics(scenario: Scenario, agent: str, track: Track, odom: pd.DataFrame,
+                 collisions: pd.DataFrame | None) -> list[Metric]:
+    model = scenario.agents[agent].model
+    assert isinstance(model, GokartModel)
+    tr = kart_track(track, odom)
+    t, total = tr["t"].to_numpy(), tr["s_total"].to_numpy()
+    crossings = []
+    for lap in range(1, int(max(total.max(), 0) // track.length_m) + 1):
+        i = int(np.argmax(total >= lap * track.length_m))
+        # interpolate the crossing time between samples
+        a, b = total[i - 1], total[i]
+        frac = (lap * track.length_m - a) / (b - a) if b != a else 0.0
+        crossings.append(float(t[i - 1] + frac * (t[i] - t[i - 1])))
+    laps = np.diff([0.0, *crossings])
+    lap_list = [round(float(x), 4) for x in laps]
+
+    wheels = np.asarray(model.wheel_xy_m)
+    yaw = tr["yaw"].to_numpy()
+    out_any = np.zeros(len(tr), bool)
+    for wx, wy in wheels:
+        px = tr["x"].to_numpy() + wx * np.cos(yaw) - wy * np.sin(yaw)
+        py = tr["y"].to_numpy() + wx * np.sin(yaw) + wy * np.cos(yaw)
+        _, lat, w_right, w_left = track.project(np.column_stack([px, py]))
+        out_any |= (lat > w_left) | (lat < -w_right)
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+
+    events = [] if collisions is None else [
+        {"time_s": round(float(t_c), 4), "other": str(other), "impulse_ns": round(float(imp), 3)}
+        for t_c, other, imp in zip(collisions["t"].to_numpy(), collisions["other"].tolist(),
+                                   collisions["impulse_ns"].to_numpy(), strict=True)]
+    return [
+        _m("laps_completed", len(lap_list)),
+        _m("lap_times_s", float(np.mean(laps)) if len(laps) else math.nan, laps=lap_list),
+        _m("best_lap_s", float(np.min(laps)) if len(laps) else math.nan),
+        _m("collisions", len(events), events=events),
+        _m("off_track_s", float(out_any.sum()) * dt),
+        _m("max_speed_mps", float(tr["speed"].max())),
+        _m("mean_speed_mps", float(tr["speed"].mean())),
+        _m("progress_m", float(total[-1] - total[0])),
+        _m("cross_track_rms_m", math.sqrt(float(np.mean(tr["offset"] ** 2)))),
+    ]
