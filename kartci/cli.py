@@ -146,7 +146,7 @@ def run(
 def replay(
     log: Annotated[Path, typer.Argument(help="ROS 1 .bag, rosbag2 folder or .mcap file.")],
     scenario: Annotated[str, typer.Option(help="Scenario whose world and kart replay the log.")]
-    = "kart_manual",
+    = "kart_replay",
     topic: Annotated[str | None, typer.Option(
         help="Input topic (default: the log's only Joy or command topic).")] = None,
     mapping: Annotated[str, typer.Option(help="Joystick mapping for Joy logs: "

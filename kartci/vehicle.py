@@ -20,14 +20,23 @@ class KartInput:
     estop: bool = False
 
 
+STEERING_RATIO = 0.36  # wheel angle per steering-column angle: the linear term of Eq. 3.4
+
+
 def wheel_angles(model: GokartModel, beta_c: float) -> tuple[float, float]:
-    """Left and right front-wheel angles (rad) for a steering-column angle beta_c (rad)."""
+    """Left and right front-wheel (steer-joint) angles, rad, for a steering-column angle, rad.
+
+    As in the seed, the angles go to the steer joints as they are (positive: about +z). The
+    measured map (Eq. 3.4 / 3.5) is not symmetric: at +1.73 rad the right wheel turns 0.575 rad
+    and the left 0.303 rad.
+    """
     if model.steering == "measured":  # Eq. 3.4 / 3.5, fitted to Table 3.3
         right = -0.0355 * beta_c**3 + 0.0455 * beta_c**2 + 0.36 * beta_c
         left = -0.0355 * beta_c**3 - 0.0455 * beta_c**2 + 0.36 * beta_c
         return left, right
-    # Eq. 3.1 / 3.2: ideal Ackermann with beta_c as the angle of a virtual centre wheel
-    t, lw, w = math.tan(beta_c), model.wheelbase_m, model.track_m
+    # Eq. 3.1 / 3.2, with the virtual centre wheel at STEERING_RATIO x the column angle
+    t = math.tan(STEERING_RATIO * beta_c)
+    lw, w = model.wheelbase_m, model.track_m
     return math.atan2(lw * t, lw + 0.5 * w * t), math.atan2(lw * t, lw - 0.5 * w * t)
 
 

@@ -11,6 +11,7 @@ import numpy as np
 from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command, load_mapping, to_command, to_joy
 from kartci.agents.source import Recorded
+from kartci.logs.types import header, msg
 from kartci.spec.models import (
     CommandsController,
     GokartModel,
@@ -36,19 +37,23 @@ class ManualAgent:
         self.period_s, self.model = spec.period_s, model
         self.mapping = load_mapping(spec.mapping)
         self.source = Recorded(spec.source, JOY)
-        self._last: Any = None
+        self._last = -1
 
     def on_message(self, topic: str, message: Any) -> None:
         pass
 
     def step(self, t_ns: int) -> Outbox:
-        joy = self.source.at(t_ns)
-        if joy is None:
+        i = self.source.index(t_ns)
+        if i < 0:
             return [("cmd", kart_command(KartInput(), t_ns, "base_link"))]
+        joy = self.source.msgs[i]
         out: Outbox = []
-        if joy is not self._last:
-            out.append(("joy", joy))
-            self._last = joy
+        for j in range(self._last + 1, i + 1):  # every message since the last step, re-stamped
+            m = self.source.msgs[j]
+            out.append(("joy", msg("sensor_msgs/msg/Joy",
+                                   header=header(self.source.times[j], m.header.frame_id),
+                                   axes=m.axes, buttons=m.buttons)))
+        self._last = i
         return [*out, ("cmd", kart_command(to_command(self.mapping, self.model, joy), t_ns,
                                            "base_link"))]
 

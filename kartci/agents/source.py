@@ -52,5 +52,9 @@ class Recorded:
         return (self.times[-1] - self.times[0]) * 1e-9
 
     def at(self, t_ns: int) -> Any | None:
-        i = bisect.bisect_right(self.times, t_ns) - 1
+        i = self.index(t_ns)
         return self.msgs[i] if i >= 0 else None
+
+    def index(self, t_ns: int) -> int:
+        """Index of the latest message at or before sim time t (-1: none yet)."""
+        return bisect.bisect_right(self.times, t_ns) - 1

@@ -68,7 +68,7 @@ class Gokart:
         left, right = wheel_angles(m, self.column)
         pb.setJointMotorControlArray(self.body, self.steer, pb.POSITION_CONTROL,
                                      targetPositions=[left, right], forces=[800.0, 800.0],
-                                     positionGains=[0.5, 0.5], physicsClientId=self.client)
+                                     positionGains=[1.0, 1.0], physicsClientId=self.client)
         v = self.rear_speed()
         ref = self.v_ref
         if inp.estop:

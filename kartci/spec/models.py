@@ -160,7 +160,7 @@ class GokartModel(Frozen):
     max_brake_mps2: float = 8.0
     reverse_speed_mps: float = 2.0
     steering: Literal["measured", "ackermann"] = "measured"
-    steering_limit_rad: tuple[float, float] = Field((-1.84, 1.73), description="column angle")
+    steering_limit_rad: tuple[float, float] = Field((-1.845, 1.732), description="column angle")
     steering_rate_radps: float = Field(4.0, description="column angle slew rate")
     wheelbase_m: float = Field(1.27, description="l of Eq. 3.1/3.2 (Ackermann option)")
     track_m: float = Field(0.94, description="w of Eq. 3.1/3.2 (Ackermann option)")

@@ -48,7 +48,7 @@ def steer(side: str, y: float) -> str:
             f'\n  </link>\n  <joint name="front_{side}_wheel_steer_joint" type="revolute">'
             f'<parent link="base_link"/><child link="front_{side}_wheel_steer_link"/>'
             f'<origin xyz="1.129 {y} -0.015"/><axis xyz="0 0 1"/>'
-            '<limit lower="-0.75" upper="0.75" effort="500" velocity="6"/></joint>\n'
+            '<limit lower="-0.9" upper="0.9" effort="500" velocity="6"/></joint>\n'
             + wheel(f"front_{side}_wheel", f"front_{side}_wheel_steer_link", "0 0 0", FRONT_R,
                     0.13, "continuous"))
 
