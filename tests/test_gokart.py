@@ -10,8 +10,7 @@ import pytest
 
 from kartci._bullet import pb
 from kartci.metrics import compute
-from kartci.sim import lidar as L
-from kartci.sim import simulate
+from kartci.sim import lidar, simulate
 from kartci.sim.gokart import Gokart
 from kartci.sim.hall import blocks
 from kartci.sim.world import World
@@ -122,7 +121,7 @@ def test_steering_wheel_angles_of_table_3_3_give_eq_3_4_and_3_5(steering: str) -
 ])
 def test_lidar_models_follow_table_3_5(name: str, rings: int, lowest: float, highest: float,
                                        spacing: float, per_rev: int) -> None:
-    m = L.MODELS[name]
+    m = lidar.MODELS[name]
     deg = np.degrees(m.elevations_rad)
     assert len(deg) == rings
     assert (deg[0], deg[-1]) == pytest.approx((lowest, highest), abs=0.01)
@@ -138,13 +137,13 @@ def test_fast_lidar_agrees_with_pybullet_rays(name: str) -> None:
     assert isinstance(spec.world, HallWorld)
     world = World(spec.world, 0.002)
     try:
-        m = L.MODELS[name]
+        m = lidar.MODELS[name]
         az = m.azimuths(10.0)
         for x, y, yaw in ((8.0, 3.2, 0.0), (25.0, 9.0, 2.0), (5.0, 14.0, -1.0)):
             pos = np.array([x, y, 0.127 + 1.154])
-            fast = L.scan_fast(m, az, pos, yaw, blocks(spec.world), spec.world.wall_height_m,
+            fast = lidar.scan_fast(m, az, pos, yaw, blocks(spec.world), spec.world.wall_height_m,
                                100.0)
-            ref = L.scan_reference(world.client, m, az, pos, yaw, 100.0)
+            ref = lidar.scan_reference(world.client, m, az, pos, yaw, 100.0)
             both = np.isfinite(fast) & np.isfinite(ref)
             assert (np.isfinite(fast) == np.isfinite(ref)).mean() > 0.999
             assert (np.abs(fast[both] - ref[both]) < 0.01).mean() > 0.995

@@ -1,0 +1,70 @@
+"""Go-kart speed: real-time factor of kart_manual with and without the VLP-16 at 10 Hz, and
+the cost of one full VLP-16 / HDL-32E scan, fast 2.5D model vs PyBullet's batched ray test,
+measured in one process, medians of repeats. Prints figures; asserts nothing.
+
+    .venv/bin/python benchmarks/bench_kart.py [--repeats 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from kartci.sim import lidar, simulate
+from kartci.sim.hall import blocks
+from kartci.sim.world import World
+from kartci.spec import load_scenario
+from kartci.spec.models import HallWorld
+
+
+def rtf(sets: list[str], out: Path) -> float:
+    spec = load_scenario("kart_manual", sets)
+    t0 = time.perf_counter()
+    info = simulate(spec, out / "run.mcap")
+    return info.sim_time_s / (time.perf_counter() - t0)
+
+
+def scan_ms(name: str, repeats: int) -> tuple[float, float, int]:
+    spec = load_scenario("kart_replay")
+    assert isinstance(spec.world, HallWorld)
+    world = World(spec.world, 0.002)
+    m = lidar.MODELS[name]
+    az = m.azimuths(10.0)
+    pos = np.array([8.0, 3.2, 1.281])
+    fast, ref = [], []
+    try:
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            lidar.scan_fast(m, az, pos, 0.3, blocks(spec.world), spec.world.wall_height_m, 100.0)
+            fast.append((time.perf_counter() - t0) * 1e3)
+            t0 = time.perf_counter()
+            lidar.scan_reference(world.client, m, az, pos, 0.3, 100.0)
+            ref.append((time.perf_counter() - t0) * 1e3)
+    finally:
+        world.close()
+    return statistics.median(fast), statistics.median(ref), len(az) * len(m.elevations_rad)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    for name in ("vlp16", "hdl32e"):
+        fast, ref, rays = scan_ms(name, max(5, args.repeats))
+        print(f"{name}: {rays} rays per scan; fast model {fast:.1f} ms, PyBullet rays "
+              f"{ref:.1f} ms (median)")
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, sets in (("kart_manual, no lidar", []),
+                            ("kart_manual, VLP-16 10 Hz", ["agents.kart0.lidar.enabled=true"])):
+            samples = [rtf(sets, Path(tmp)) for _ in range(args.repeats)]
+            print(f"{label:28s} median RTF {statistics.median(samples):5.1f}x  ("
+                  + ", ".join(f"{s:.1f}" for s in samples) + ")")
+
+
+if __name__ == "__main__":
+    main()
