@@ -208,3 +208,21 @@ def _noisy(tmp_path: Path) -> Path:
     log = tmp_path / "noisy.mcap"
     simulate(load_scenario("kart_replay", ["duration_s=2"]), log)
     return log
+
+
+def test_camera_and_moving_frames(tmp_path: Path) -> None:
+    from kartci.logs import messages
+
+    log = tmp_path / "cam.mcap"
+    simulate(load_scenario("kart_replay", ["duration_s=1", "agents.kart0.camera.enabled=true"]),
+             log)
+    images = [m for _, _, m in messages(log, ["/kart0/camera/image_raw"])]
+    assert len(images) == 6  # 5 Hz over 1 s, both ends
+    img = np.asarray(images[-1].data).reshape(60, 80, 3)
+    assert img.std() > 10  # walls and floor, not a blank frame
+    frames = {t.child_frame_id for _, _, m in messages(log, ["/tf"]) for t in m.transforms}
+    assert {"kart0/base_link", "kart0/front_left_wheel_steer_link",
+            "kart0/rear_right_wheel_link", "kart0/front_left_wheel_link"} <= frames
+    static = {t.child_frame_id for _, _, m in messages(log, ["/tf_static"]) for t in m.transforms}
+    assert static == {"kart0/cog_link", "kart0/imu_link", "kart0/velodyne_link",
+                      "kart0/camera_link"}

@@ -96,6 +96,11 @@ class Gokart:
         js = pb.getJointStates(self.body, self.steer + self.wheels, physicsClientId=self.client)
         return [s[0] for s in js[:2]], [s[1] for s in js[2:]]
 
+    def wheel_angles(self) -> list[float]:
+        """Rotation angles of the four wheels (rad: rl, rr, fl, fr), for their tf frames."""
+        js = pb.getJointStates(self.body, self.wheels, physicsClientId=self.client)
+        return [s[0] for s in js]
+
     def state(self) -> BodyState:
         c = self.client
         com, quat = pb.getBasePositionAndOrientation(self.body, physicsClientId=c)

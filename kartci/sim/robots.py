@@ -12,7 +12,7 @@ import numpy as np
 
 from kartci import geometry
 from kartci.agents import Agent
-from kartci.errors import RunError
+from kartci.errors import RunError, SpecError
 from kartci.logs import header, msg
 from kartci.sim import lidar as lidar_mod
 from kartci.sim.gokart import Gokart
@@ -28,7 +28,7 @@ from kartci.sim.messages import (
 )
 from kartci.sim.sensors import LineCamera, Sonar
 from kartci.sim.world import World
-from kartci.spec.models import AgentSpec, HallWorld, LineLabWorld
+from kartci.spec.models import AgentSpec, GokartModel, HallWorld, LineLabWorld
 from kartci.track import Track
 from kartci.vehicle import KartInput
 
@@ -134,7 +134,9 @@ class KartRobot(Robot):
         assert isinstance(world.spec, HallWorld)
         self.spec, self.world_spec, self.rng, self.dt = spec, world.spec, rng, dt_s
         model = spec.model
-        assert model.kind == "gokart"
+        if not isinstance(model, GokartModel):
+            raise SpecError(f"agent {name}: a hall world needs gokart models, not {model.kind}")
+        self.model = model
         self.body = Gokart(world.client, model, model_dir,
                            track.pose_at(spec.start.along_m, spec.start.lateral_m), dt_s)
         super().__init__(name, agent, every(agent.period_s, dt_s), self.body.frames)
@@ -142,6 +144,7 @@ class KartRobot(Robot):
                                                                 world.floor)
         self.imu_every = every(1.0 / spec.imu.rate_hz, dt_s)
         self.lidar_every = every(1.0 / spec.lidar.rate_hz, dt_s)
+        self.camera_every = every(1.0 / spec.camera.rate_hz, dt_s)
         self.lidar = lidar_mod.MODELS[spec.lidar.model]
         self.azimuths = self.lidar.azimuths(spec.lidar.rate_hz)
         self.blocks = blocks(self.world_spec)
@@ -170,10 +173,52 @@ class KartRobot(Robot):
                 t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
                 [*steer, 0.0, 0.0, 0.0, 0.0, self.body.column], [0.0, 0.0, *speeds, 0.0]), t_ns)
             self._zone_friction(st)
+            put("/tf", tf_message(self._joint_tf(t_ns, steer)), t_ns)
+        if self.spec.camera.enabled and k % self.camera_every == 0:
+            self._camera(st, t_ns, put)
         if self.spec.imu.enabled and k % self.imu_every == 0:
             self._imu(st, t_ns, put)
         if self.spec.lidar.enabled and k % self.lidar_every == 0:
             self._lidar(st, t_ns, put)
+
+    def _joint_tf(self, t_ns: int, steer: list[float]) -> list[Any]:
+        """tf of the moving frames: steer links (about z) and wheel links (about y)."""
+        ns, (x_r, y_r), (x_f, y_f) = self.name, self.model.wheel_xy_m[0], (
+            self.model.wheel_xy_m[2])
+        out = []
+        for side, sign, angle in (("left", 1, steer[0]), ("right", -1, steer[1])):
+            out.append(transform(t_ns, f"{ns}/base_link", f"{ns}/front_{side}_wheel_steer_link",
+                                 (x_f, sign * y_f, -0.015), _axis_quat(2, angle)))
+        spin = self.body.wheel_angles()
+        for i, (name, parent, xyz) in enumerate((
+                ("rear_left", "base_link", (x_r, y_r, 0.0)),
+                ("rear_right", "base_link", (x_r, -y_r, 0.0)),
+                ("front_left", "front_left_wheel_steer_link", (0.0, 0.0, 0.0)),
+                ("front_right", "front_right_wheel_steer_link", (0.0, 0.0, 0.0)))):
+            out.append(transform(t_ns, f"{ns}/{parent}", f"{ns}/{name}_wheel_link", xyz,
+                                 _axis_quat(1, spin[i])))
+        return out
+
+    def _camera(self, st: BodyState, t_ns: int, put: Put) -> None:
+        """A low-resolution RGB image from camera_link (optical frame: z forward, y down)."""
+        from kartci._bullet import pb
+
+        cam = self.spec.camera
+        pos, rot = self.body.frame_pose("camera_link", st)
+        view = pb.computeViewMatrix(pos.tolist(), (pos + rot[:, 2]).tolist(),
+                                    (-rot[:, 1]).tolist())
+        proj = pb.computeProjectionMatrixFOV(math.degrees(cam.fov_rad) * cam.height_px
+                                             / cam.width_px, cam.width_px / cam.height_px,
+                                             0.05, 60.0)
+        img = pb.getCameraImage(cam.width_px, cam.height_px, view, proj,
+                                renderer=pb.ER_TINY_RENDERER, flags=pb.ER_NO_SEGMENTATION_MASK,
+                                physicsClientId=self.client)
+        rgb = np.asarray(img[2], dtype=np.uint8).reshape(cam.height_px, cam.width_px, 4)[..., :3]
+        put("camera/image_raw", msg("sensor_msgs/msg/Image",
+                                    header=header(t_ns, f"{self.name}/camera_link"),
+                                    height=cam.height_px, width=cam.width_px, encoding="rgb8",
+                                    is_bigendian=0, step=3 * cam.width_px,
+                                    data=np.ascontiguousarray(rgb).ravel()), t_ns)
 
     def _imu(self, st: BodyState, t_ns: int, put: Put) -> None:
         """Specific force (gravity included) and angular rate in imu_link, from the finite
@@ -283,6 +328,12 @@ def _rotation(q: tuple[float, float, float, float]) -> list[list[float]]:
     return [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
             [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+
+
+def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
+    q = [0.0, 0.0, 0.0, math.cos(angle / 2)]
+    q[axis] = math.sin(angle / 2)
+    return q[0], q[1], q[2], q[3]
 
 
 def _yaw(q: tuple[float, float, float, float]) -> float:
