@@ -91,7 +91,7 @@ def _kart(steering: str = "measured") -> tuple[World, Gokart, GokartModel]:
     model = spec.agents["kart0"].model
     assert isinstance(model, GokartModel)
     world = World(spec.world, 0.002)
-    return world, Gokart(world.client, model, MODELS, (8.0, 10.0, 0.0), 0.002), model
+    return world, Gokart(world.client, model, MODELS, (8.0, 3.2, 0.0), 0.002), model  # start line
 
 
 @pytest.mark.parametrize("steering", ["measured", "ackermann"])
@@ -226,3 +226,36 @@ def test_camera_and_moving_frames(tmp_path: Path) -> None:
     static = {t.child_frame_id for _, _, m in messages(log, ["/tf_static"]) for t in m.transforms}
     assert static == {"kart0/cog_link", "kart0/imu_link", "kart0/velodyne_link",
                       "kart0/camera_link"}
+
+
+def test_reverse_and_emergency_stop() -> None:
+    world, kart, _ = _kart()
+    try:
+        def drive(cmd: KartInput, seconds: float) -> float:
+            kart.command(cmd)
+            for _ in range(round(seconds / 0.002)):
+                kart.pre_step()
+                world.step()
+            return kart.state().v_body[0]
+
+        assert drive(KartInput(accel_mps2=2.0, reverse=True), 1.5) < -1.5  # backwards
+        assert drive(KartInput(brake_mps2=8.0), 1.0) == pytest.approx(0.0, abs=0.05)
+        assert drive(KartInput(accel_mps2=4.0), 1.5) > 3.0
+        # the e-stop locks the rear wheels (rear brakes only, as on the kart): about 5.6 m/s^2
+        assert drive(KartInput(accel_mps2=4.0, estop=True), 2.0) == pytest.approx(0.0, abs=0.05)
+    finally:
+        world.close()
+
+
+@pytest.mark.parametrize("mapping", ["ps4", "g29"])
+def test_joystick_mappings_round_trip(mapping: str) -> None:
+    from kartci.agents.joy import load_mapping, to_command, to_joy
+
+    m = load_mapping(mapping)
+    model = load_scenario("kart_replay").agents["kart0"].model
+    assert isinstance(model, GokartModel)
+    wish = KartInput(steering_rad=-0.9, accel_mps2=2.5, brake_mps2=0.0, reverse=True)
+    got = to_command(m, model, to_joy(m, model, wish, 0, "joy"))
+    assert got.steering_rad == pytest.approx(wish.steering_rad, abs=1e-6)
+    assert got.accel_mps2 == pytest.approx(2.5, abs=1e-5)
+    assert (got.brake_mps2, got.reverse, got.estop) == (0.0, True, False)
