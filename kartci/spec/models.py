@@ -59,7 +59,7 @@ class LineLabWorld(Frozen):
     description: str = ""
     line_width_m: float = Field(0.014, gt=0.0, lt=0.2)
     light_level: float = Field(
-        0.545, gt=0.0, le=1.0,
+        0.571, gt=0.0, le=1.0,
         description="luminance of the white floor as the line cameras see it (0-1)",
     )
     floor_friction: float = Field(1.0, ge=0.0)
