@@ -103,7 +103,7 @@ def test_steering_wheel_angles_of_table_3_3_give_eq_3_4_and_3_5(steering: str) -
             for _ in range(600):  # 1.2 s: the column slews at 4 rad/s, then the joints settle
                 kart.pre_step()
                 world.step()
-            (left, right), _ = kart.wheel_states()
+            (left, right), _, _ = kart.wheel_states()
             exp_left, exp_right = wheel_angles(model, beta)
             assert (left, right) == pytest.approx((exp_left, exp_right), abs=2e-3), beta
     finally:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from kartci._bullet import pb, quiet_c_output
-from kartci.sim.line_tracker import BodyState, _t3
+from kartci.sim.body import Base, BodyState
 from kartci.sim.urdf import fixed_frames, physics_urdf
 from kartci.spec.models import GokartModel
 from kartci.vehicle import KartInput, wheel_angles
@@ -18,27 +18,24 @@ AIR_DRAG_PER_M = 0.004  # aerodynamic deceleration = this * v^2
 SLIP_WINDOW_MPS = 0.5  # the motor's speed reference stays within this of the wheel speed
 
 
-class Gokart:
+class Gokart(Base):
     def __init__(self, client: int, model: GokartModel, model_dir: Path,
                  pose: tuple[float, float, float], dt_s: float) -> None:
-        self.client, self.model, self.dt = client, model, dt_s
+        self.model, self.dt = model, dt_s
         x, y, yaw = pose
         with quiet_c_output():
-            self.body = int(pb.loadURDF(
+            body = int(pb.loadURDF(
                 str(physics_urdf(model_dir / model.urdf)),
                 [x, y, model.rear_wheel_radius_m + 0.005], pb.getQuaternionFromEuler([0, 0, yaw]),
                 flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=client))
-        self.frames = fixed_frames(model_dir / model.urdf)
+        super().__init__(client, body, fixed_frames(model_dir / model.urdf))
         joints = {pb.getJointInfo(self.body, j, physicsClientId=client)[1].decode(): j
                   for j in range(pb.getNumJoints(self.body, physicsClientId=client))}
-        self.joints = joints
         self.rear = [joints["rear_left_wheel_joint"], joints["rear_right_wheel_joint"]]
         self.front = [joints["front_left_wheel_joint"], joints["front_right_wheel_joint"]]
         self.steer = [joints["front_left_wheel_steer_joint"],
                       joints["front_right_wheel_steer_joint"]]
         self.wheels = [*self.rear, *self.front]
-        self._com_offset = np.asarray(pb.getDynamicsInfo(self.body, -1,
-                                                         physicsClientId=client)[3])
         pb.setJointMotorControlArray(self.body, self.front, pb.VELOCITY_CONTROL,
                                      forces=[0.0, 0.0], physicsClientId=client)
         self.friction = [-1.0] * 4
@@ -91,36 +88,14 @@ class Gokart:
         js = pb.getJointStates(self.body, self.rear, physicsClientId=self.client)
         return float(js[0][1] + js[1][1]) / 2 * self.model.rear_wheel_radius_m
 
-    def wheel_states(self) -> tuple[list[float], list[float]]:
-        """Steer-joint angles (rad) and the four wheel speeds (rad/s: rl, rr, fl, fr)."""
+    def wheel_states(self) -> tuple[list[float], list[float], list[float]]:
+        """Steer-joint angles (rad), and the four wheels' angles (rad) and speeds (rad/s), in
+        the order rl, rr, fl, fr."""
         js = pb.getJointStates(self.body, self.steer + self.wheels, physicsClientId=self.client)
-        return [s[0] for s in js[:2]], [s[1] for s in js[2:]]
-
-    def wheel_angles(self) -> list[float]:
-        """Rotation angles of the four wheels (rad: rl, rr, fl, fr), for their tf frames."""
-        js = pb.getJointStates(self.body, self.wheels, physicsClientId=self.client)
-        return [s[0] for s in js]
-
-    def state(self) -> BodyState:
-        c = self.client
-        com, quat = pb.getBasePositionAndOrientation(self.body, physicsClientId=c)
-        lin, ang = pb.getBaseVelocity(self.body, physicsClientId=c)
-        rot = np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
-        off = rot @ self._com_offset
-        w = np.asarray(ang)
-        v = np.asarray(lin) - np.cross(w, off)
-        return BodyState(_t3(np.asarray(com) - off), (quat[0], quat[1], quat[2], quat[3]),
-                         _t3(rot.T @ v), _t3(rot.T @ w))
-
-    def frame_pose(self, name: str, state: BodyState) -> tuple[np.ndarray, np.ndarray]:
-        rot = np.array(pb.getMatrixFromQuaternion(state.quat)).reshape(3, 3)
-        rel_pos, rel_rot = self.frames[name]
-        return np.asarray(state.xyz) + rot @ rel_pos, rot @ rel_rot
+        return [s[0] for s in js[:2]], [s[0] for s in js[2:]], [s[1] for s in js[2:]]
 
     def wheel_contacts_xy(self, state: BodyState) -> np.ndarray:
-        """Ground points under the four wheels (rl, rr, fl, fr), from base_link geometry."""
-        rot = np.array(pb.getMatrixFromQuaternion(state.quat)).reshape(3, 3)
-        rel = np.array([[-0.077, 0.5625, 0.0], [-0.077, -0.5625, 0.0], [1.129, 0.47, 0.0],
-                        [1.129, -0.47, 0.0]])
-        out: np.ndarray = (np.asarray(state.xyz) + rel @ rot.T)[:, :2]
+        """Points under the four wheel centres (rl, rr, fl, fr), from the model's geometry."""
+        rel = np.column_stack([np.asarray(self.model.wheel_xy_m), np.zeros(4)])
+        out: np.ndarray = (np.asarray(state.xyz) + rel @ state.rotation.T)[:, :2]
         return out

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from kartci.logs import header, msg
-from kartci.sim.line_tracker import BodyState
+from kartci.sim.body import BodyState
 
 WORLD_FRAME = "map"
 

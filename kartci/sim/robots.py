@@ -15,9 +15,10 @@ from kartci.agents import Agent
 from kartci.errors import RunError, SpecError
 from kartci.logs import header, msg
 from kartci.sim import lidar as lidar_mod
+from kartci.sim.body import BodyState
 from kartci.sim.gokart import Gokart
 from kartci.sim.hall import Block, blocks
-from kartci.sim.line_tracker import BodyState, LineTracker
+from kartci.sim.line_tracker import LineTracker
 from kartci.sim.messages import (
     WORLD_FRAME,
     joint_state,
@@ -158,22 +159,20 @@ class KartRobot(Robot):
 
     def footprint(self) -> Block:
         st = self.body.state()
-        yaw = math.atan2(2 * (st.quat[3] * st.quat[2] + st.quat[0] * st.quat[1]),
-                         1 - 2 * (st.quat[1] ** 2 + st.quat[2] ** 2))
-        c = (st.xyz[0] + 0.6 * math.cos(yaw), st.xyz[1] + 0.6 * math.sin(yaw))
-        return Block(self.name, c, (2.0, 1.2, 0.45), yaw)
+        c = (st.xyz[0] + 0.6 * math.cos(st.yaw), st.xyz[1] + 0.6 * math.sin(st.yaw))
+        return Block(self.name, c, (2.0, 1.2, 0.45), st.yaw)
 
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         st = self.body.state()
         ns = self.name
         if k % self.odom_every == 0:
             self.publish_pose(st, t_ns, put)
-            steer, speeds = self.body.wheel_states()
+            steer, spin, speeds = self.body.wheel_states()
             put("joint_states", joint_state(
                 t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
-                [*steer, 0.0, 0.0, 0.0, 0.0, self.body.column], [0.0, 0.0, *speeds, 0.0]), t_ns)
+                [*steer, *spin, self.body.column], [0.0, 0.0, *speeds, 0.0]), t_ns)
             self._zone_friction(st)
-            put("/tf", tf_message(self._joint_tf(t_ns, steer)), t_ns)
+            put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
         if self.spec.camera.enabled and k % self.camera_every == 0:
             self._camera(st, t_ns, put)
         if self.spec.imu.enabled and k % self.imu_every == 0:
@@ -181,7 +180,7 @@ class KartRobot(Robot):
         if self.spec.lidar.enabled and k % self.lidar_every == 0:
             self._lidar(st, t_ns, put)
 
-    def _joint_tf(self, t_ns: int, steer: list[float]) -> list[Any]:
+    def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
         """tf of the moving frames: steer links (about z) and wheel links (about y)."""
         ns, (x_r, y_r), (x_f, y_f) = self.name, self.model.wheel_xy_m[0], (
             self.model.wheel_xy_m[2])
@@ -189,7 +188,6 @@ class KartRobot(Robot):
         for side, sign, angle in (("left", 1, steer[0]), ("right", -1, steer[1])):
             out.append(transform(t_ns, f"{ns}/base_link", f"{ns}/front_{side}_wheel_steer_link",
                                  (x_f, sign * y_f, -0.015), _axis_quat(2, angle)))
-        spin = self.body.wheel_angles()
         for i, (name, parent, xyz) in enumerate((
                 ("rear_left", "base_link", (x_r, y_r, 0.0)),
                 ("rear_right", "base_link", (x_r, -y_r, 0.0)),
@@ -223,7 +221,7 @@ class KartRobot(Robot):
     def _imu(self, st: BodyState, t_ns: int, put: Put) -> None:
         """Specific force (gravity included) and angular rate in imu_link, from the finite
         difference of the IMU point's velocity over one IMU period."""
-        rot = np.array(_rotation(st.quat))
+        rot = st.rotation
         rel, rel_rot = self.frames["imu_link"]
         w_world = rot @ np.asarray(st.w_body)
         v_world = rot @ np.asarray(st.v_body) + np.cross(w_world, rot @ rel)
@@ -251,7 +249,7 @@ class KartRobot(Robot):
 
     def _lidar(self, st: BodyState, t_ns: int, put: Put) -> None:
         pos, _ = self.body.frame_pose("velodyne_link", st)
-        yaw = _yaw(st.quat)
+        yaw = st.yaw
         extra = [o.footprint() for o in self.others]
         ranges = lidar_mod.scan_fast(self.lidar, self.azimuths, pos, yaw, self.blocks + extra,
                                      self.world_spec.wall_height_m, self.spec.lidar.range_m)
@@ -323,22 +321,10 @@ class KartRobot(Robot):
         self.body.pre_step()
 
 
-def _rotation(q: tuple[float, float, float, float]) -> list[list[float]]:
-    x, y, z, w = q
-    return [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-
-
 def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     q = [0.0, 0.0, 0.0, math.cos(angle / 2)]
     q[axis] = math.sin(angle / 2)
     return q[0], q[1], q[2], q[3]
-
-
-def _yaw(q: tuple[float, float, float, float]) -> float:
-    x, y, z, w = q
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 # Table 3.6, read as 1-sigma white noise: accuracy x default full scale.

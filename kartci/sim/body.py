@@ -1,0 +1,75 @@
+"""base_link of a PyBullet body. PyBullet reports and places a base by its centre of mass, so
+every pose and twist here is shifted to the URDF's base_link frame."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from kartci._bullet import pb
+
+Frames = dict[str, tuple[np.ndarray, np.ndarray]]
+
+
+def _t3(v: np.ndarray) -> tuple[float, float, float]:
+    return float(v[0]), float(v[1]), float(v[2])
+
+
+def rotation(quat: tuple[float, float, float, float]) -> np.ndarray:
+    return np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
+
+
+@dataclass(frozen=True)
+class BodyState:
+    """Ground truth of base_link: world pose and body-frame twist."""
+
+    xyz: tuple[float, float, float]
+    quat: tuple[float, float, float, float]  # x, y, z, w
+    v_body: tuple[float, float, float]  # m/s in base_link
+    w_body: tuple[float, float, float]  # rad/s in base_link
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return rotation(self.quat)
+
+    @property
+    def yaw(self) -> float:
+        x, y, z, w = self.quat
+        return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+class Base:
+    """A loaded body with the fixed frames of its URDF (sensor mounts)."""
+
+    def __init__(self, client: int, body: int, frames: Frames) -> None:
+        self.client, self.body, self.frames = client, body, frames
+        self._com_offset = np.asarray(pb.getDynamicsInfo(body, -1, physicsClientId=client)[3])
+
+    def state(self) -> BodyState:
+        c = self.client
+        com, quat = pb.getBasePositionAndOrientation(self.body, physicsClientId=c)
+        lin, ang = pb.getBaseVelocity(self.body, physicsClientId=c)
+        rot = rotation(quat)
+        off = rot @ self._com_offset
+        w = np.asarray(ang)
+        v = np.asarray(lin) - np.array([w[1] * off[2] - w[2] * off[1],  # - w x off, no BLAS
+                                        w[2] * off[0] - w[0] * off[2],
+                                        w[0] * off[1] - w[1] * off[0]])
+        return BodyState(_t3(np.asarray(com) - off), (quat[0], quat[1], quat[2], quat[3]),
+                         _t3(rot.T @ v), _t3(rot.T @ w))
+
+    def reset_pose(self, xyz: np.ndarray, quat: tuple[float, float, float, float]) -> None:
+        """Place base_link at `xyz`."""
+        pb.resetBasePositionAndOrientation(self.body,
+                                           (xyz + rotation(quat) @ self._com_offset).tolist(),
+                                           quat, physicsClientId=self.client)
+
+    def frame_pose(self, name: str, state: BodyState | None = None) -> tuple[np.ndarray,
+                                                                                np.ndarray]:
+        """World position and 3x3 rotation of a fixed frame of the URDF (e.g. a sensor mount)."""
+        st = state or self.state()
+        rot = st.rotation
+        rel_pos, rel_rot = self.frames[name]
+        return np.asarray(st.xyz) + rot @ rel_pos, rot @ rel_rot
