@@ -20,6 +20,10 @@ class KartInput:
     estop: bool = False
 
 
+# The kart's footprint in base_link: centre ahead of the rear axle, length, width (m), from the
+# wheel positions (Table 3.2) and tyre radii with the bodywork around them.
+FOOTPRINT_M = (0.6, 2.0, 1.2)
+
 STEERING_RATIO = 0.36  # wheel angle per steering-column angle: the linear term of Eq. 3.4
 
 

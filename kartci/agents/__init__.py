@@ -5,22 +5,27 @@ from __future__ import annotations
 from kartci.agents.base import Agent, Outbox
 from kartci.agents.kart import CommandsAgent, JoyDriver, ManualAgent, ScriptAgent
 from kartci.agents.line_pid import LinePid
+from kartci.agents.mpcc import MpccAgent
 from kartci.errors import SpecError
 from kartci.spec.models import (
     AgentSpec,
+    Box,
     CommandsController,
     GokartModel,
     JoyDriverController,
     LinePidController,
     LineTrackerModel,
     ManualController,
+    MpccController,
     ScriptController,
 )
 from kartci.track import Track
 
 
-def make_agent(spec: AgentSpec, track: Track | None = None) -> Agent:
-    """The controller an agent spec names, checked against the robot it drives."""
+def make_agent(spec: AgentSpec, track: Track | None = None, obstacles: tuple[Box, ...] = (),
+               other_karts: tuple[str, ...] = ()) -> Agent:
+    """The controller an agent spec names, checked against the robot it drives. `obstacles`
+    and `other_karts` (agent names) are ground truth an MPCC may see."""
     c, m = spec.controller, spec.model
     if isinstance(c, LinePidController):
         if not isinstance(m, LineTrackerModel):
@@ -34,9 +39,11 @@ def make_agent(spec: AgentSpec, track: Track | None = None) -> Agent:
         return CommandsAgent(c, m)
     if isinstance(c, ScriptController):
         return ScriptAgent(c)
-    assert isinstance(c, JoyDriverController)
     if track is None:
-        raise SpecError("controller joy_driver needs a world with a track")
+        raise SpecError(f"controller {c.type} needs a world with a track")
+    if isinstance(c, MpccController):
+        return MpccAgent(c, m, track, obstacles, other_karts)
+    assert isinstance(c, JoyDriverController)
     return JoyDriver(c, m, track)
 
 

@@ -55,6 +55,8 @@ FLATTENERS: dict[str, Callable[[Any], Row]] = {
                                             "y": m.position.y},
     "kartci_msgs/msg/KartCommand": _fields("steering_wheel_angle_rad", "acceleration_mps2",
                                            "brake_mps2", "reverse", "emergency_stop"),
+    "kartci_msgs/msg/SolverStats": _fields("success", "status", "solve_ms", "iterations",
+                                           "cost", "failures", "max_slack_m"),
     "sensor_msgs/msg/Imu": lambda m: {"ax": m.linear_acceleration.x,
                                       "ay": m.linear_acceleration.y,
                                       "az": m.linear_acceleration.z, "wz": m.angular_velocity.z},

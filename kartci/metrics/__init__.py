@@ -8,6 +8,7 @@ from typing import Any
 
 from kartci.errors import LogError
 from kartci.logs import tables
+from kartci.metrics import race
 from kartci.metrics.base import DEFS, Direction, Metric, MetricDef
 from kartci.metrics.kart import kart_metrics, kart_track
 from kartci.metrics.line import line_metrics, sensor_track
@@ -39,9 +40,35 @@ def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
         else:
             values = kart_metrics(scenario, agent, track, odom,
                                   log_tables.get(f"/{agent}/collision"))
+            values += race_metrics(scenario, agent, track, log_tables)
         for m in values:
             out[f"{agent}.{m.name}" if many else m.name] = m
     return scenario, out
+
+
+def race_metrics(scenario: Scenario, agent: str, track: Track,
+                 log_tables: Mapping[str, Any]) -> list[Metric]:
+    """Clearance, overtakes and solver statistics, where the run has what they need."""
+    world = scenario.world
+    assert isinstance(world, HallWorld)
+    odom = log_tables[f"/{agent}/odom"]
+    others = [n for n in scenario.agents if n != agent]
+    other_odom = [log_tables[f"/{n}/odom"] for n in others if f"/{n}/odom" in log_tables]
+    out = []
+    if world.obstacles or other_odom:
+        gap = race.min_clearance_m(race.kart_rects(odom), world.obstacles,
+                                   [race.kart_rects(o) for o in other_odom])
+        out.append(Metric("min_clearance_m", gap, "m"))
+    if other_odom:
+        mine = kart_track(track, odom)["s_total"].to_numpy()
+        theirs = [kart_track(track, o)["s_total"].to_numpy() for o in other_odom]
+        out.append(Metric("overtakes", float(race.overtakes(mine, theirs)), "count"))
+    stats = log_tables.get(f"/{agent}/mpcc/stats")
+    if stats is not None and not stats.empty:
+        failures, timing = race.solver_values(stats)
+        out.append(Metric("solver_failures", float(failures), "count"))
+        out += [Metric(name, value, "ms") for name, value in timing.items()]
+    return out
 
 
 def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:

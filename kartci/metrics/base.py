@@ -21,6 +21,7 @@ class MetricDef:
     abs_tol: float  # default tolerance in the metric's unit...
     rel_tol: float  # ...or this fraction of the baseline value, whichever is larger
     description: str
+    timing: bool = False  # wall-clock: machine-dependent, kept out of the deterministic metrics
 
     def default_tolerance(self, value: float) -> float:
         return max(self.abs_tol, self.rel_tol * abs(value)) if math.isfinite(value) else (
@@ -64,4 +65,17 @@ DEFS: dict[str, MetricDef] = {
                              "time with any wheel outside the track bounds"),
     "max_speed_mps": MetricDef("m/s", Direction.EQUAL, 0.2, 0.03, "top speed of base_link"),
     "progress_m": MetricDef("m", Direction.HIGHER, 0.5, 0.01, "arc length driven along the track"),
+    "min_clearance_m": MetricDef("m", Direction.HIGHER, 0.05, 0.2,
+                                 "smallest gap between the kart's footprint and an obstacle or "
+                                 "another kart"),
+    "overtakes": MetricDef("count", Direction.HIGHER, 0.0, 0.0,
+                           "net passes of other karts (passes minus times passed)"),
+    "solver_failures": MetricDef("count", Direction.LOWER, 0.0, 0.0,
+                                 "MPCC solves that failed or hit the iteration cap (the kart "
+                                 "braked)"),
+    "solve_ms_median": MetricDef("ms", Direction.LOWER, 5.0, 1.0, "median MPCC solve time",
+                                 timing=True),
+    "solve_ms_p95": MetricDef("ms", Direction.LOWER, 5.0, 1.0, "95th percentile solve time",
+                              timing=True),
+    "solve_ms_max": MetricDef("ms", Direction.LOWER, 20.0, 2.0, "slowest solve", timing=True),
 }

@@ -56,8 +56,13 @@ def run_one(scenario: Scenario, out: Path,
 def score(folder: Path) -> dict[str, Any]:
     """Compute metrics.json from the log in `folder` (byte-identical for identical logs)."""
     scenario, values = metrics.compute(folder / LOG_NAME)
+    def timing(name: str) -> bool:
+        d = metrics.DEFS.get(name.rsplit(".", 1)[-1])
+        return d is not None and d.timing
+
     doc = {"scenario": scenario.name, "seed": scenario.seed,
-           "metrics": {name: m.to_json() for name, m in values.items()}}
+           "metrics": {name: m.to_json() for name, m in values.items() if not timing(name)},
+           "timing": {name: m.to_json() for name, m in values.items() if timing(name)}}
     write_json_atomic(folder / "metrics.json", doc)
     return doc
 

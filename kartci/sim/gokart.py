@@ -78,10 +78,15 @@ class Gokart(Base):
             ref = min(max(ref, -m.reverse_speed_mps), m.max_speed_mps)
             ref = min(max(ref, v - SLIP_WINDOW_MPS), v + SLIP_WINDOW_MPS)
         self.v_ref = ref
-        w = ref / m.rear_wheel_radius_m
+        # two rear motors (REFERENCE.md): each wheel's speed follows its own path radius, an
+        # electronic differential on the measured yaw rate, so the axle does not scrub
+        yaw_rate = float(pb.getBaseVelocity(self.body, physicsClientId=self.client)[1][2])
+        half = abs(m.wheel_xy_m[0][1])
+        w_left = (ref - yaw_rate * half) / m.rear_wheel_radius_m
+        w_right = (ref + yaw_rate * half) / m.rear_wheel_radius_m
         tau = m.wheel_torque_limit_nm * (3.0 if inp.estop else 1.0)
         pb.setJointMotorControlArray(self.body, self.rear, pb.VELOCITY_CONTROL,
-                                     targetVelocities=[w, w], forces=[tau, tau],
+                                     targetVelocities=[w_left, w_right], forces=[tau, tau],
                                      physicsClientId=self.client)
 
     def rear_speed(self) -> float:

@@ -53,8 +53,10 @@ def simulate(scenario: Scenario, log_path: Path,
     count, finished, k = 0, False, 0
     try:
         robots: list[LineTrackerRobot | KartRobot] = []
+        obstacles = scenario.world.obstacles if isinstance(scenario.world, HallWorld) else ()
         for name, spec in scenario.agents.items():
-            agent = make_agent(spec, track)
+            agent = make_agent(spec, track, obstacles,
+                               tuple(n for n in scenario.agents if n != name))
             model_dir = project_root() / "models" / spec.model.kind
             if isinstance(scenario.world, LineLabWorld):
                 robots.append(LineTrackerRobot(name, spec, world, agent, dt, model_dir,
@@ -71,17 +73,22 @@ def simulate(scenario: Scenario, log_path: Path,
         course = scenario.world.course if isinstance(scenario.world, LineLabWorld) else None
         end_m = geometry.length_m(course) if isinstance(course, StraightCourse) else math.inf
 
+        # full topic -> the agents reading it, and the name each asked for it by
+        readers: dict[str, list[tuple[Any, str]]] = {}
+        for r in robots:
+            for want in r.agent.inputs:
+                full = want if want.startswith("/") else f"/{r.name}/{want}"
+                readers.setdefault(full, []).append((r.agent, want))
+
         with McapLogWriter(log_path) as log:
             def putter(robot: LineTrackerRobot | KartRobot) -> Callable[[str, Any, int], None]:
-                agent = robot.agent
-
                 def put(topic: str, m: Any, t_ns: int) -> None:
                     nonlocal count
-                    log.write(topic if topic.startswith("/") else f"/{robot.name}/{topic}", m,
-                              t_ns)
+                    full = topic if topic.startswith("/") else f"/{robot.name}/{topic}"
+                    log.write(full, m, t_ns)
                     count += 1
-                    if topic in agent.inputs:
-                        agent.on_message(topic, m)
+                    for agent, want in readers.get(full, ()):
+                        agent.on_message(want, m)
                 return put
 
             puts = [putter(r) for r in robots]

@@ -31,7 +31,7 @@ from kartci.sim.sensors import LineCamera, Sonar
 from kartci.sim.world import World
 from kartci.spec.models import AgentSpec, GokartModel, HallWorld, LineLabWorld
 from kartci.track import Track
-from kartci.vehicle import KartInput
+from kartci.vehicle import FOOTPRINT_M, KartInput
 
 Put = Callable[[str, Any, int], None]  # (topic relative to the namespace, message, t ns)
 
@@ -159,8 +159,9 @@ class KartRobot(Robot):
 
     def footprint(self) -> Block:
         st = self.body.state()
-        c = (st.xyz[0] + 0.6 * math.cos(st.yaw), st.xyz[1] + 0.6 * math.sin(st.yaw))
-        return Block(self.name, c, (2.0, 1.2, 0.45), st.yaw)
+        ahead, length, width = FOOTPRINT_M
+        c = (st.xyz[0] + ahead * math.cos(st.yaw), st.xyz[1] + ahead * math.sin(st.yaw))
+        return Block(self.name, c, (length, width, 0.45), st.yaw)
 
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         st = self.body.state()

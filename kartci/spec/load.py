@@ -65,6 +65,10 @@ def _resolve_refs(data: dict[str, Any], path: Path) -> None:
     world = data.get("world")
     if isinstance(world, str):
         data["world"] = _read_yaml(root / "sims" / f"{world}.yaml")
+    elif isinstance(world, dict) and isinstance(world.get("from"), str):
+        # `world: {from: winti/hall, obstacles: [...]}`: a sims file with keys replaced
+        data["world"] = {**_read_yaml(root / "sims" / f"{world['from']}.yaml"),
+                         **{k: v for k, v in world.items() if k != "from"}}
     agents = data.get("agents")
     if isinstance(agents, dict):
         for agent in agents.values():

@@ -15,7 +15,7 @@ import numpy as np
 
 from kartci.track import write_csv
 
-HALF_WIDTH_M = 1.6
+HALF_WIDTH_M = 2.0
 STEP_M = 1.0
 START = (8.0, 3.2, 0.0)  # x, y, heading
 # (length m, curvature 1/m): left turns positive

@@ -1,0 +1,109 @@
+"""The MPCC agent: reads its state from an odometry topic (ground truth by default, so a
+localisation estimate can replace it by configuration), sees static obstacles from the
+scenario and other karts from their odometry, and publishes kart commands in the seed's
+format, its predicted horizon (nav_msgs/Path) and solver statistics every step."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from kartci.agents.base import Outbox
+from kartci.agents.joy import kart_command
+from kartci.logs.types import header, msg
+from kartci.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
+from kartci.spec.models import Box, GokartModel, MpccController
+from kartci.track import Track
+from kartci.vehicle import KartInput, column_for_wheel_angle, wheel_angles
+
+MAP_FRAME = "map"
+
+
+def _yaw(q: Any) -> float:
+    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+class MpccAgent:
+    def __init__(self, spec: MpccController, model: GokartModel, track: Track,
+                 obstacles: tuple[Box, ...] = (), other_karts: tuple[str, ...] = ()) -> None:
+        self.spec, self.model, self.track, self.period_s = spec, model, track, spec.period_s
+        self.mpcc = Mpcc(spec, model, track)
+        self.static = [obstacle_from_xy(track, b.center_m[0], b.center_m[1],
+                                        0.5 * math.hypot(b.size_m[0], b.size_m[1]))
+                       for b in obstacles]
+        self.others = {f"/{name}/odom": name for name in other_karts}
+        self.inputs = (spec.state_topic, "joint_states", *self.others)
+        self._state: np.ndarray | None = None  # [X, Y, psi, vx, vy, r] of the CoG
+        self._delta = 0.0
+        self._accel = 0.0
+        self._s: float | None = None
+        self._karts: dict[str, tuple[float, float, float, float]] = {}
+
+    def on_message(self, topic: str, message: Any) -> None:
+        if topic == "joint_states":
+            names = list(message.name)
+            if "steering_column" in names:
+                col = float(message.position[names.index("steering_column")])
+                self._delta = sum(wheel_angles(self.model, col)) / 2
+            return
+        p, tw = message.pose.pose.position, message.twist.twist
+        yaw, c = _yaw(message.pose.pose.orientation), self.spec.vehicle.cog_x_m
+        x, y = p.x + c * math.cos(yaw), p.y + c * math.sin(yaw)
+        vx, vy, r = float(tw.linear.x), float(tw.linear.y) + c * float(tw.angular.z), float(
+            tw.angular.z)
+        if topic == self.spec.state_topic:
+            self._state = np.array([x, y, yaw, vx, vy, r])
+        elif topic in self.others:
+            self._karts[topic] = (x, y, yaw, vx)
+
+    def _obstacles(self) -> list[Obstacle]:
+        out = list(self.static)
+        radius = 0.5 * self.spec.kart_width_m
+        for x, y, yaw, v in self._karts.values():
+            s, _, _, _ = self.track.project(np.array([[x, y]]))
+            heading = self.track.pose_at(float(s[0]))[2]
+            speed = v * math.cos(yaw - heading)
+            out.append(obstacle_from_xy(self.track, x, y, radius, speed,
+                                        follow_gap_m=self.spec.kart_length_m + 1.0))
+        return out
+
+    def step(self, t_ns: int) -> Outbox:
+        if self._state is None:
+            return []
+        st = self._state
+        proj = float(self.track.project(st[None, :2])[0][0])
+        ref = self._s if self._s is not None else (proj if proj < self.track.length_m / 2
+                                                   else proj - self.track.length_m)
+        s0 = proj + self.track.length_m * round((ref - proj) / self.track.length_m)
+        x0 = np.array([*st, s0, self._delta, self._accel])
+        plan = self.mpcc.solve(x0, self._obstacles())
+        self._s = s0
+        # after a failed solve the brake is an emergency action, not part of a plan: the next
+        # solve starts from a neutral pedal so that it is not born infeasible at standstill
+        self._accel = plan.accel_mps2 if plan.success else 0.0
+        cmd = KartInput(column_for_wheel_angle(self.model, plan.wheel_angle_rad),
+                        max(plan.accel_mps2, 0.0), max(-plan.accel_mps2, 0.0))
+        return [("cmd", kart_command(cmd, t_ns, "base_link")),
+                ("mpcc/horizon", self._path(plan, t_ns)),
+                ("mpcc/stats", self._stats(plan, t_ns))]
+
+    def _path(self, plan: Plan, t_ns: int) -> Any:
+        poses = []
+        for row in plan.states:
+            half = row[2] / 2
+            poses.append(msg("geometry_msgs/msg/PoseStamped", header=header(t_ns, MAP_FRAME),
+                             pose=msg("geometry_msgs/msg/Pose",
+                                      position=msg("geometry_msgs/msg/Point", x=float(row[0]),
+                                                   y=float(row[1]), z=0.0),
+                                      orientation=msg("geometry_msgs/msg/Quaternion", x=0.0,
+                                                      y=0.0, z=math.sin(half),
+                                                      w=math.cos(half)))))
+        return msg("nav_msgs/msg/Path", header=header(t_ns, MAP_FRAME), poses=poses)
+
+    def _stats(self, plan: Plan, t_ns: int) -> Any:
+        return msg("kartci_msgs/msg/SolverStats", header=header(t_ns, MAP_FRAME),
+                   success=plan.success, status=plan.status, solve_ms=plan.solve_ms,
+                   iterations=plan.iterations, cost=plan.cost, failures=self.mpcc.failures,
+                   max_slack_m=plan.max_slack_m)

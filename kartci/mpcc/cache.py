@@ -1,0 +1,112 @@
+"""Build the MPCC solver once and keep its compiled form on disk.
+
+The key hashes everything the compiled code depends on (the horizon, the vehicle model, the
+solver, CasADi's version and this package's source), so a second run compiles nothing and a
+changed model never loads a stale binary. Builds are written under a temporary name and renamed
+into place, so parallel runs that race to build the same solver each get a whole file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+
+from kartci.errors import RunError
+from kartci.mpcc.ocp import Layout, build
+from kartci.spec.models import MpccController
+
+SOURCES = ("model.py", "ocp.py", "cache.py")
+
+
+def cache_dir() -> Path:
+    """KARTCI_CACHE_DIR, else ~/.cache/kartci (XDG_CACHE_HOME respected)."""
+    env = os.environ.get("KARTCI_CACHE_DIR")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "kartci"
+
+
+def solver_key(spec: MpccController) -> str:
+    here = Path(__file__).parent
+    h = hashlib.sha256()
+    h.update(ca.__version__.encode())
+    for name in SOURCES:
+        h.update((here / name).read_bytes())
+    compiled = spec.model_dump(include={"horizon_steps", "step_s", "rk4_substeps", "vehicle"})
+    h.update(repr(sorted(compiled.items())).encode())
+    return h.hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Built:
+    solver: ca.Function  # warm-started from the previous solution
+    cold: ca.Function  # the same NLP with Ipopt's default start, for retries
+    layout: Layout
+    compiled: bool  # False when no C compiler was found: the SX graph is interpreted
+    setup_s: float  # wall time to get the solver: compile on a miss, load on a hit
+    cache_hit: bool
+
+
+def _options(spec: MpccController, warm: bool = True) -> dict[str, Any]:
+    start = ({"warm_start_init_point": "yes", "warm_start_bound_push": 1e-6,
+              "warm_start_mult_bound_push": 1e-6, "mu_init": 1e-3} if warm else {})
+    return {"print_time": False,
+            "ipopt": {"print_level": 0, "sb": "yes", "max_iter": spec.max_iterations,
+                      "tol": 1e-4, "acceptable_tol": 1e-3, "linear_solver": "mumps", **start}}
+
+
+def _compiler() -> str | None:
+    return shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
+
+
+def get_solver(spec: MpccController) -> Built:
+    """The solver for this spec: from the cache, else compiled into it (or interpreted when
+    compiling is off or impossible)."""
+    t0 = time.perf_counter()
+    nlp, layout = build(spec)
+    cc = _compiler() if spec.compile else None
+    if cc is None:
+        solver = ca.nlpsol("mpcc", "ipopt", nlp, _options(spec))
+        cold = ca.nlpsol("mpcc_cold", "ipopt", nlp, _options(spec, warm=False))
+        return Built(solver, cold, layout, False, time.perf_counter() - t0, False)
+    key = solver_key(spec)
+    lib = cache_dir() / "mpcc" / f"mpcc_{key}.so"
+    hit = lib.exists()
+    if not hit:
+        _compile(ca.nlpsol("mpcc", "ipopt", nlp, _options(spec)), lib, cc)
+    try:
+        solver = ca.nlpsol("mpcc", "ipopt", str(lib), _options(spec))
+        cold = ca.nlpsol("mpcc_cold", "ipopt", str(lib), _options(spec, warm=False))
+    except RuntimeError as err:
+        raise RunError(f"MPCC solver {lib} does not load ({err}); delete it to rebuild") from err
+    return Built(solver, cold, layout, True, time.perf_counter() - t0, hit)
+
+
+def _compile(gen: ca.Function, lib: Path, cc: str) -> None:
+    """C code for the solver's own derivative functions, compiled into `lib`."""
+    lib.parent.mkdir(parents=True, exist_ok=True)
+    tmp = lib.parent / f".build_{os.getpid()}_{lib.stem}"
+    tmp.mkdir(exist_ok=True)
+    try:
+        cg = ca.CodeGenerator("mpcc_nlp.c", {"with_header": False})
+        cg.add(gen.oracle())
+        for name in gen.get_function():
+            cg.add(gen.get_function(name))
+        cg.generate(f"{tmp}/")
+        out = tmp / lib.name
+        run = subprocess.run([cc, "-O1", "-fPIC", "-shared", str(tmp / "mpcc_nlp.c"), "-o",
+                              str(out), "-lm"], capture_output=True, text=True, check=False)
+        if run.returncode != 0:
+            raise RunError(f"compiling the MPCC solver failed: {run.stderr.strip()[:300]}")
+        os.replace(out, lib)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

@@ -1,0 +1,143 @@
+"""One MPCC solve per control period: measured state in, a command and the predicted horizon
+out. Warm-started from the previous solution shifted by one step; a failed solve brakes."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from kartci.mpcc.cache import Built, get_solver
+from kartci.mpcc.model import ACC, DELTA, S, SLACK, VS, VX
+from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
+from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
+from kartci.spec.models import GokartModel, MpccController
+from kartci.track import Track
+from kartci.vehicle import STEERING_RATIO, wheel_angles
+
+SUCCESS = {"Solve_Succeeded", "Solved_To_Acceptable_Level", "Success"}
+FEASIBLE = 1e-4  # largest constraint violation of a usable iterate (m, m/s, ...)
+
+
+@dataclass(frozen=True)
+class Plan:
+    success: bool
+    status: str
+    iterations: int
+    solve_ms: float
+    cost: float
+    max_slack_m: float
+    states: np.ndarray  # (N + 1, NX) predicted states; on failure the braking fallback
+    accel_mps2: float  # the command: longitudinal acceleration (negative: brake)
+    wheel_angle_rad: float  # mean front-wheel angle to steer to
+
+
+class Mpcc:
+    def __init__(self, spec: MpccController, model: GokartModel, track: Track) -> None:
+        self.spec, self.model, self.track = spec, model, track
+        self.built: Built = get_solver(spec)
+        self.lay = self.built.layout
+        self.lbg, self.ubg = constraint_bounds(spec.horizon_steps)
+        lo, hi = model.steering_limit_rad
+        self.max_delta = min(abs(sum(wheel_angles(model, lo)) / 2),
+                             abs(sum(wheel_angles(model, hi)) / 2), STEERING_RATIO * 1.7)
+        self._w: np.ndarray | None = None
+        self._lam_g: np.ndarray | None = None
+        self._lam_x: np.ndarray | None = None
+        self.failures = 0
+
+    def solve(self, x0: np.ndarray, obstacles: list[Obstacle]) -> Plan:
+        sp, lay, n = self.spec, self.lay, self.spec.horizon_steps
+        x0 = x0.copy()
+        x0[DELTA] = float(np.clip(x0[DELTA], -self.max_delta, self.max_delta))
+        x0[ACC] = float(np.clip(x0[ACC], -sp.max_brake_mps2, sp.max_accel_mps2))
+        w0 = self._initial_guess(x0)
+        s_bar = lay.states(w0)[1:, S]
+        params = stage_params(self.track, s_bar, sp.step_s, sp.track_padding_m, obstacles,
+                              sp.obstacle_margin_m, sp.kart_length_m)
+        p = np.concatenate([weights_vector(sp.weights), [sp.max_lateral_accel_mps2,
+                                                          sp.max_brake_mps2, sp.front_check_m,
+                                                          sp.max_speed_mps],
+                            params.ravel()])
+        lbw, ubw = variable_bounds(sp, lay, x0, self.max_delta)
+        args = {"x0": w0, "p": p, "lbx": lbw, "ubx": ubw, "lbg": self.lbg, "ubg": self.ubg}
+        warm = self._lam_g is not None and self._lam_x is not None
+        if warm:
+            args["lam_g0"], args["lam_x0"] = self._lam_g, self._lam_x
+        t0 = time.perf_counter()
+        sol, status, ok, iters = self._call(self.built.solver, args)
+        if not ok and warm:  # a warm start can trap the interior point: retry once cold
+            del args["lam_g0"], args["lam_x0"]
+            sol, status, ok, more = self._call(self.built.cold, args)
+            iters += more
+        solve_ms = (time.perf_counter() - t0) * 1e3
+        w = np.asarray(sol["x"]).ravel()
+        if not ok:
+            self.failures += 1
+            self._w = self._lam_g = self._lam_x = None
+            return self._brake(x0, status, iters, solve_ms)
+        self._w = w
+        self._lam_g = np.asarray(sol["lam_g"]).ravel()
+        self._lam_x = np.asarray(sol["lam_x"]).ravel()
+        states = lay.states(w)
+        slack = float(lay.inputs(w)[1:, SLACK].max())
+        return Plan(True, status, iters, solve_ms, float(sol["f"]), slack, states,
+                    float(states[0, ACC] + states[1, ACC]) / 2, float(states[1, DELTA]))
+
+    def _call(self, solver: Any, args: dict[str, Any]) -> tuple[dict[str, Any], str, bool, int]:
+        sol = solver(**args)
+        stats = solver.stats()
+        status = str(stats.get("return_status", "unknown"))
+        w = np.asarray(sol["x"]).ravel()
+        g = np.asarray(sol["g"]).ravel()
+        violation = float(np.max(np.maximum(self.lbg - g, g - self.ubg), initial=0.0))
+        ok = bool(np.isfinite(w).all()) and (
+            status in SUCCESS
+            # the iteration cap with a feasible iterate: a usable, suboptimal plan, as in
+            # real-time MPC; an infeasible iterate is a failure
+            or (status == "Maximum_Iterations_Exceeded" and violation < FEASIBLE))
+        return sol, status, ok, int(stats.get("iter_count", -1))
+
+    def _initial_guess(self, x0: np.ndarray) -> np.ndarray:
+        lay, sp = self.lay, self.spec
+        w = np.zeros(lay.size)
+        if self._w is not None:  # shift the last solution by one step
+            xs, us = lay.states(self._w), lay.inputs(self._w)
+            xs = np.vstack([xs[1:], xs[-1:]])
+            xs[-1, S] += xs[-1, VX] * sp.step_s
+            us = np.vstack([us[1:], us[-1:]])
+            offset = x0[S] - xs[0, S]
+            xs[:, S] += offset
+        else:
+            s = progress_guess(self.track, float(x0[S]), float(x0[VX]), sp.step_s,
+                               sp.horizon_steps, sp.max_speed_mps)
+            xs = np.tile(x0, (sp.horizon_steps + 1, 1))
+            xs[1:, S] = s
+            xs[1:, VX] = np.diff(np.r_[x0[S], s]) / sp.step_s
+            us = np.zeros((sp.horizon_steps, 4))
+            us[:, VS] = xs[1:, VX]
+            self._lam_g = self._lam_x = None
+        xs[0] = x0
+        for k in range(lay.n + 1):
+            w[lay.x(k)] = xs[k]
+            if k < lay.n:
+                w[lay.u(k)] = us[k]
+        return w
+
+    def _brake(self, x0: np.ndarray, status: str, iters: int, solve_ms: float) -> Plan:
+        """Full brake, steering held: the safe reaction to a failed solve."""
+        states = np.tile(x0, (self.spec.horizon_steps + 1, 1))
+        v, t = float(x0[VX]), self.spec.step_s * np.arange(self.spec.horizon_steps + 1)
+        speed = np.maximum(v - self.spec.max_brake_mps2 * t, 0.0)
+        states[:, VX] = speed
+        heading = x0[2]
+        dist = np.concatenate([[0.0], np.cumsum(speed[:-1] * self.spec.step_s)])
+        states[:, 0] = x0[0] + dist * math.cos(heading)
+        states[:, 1] = x0[1] + dist * math.sin(heading)
+        return Plan(False, status, iters, solve_ms, math.nan, math.nan, states,
+                    -self.spec.max_brake_mps2, float(x0[DELTA]))
+
+

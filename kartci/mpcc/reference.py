@@ -1,0 +1,82 @@
+"""Per-stage track references and lateral bounds for the MPCC, with obstacles and other karts
+carved out of the bounds ("narrowing the track bounds", REFERENCE.md)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from kartci.track import Track
+
+NO_LIMIT_M = 1e6
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """Something to keep clear of, in track coordinates: centre progress and lateral offset
+    (m), its half-extent (m), and its speed along the track (m/s; 0 for static ones)."""
+
+    s_m: float
+    lateral_m: float
+    radius_m: float
+    speed_mps: float = 0.0
+    follow_gap_m: float = 0.0  # > 0: a kart; stay this far behind it when it cannot be passed
+
+
+def obstacle_from_xy(track: Track, x: float, y: float, radius_m: float, speed_mps: float = 0.0,
+                     follow_gap_m: float = 0.0) -> Obstacle:
+    s, lat, _, _ = track.project(np.array([[x, y]]))
+    return Obstacle(float(s[0]), float(lat[0]), radius_m, speed_mps, follow_gap_m)
+
+
+def _width(track: Track, s_m: np.ndarray, side: np.ndarray) -> np.ndarray:
+    out: np.ndarray = np.interp(np.mod(s_m, track.length_m), track.s, side,
+                                period=track.length_m)
+    return out
+
+
+def stage_params(track: Track, s_bar: np.ndarray, step_s: float, padding_m: float,
+                 obstacles: list[Obstacle], margin_m: float, kart_length_m: float,
+                 ) -> np.ndarray:
+    """Rows of [x_ref, y_ref, cos, sin, s_ref, lateral_lo, lateral_hi, s_max] for stages
+    1..N at predicted progress `s_bar` (m, unwrapped)."""
+    n = len(s_bar)
+    m = len(track.s)
+    wrapped = np.mod(s_bar, track.length_m)
+    idx = np.rint(wrapped / track.length_m * m).astype(int) % m
+    diff = (track.s[idx] - wrapped + track.length_m / 2) % track.length_m - track.length_m / 2
+    s_ref = s_bar + diff  # the progress of the sample the reference is taken at
+    heading, xy = track.heading[idx], track.xy[idx]
+    hi = _width(track, s_bar, track.w_left) - padding_m
+    lo = padding_m - _width(track, s_bar, track.w_right)
+    s_max = np.full(n, NO_LIMIT_M)
+    t = step_s * np.arange(1, n + 1)
+    for ob in obstacles:
+        s_ob = ob.s_m + ob.speed_mps * t
+        # the obstacle's progress unwrapped next to the stage's
+        gap = (s_ob - s_bar + track.length_m / 2) % track.length_m - track.length_m / 2
+        near = np.abs(gap) < ob.radius_m + kart_length_m / 2 + margin_m
+        if not near.any():
+            continue
+        clear = ob.radius_m + margin_m
+        left_lo, right_hi = ob.lateral_m + clear, ob.lateral_m - clear
+        room_left, room_right = hi - left_lo, right_hi - lo
+        pass_left = room_left[near].min() >= room_right[near].min()
+        if ob.follow_gap_m > 0 and max(room_left[near].min(), room_right[near].min()) < 0:
+            # no way past: follow it
+            s_max = np.minimum(s_max, np.where(gap > 0, s_bar + gap - ob.follow_gap_m,
+                                               NO_LIMIT_M))
+            continue
+        if pass_left:
+            lo = np.where(near, np.maximum(lo, left_lo), lo)
+        else:
+            hi = np.where(near, np.minimum(hi, right_hi), hi)
+    return np.column_stack([xy, np.cos(heading), np.sin(heading), s_ref, lo, hi, s_max])
+
+
+def progress_guess(track: Track, s0: float, v0: float, step_s: float, n: int,
+                   v_max: float) -> np.ndarray:
+    """A first guess of the predicted progress: accelerate gently from the current speed."""
+    v = np.minimum(max(v0, 1.0) + 1.0 * step_s * np.arange(1, n + 1), v_max)
+    return s0 + np.cumsum(v) * step_s
