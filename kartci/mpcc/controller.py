@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from kartci.mpcc.cache import Built, get_solver
-from kartci.mpcc.model import ACC, DELTA, S, SLACK, VS, VX
+from kartci.mpcc.model import ACC, DELTA, SLACK, VS, VX, S
 from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
 from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
 from kartci.spec.models import GokartModel, MpccController
@@ -50,28 +50,16 @@ class Mpcc:
         self.failures = 0
 
     def solve(self, x0: np.ndarray, obstacles: list[Obstacle]) -> Plan:
-        sp, lay, n = self.spec, self.lay, self.spec.horizon_steps
+        sp, lay = self.spec, self.lay
         x0 = x0.copy()
         x0[DELTA] = float(np.clip(x0[DELTA], -self.max_delta, self.max_delta))
         x0[ACC] = float(np.clip(x0[ACC], -sp.max_brake_mps2, sp.max_accel_mps2))
-        w0 = self._initial_guess(x0)
-        s_bar = lay.states(w0)[1:, S]
-        params = stage_params(self.track, s_bar, sp.step_s, sp.track_padding_m, obstacles,
-                              sp.obstacle_margin_m, sp.kart_length_m)
-        p = np.concatenate([weights_vector(sp.weights), [sp.max_lateral_accel_mps2,
-                                                          sp.max_brake_mps2, sp.front_check_m,
-                                                          sp.max_speed_mps],
-                            params.ravel()])
-        lbw, ubw = variable_bounds(sp, lay, x0, self.max_delta)
-        args = {"x0": w0, "p": p, "lbx": lbw, "ubx": ubw, "lbg": self.lbg, "ubg": self.ubg}
-        warm = self._lam_g is not None and self._lam_x is not None
-        if warm:
-            args["lam_g0"], args["lam_x0"] = self._lam_g, self._lam_x
         t0 = time.perf_counter()
-        sol, status, ok, iters = self._call(self.built.solver, args)
-        if not ok and warm:  # a warm start can trap the interior point: retry once cold
-            del args["lam_g0"], args["lam_x0"]
-            sol, status, ok, more = self._call(self.built.cold, args)
+        warm = self._w is not None and self._lam_g is not None
+        sol, status, ok, iters = self._attempt(x0, obstacles, self.built.solver)
+        if not ok and warm:  # a warm start can trap the interior point: retry once, fresh
+            self._w = self._lam_g = self._lam_x = None
+            sol, status, ok, more = self._attempt(x0, obstacles, self.built.cold)
             iters += more
         solve_ms = (time.perf_counter() - t0) * 1e3
         w = np.asarray(sol["x"]).ravel()
@@ -87,7 +75,22 @@ class Mpcc:
         return Plan(True, status, iters, solve_ms, float(sol["f"]), slack, states,
                     float(states[0, ACC] + states[1, ACC]) / 2, float(states[1, DELTA]))
 
-    def _call(self, solver: Any, args: dict[str, Any]) -> tuple[dict[str, Any], str, bool, int]:
+    def _attempt(self, x0: np.ndarray, obstacles: list[Obstacle],
+                 solver: Any) -> tuple[dict[str, Any], str, bool, int]:
+        """One Ipopt call from the current guess: the last solution shifted, else fresh."""
+        sp, lay = self.spec, self.lay
+        w0 = self._initial_guess(x0)
+        params = stage_params(self.track, lay.states(w0)[1:, S], sp.step_s,
+                              sp.track_padding_m, obstacles, sp.obstacle_margin_m,
+                              sp.kart_length_m)
+        p = np.concatenate([weights_vector(sp.weights), [sp.max_lateral_accel_mps2,
+                                                          sp.max_brake_mps2, sp.front_check_m,
+                                                          sp.max_speed_mps],
+                            params.ravel()])
+        lbw, ubw = variable_bounds(sp, lay, x0, self.max_delta)
+        args = {"x0": w0, "p": p, "lbx": lbw, "ubx": ubw, "lbg": self.lbg, "ubg": self.ubg}
+        if self._lam_g is not None and self._lam_x is not None:
+            args["lam_g0"], args["lam_x0"] = self._lam_g, self._lam_x
         sol = solver(**args)
         stats = solver.stats()
         status = str(stats.get("return_status", "unknown"))

@@ -15,7 +15,21 @@ import casadi as ca
 import numpy as np
 
 from kartci.mpcc.model import (
-    ACC, DDELTA, DELTA, JERK, NU, NX, PSI, R, S, SLACK, VS, VX, X, Y, discrete,
+    ACC,
+    DDELTA,
+    DELTA,
+    JERK,
+    NU,
+    NX,
+    PSI,
+    SLACK,
+    VS,
+    VX,
+    R,
+    S,
+    X,
+    Y,
+    discrete,
 )
 from kartci.spec.models import MpccController, MpccWeights
 
