@@ -139,7 +139,7 @@ class JoyDriver:
         x, y, yaw, v = self._pose
         sp = self.spec
         s, _, _, _ = self.track.project(np.array([[x, y]]))
-        gx, gy, _ = self.track.pose_at(float(s[0]) + sp.lookahead_m)
+        gx, gy, _ = self.track.pose_at(float(s[0]) + sp.lookahead_m, sp.lateral_offset_m)
         alpha = math.atan2(gy - y, gx - x) - yaw
         lw = axle_distance_m(self.model)
         delta = math.atan2(2 * lw * math.sin(alpha), sp.lookahead_m)

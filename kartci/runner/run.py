@@ -147,7 +147,9 @@ def run_specs(specs: list[Scenario], out: Path, baselines: Path,
               on_done: Callable[[str, ScenarioResult], None] | None = None,
               on_progress: Callable[[str, float], None] | None = None) -> list[ScenarioResult]:
     for spec in specs:
-        unknown = sorted(set(spec.criteria) - set(metrics.DEFS))
+        unknown = sorted(
+            c for c in spec.criteria if c not in metrics.DEFS and not (
+                c.partition(".")[0] in spec.agents and c.partition(".")[2] in metrics.DEFS))
         if unknown:
             raise SpecError(f"scenario {spec.name}: criteria on unknown metrics: "
                             f"{', '.join(unknown)} (known: {', '.join(sorted(metrics.DEFS))})")

@@ -247,6 +247,7 @@ class JoyDriverController(Frozen):
     mapping: str = "ps4"
     target_speed_mps: float = 5.0
     lookahead_m: float = 3.5
+    lateral_offset_m: float = Field(0.0, description="drive this far left of the centreline")
     max_lateral_accel_mps2: float = 4.0
     period_s: float = 0.02
 
