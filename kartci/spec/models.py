@@ -302,7 +302,7 @@ class MpccController(Frozen):
     max_lateral_accel_mps2: float = Field(3.5, gt=0.0, description="friction ellipse, lateral")
     max_steer_rate_radps: float = Field(1.2, gt=0.0, description="front-wheel angle rate")
     max_jerk_mps3: float = Field(40.0, gt=0.0)
-    track_padding_m: float = Field(0.8, ge=0.0, description="kept from each track edge by the "
+    track_padding_m: float = Field(0.95, ge=0.0, description="kept from each track edge by the "
                                    "kart's centre line: half the kart's width plus a margin")
     obstacle_margin_m: float = Field(0.9, ge=0.0, description="kept from an obstacle's edge")
     front_check_m: float = Field(1.0, ge=0.0, description="a point this far ahead of the CoG "
