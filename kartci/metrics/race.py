@@ -17,7 +17,8 @@ Rect = np.ndarray  # (4, 2) corners, counter-clockwise
 def rect(cx: float, cy: float, length: float, width: float, yaw: float) -> Rect:
     c, s = math.cos(yaw), math.sin(yaw)
     local = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]]) * [length / 2, width / 2]
-    return local @ np.array([[c, s], [-s, c]]) + [cx, cy]
+    out: Rect = local @ np.array([[c, s], [-s, c]]) + [cx, cy]
+    return out
 
 
 def kart_rects(odom: pd.DataFrame) -> list[Rect]:

@@ -38,7 +38,7 @@ def cache_dir() -> Path:
 def solver_key(spec: MpccController) -> str:
     here = Path(__file__).parent
     h = hashlib.sha256()
-    h.update(ca.__version__.encode())
+    h.update(str(ca.CasadiMeta.version()).encode())
     for name in SOURCES:
         h.update((here / name).read_bytes())
     compiled = spec.model_dump(include={"horizon_steps", "step_s", "rk4_substeps", "vehicle"})

@@ -87,7 +87,7 @@ def build(spec: MpccController) -> tuple[dict[str, ca.MX], Layout]:
         base = N_WEIGHTS + 4 + STAGE_PARAMS * (k - 1)
         return [p[base + i] for i in range(STAGE_PARAMS)]
 
-    def errors(xk: ca.MX, ref: list[ca.MX], ahead: ca.MX = 0.0) -> tuple[ca.MX, ca.MX]:
+    def errors(xk: ca.MX, ref: list[ca.MX], ahead: ca.MX | float = 0.0) -> tuple[ca.MX, ca.MX]:
         xr, yr, c, s, s_ref = ref[:5]
         dx = xk[X] + ahead * ca.cos(xk[PSI]) - xr
         dy = xk[Y] + ahead * ca.sin(xk[PSI]) - yr

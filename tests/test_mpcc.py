@@ -1,0 +1,103 @@
+"""The MPCC: its compiled-solver cache, its reaction to its inputs, other tracks, failures,
+and the racing metrics computed from its logs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from kartci.logs import tables
+from kartci.metrics import Metric, compute, kart_track, race
+from kartci.mpcc.cache import get_solver, solver_key
+from kartci.sim import simulate
+from kartci.spec import load_scenario
+from kartci.spec.models import MpccController, MpccWeights
+from kartci.track import load_track
+
+
+def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]]:
+    log = tmp_path / f"{name}.mcap"
+    simulate(load_scenario(name, list(sets)), log)
+    return log, compute(log)[1]
+
+
+def test_solver_is_compiled_once_then_loaded_from_the_cache(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
+    spec = MpccController(horizon_steps=8)
+    first = get_solver(spec)
+    assert first.compiled and not first.cache_hit
+    assert len(list((tmp_path / "mpcc").glob("mpcc_*.so"))) == 1
+    second = get_solver(spec)
+    assert second.cache_hit
+    # tuning and limits are solver inputs: they reuse the binary; the horizon does not
+    assert solver_key(spec.model_copy(update={"weights": MpccWeights(lag=5.0),
+                                              "max_speed_mps": 3.0})) == solver_key(spec)
+    assert solver_key(spec.model_copy(update={"horizon_steps": 9})) != solver_key(spec)
+
+
+def test_a_lower_speed_limit_lowers_the_top_speed(tmp_path: Path) -> None:
+    _, fast = _run(tmp_path, "mpcc_lap", "duration_s=6")
+    _, slow = _run(tmp_path, "mpcc_lap", "duration_s=6",
+                   "agents.kart0.controller.max_speed_mps=4.0")
+    assert fast["max_speed_mps"].value > 6.0
+    assert slow["max_speed_mps"].value == pytest.approx(4.0, abs=0.3)
+
+
+@pytest.mark.parametrize(("lateral", "side"), [(0.3, -1), (-0.5, 1)])
+def test_an_obstacle_moved_by_set_moves_the_path(tmp_path: Path, lateral: float,
+                                                  side: int) -> None:
+    """One box on the main straight (s = 7 m): the kart passes on the side with more room."""
+    track = load_track(Path(__file__).parents[1] / "sims" / "winti" / "track.csv")
+    x, y, _ = track.pose_at(7.0, lateral)
+    log, m = _run(tmp_path, "mpcc_lap", "duration_s=4",
+                  f"world.obstacles=[{{center_m: [{x}, {y}], size_m: [0.5, 0.5, 0.5]}}]")
+    path = kart_track(track, tables(log)["/kart0/odom"])
+    at = path[(path["s_total"] > 6.5) & (path["s_total"] < 7.5)]
+    assert len(at) > 0
+    assert (side * at["offset"] > 0.3).all()
+    assert m["collisions"].value == 0
+    assert m["min_clearance_m"].value > 0.1
+
+
+@pytest.mark.parametrize("name", ["hairpins", "sweepers", "chicane"])
+def test_the_same_mpcc_laps_other_tracks(tmp_path: Path, name: str) -> None:
+    _, m = _run(tmp_path, "mpcc_lap", f"world.track=tracks/{name}.csv", "duration_s=17")
+    assert m["laps_completed"].value >= 1
+    assert m["collisions"].value == 0
+    assert m["off_track_s"].value == 0
+    assert m["solver_failures"].value == 0
+
+
+def test_failed_solves_brake_and_are_counted(tmp_path: Path) -> None:
+    """An iteration cap no solve can meet: every solve fails, the kart never gets going."""
+    log, m = _run(tmp_path, "mpcc_lap", "duration_s=2",
+                  "agents.kart0.controller.max_iterations=1")
+    stats = tables(log)["/kart0/mpcc/stats"]
+    assert m["solver_failures"].value == len(stats) == 41  # 2 s at 20 Hz, both ends
+    assert not stats["success"].any()
+    assert m["progress_m"].value < 0.5
+
+
+def test_two_karts_in_their_own_namespaces_and_the_mpcc_passes(tmp_path: Path) -> None:
+    log, m = _run(tmp_path, "multi_agent")
+    topics = set(tables(log))
+    assert {"/kart0/odom", "/kart1/odom", "/kart0/mpcc/stats", "/kart1/joy"} <= topics
+    assert "/kart1/mpcc/stats" not in topics
+    assert m["kart0.overtakes"].value == 1
+    assert m["kart1.overtakes"].value == -1
+    assert m["kart0.collisions"].value == 0
+    assert m["kart0.min_clearance_m"].value > 0.2
+
+
+def test_rectangle_gap_and_overtake_counting_are_exact() -> None:
+    a = race.rect(0.0, 0.0, 2.0, 1.0, 0.0)
+    assert race.gap_m(a, race.rect(3.0, 0.0, 2.0, 1.0, 0.0)) == pytest.approx(1.0)
+    assert race.gap_m(a, race.rect(3.0, 3.0, 2.0, 1.0, 0.0)) == pytest.approx(np.hypot(1, 2))
+    assert race.gap_m(a, race.rect(0.5, 0.2, 1.0, 1.0, 0.7)) == 0.0
+    behind_then_ahead = np.array([0.0, 1.0, 2.0, 3.0])
+    other = np.array([1.5, 1.6, 1.7, 1.8])
+    assert race.overtakes(behind_then_ahead, [other]) == 1
+    assert race.overtakes(other, [behind_then_ahead]) == -1
