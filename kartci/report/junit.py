@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
-from kartci.report.tables import num
+from kartci.report.tables import RUN, Wording, num
 from kartci.results import ScenarioResult
 
 
-def junit_xml(results: list[ScenarioResult], report_path: str) -> str:
+def junit_xml(results: list[ScenarioResult], report_path: str, words: Wording = RUN) -> str:
     suite = ET.Element("testsuite", name="kartci", tests=str(len(results)))
     failures = errors = 0
     for r in results:
@@ -20,7 +20,7 @@ def junit_xml(results: list[ScenarioResult], report_path: str) -> str:
         else:
             problems = [f"criterion {c.name} {c.bound}: got {num(c.value)}"
                         for c in r.criteria if not c.ok]
-            problems += [f"{v.name} {v.status.value}: {num(v.value, v.unit)} vs baseline "
+            problems += [f"{v.name} {v.status.value}: {num(v.value, v.unit)} vs {words.base} "
                          f"{num(v.baseline, v.unit)}" for v in r.verdicts if v.status.bad]
             if problems:
                 failures += 1

@@ -1,0 +1,75 @@
+"""Parallel, sharded and merged runs give what one serial run gives, metric for metric."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from test_cli import kartci
+
+from kartci.errors import SpecError
+from kartci.runner import expand, parse_shard, shard
+from kartci.runner.merge import merge
+
+QUICK = ["--set", "duration_s=3", "--set", "criteria={}", "--set", "metrics.transient_s=1"]
+PAIR = ["line_straight", "line_circle"]
+
+
+def _metrics(out: Path) -> dict[str, bytes]:
+    return {p.parent.name: p.read_bytes() for p in sorted(out.glob("*/metrics.json"))}
+
+
+def test_j2_and_two_merged_shards_equal_one_serial_run(tmp_path: Path,
+                                                        baselines: Path) -> None:
+    def run(out: str, *extra: str) -> None:
+        p = kartci("run", *PAIR, *QUICK, "--out", tmp_path / out, "--baselines", baselines,
+                   *extra)
+        assert p.returncode == 0, p.stderr
+
+    run("serial")
+    run("pool", "-j", "2")
+    run("s1", "--shard", "1/2")
+    run("s2", "--shard", "2/2")
+    serial = _metrics(tmp_path / "serial")
+    assert sorted(serial) == sorted(PAIR)
+    assert _metrics(tmp_path / "pool") == serial  # byte-identical in other processes
+    assert len(_metrics(tmp_path / "s1")) == len(_metrics(tmp_path / "s2")) == 1
+    m = kartci("merge", tmp_path / "s1", tmp_path / "s2", "--out", tmp_path / "merged",
+               "--baselines", baselines)
+    assert m.returncode == 0, m.stderr
+    assert _metrics(tmp_path / "merged") == serial
+    merged = json.loads((tmp_path / "merged" / "summary.json").read_text())
+    assert merged == json.loads((tmp_path / "serial" / "summary.json").read_text())
+    for name in ("report.html", "summary.md", "junit.xml"):
+        assert (tmp_path / "merged" / name).exists()
+    log = json.loads((tmp_path / "merged" / "line_circle" / "run.json").read_text())["log"]
+    assert Path(log).parent == tmp_path / "merged" / "line_circle"
+
+
+def test_shards_are_disjoint_deterministic_and_cover_everything() -> None:
+    jobs = expand(PAIR, [], ["seed=1,2,3"], repeat=2)
+    assert len(jobs) == 12  # 2 scenarios x 3 sweep points x 2 repeats
+    parts = [shard(jobs, i, 4) for i in range(1, 5)]
+    labels = [{j.label for j in p} for p in parts]
+    assert sorted(x for s in labels for x in s) == sorted({j.label for j in jobs})
+    assert [len(s) for s in labels] == [2, 2, 1, 1]
+    assert all(sum(j.label == lab for j in p) == 2 for p in parts for lab in {j.label for j in p})
+    assert [j.folder for j in shard(jobs, 2, 4)] == [j.folder for j in shard(jobs, 2, 4)]
+
+
+@pytest.mark.parametrize("text", ["0/2", "3/2", "1", "a/b", "1/0"])
+def test_bad_shard_is_bad_input(text: str) -> None:
+    with pytest.raises(SpecError, match="--shard"):
+        parse_shard(text)
+
+
+def test_merge_refuses_a_missing_or_repeated_shard(tmp_path: Path, baselines: Path) -> None:
+    for i in (1, 2):
+        (tmp_path / f"s{i}").mkdir()
+        (tmp_path / f"s{i}" / "shard.json").write_text(json.dumps(
+            {"index": 1 if i == 1 else 3, "total": 3, "scenarios": []}))
+    with pytest.raises(SpecError, match="shard 2 of 3 missing"):
+        merge([tmp_path / "s1", tmp_path / "s2"], tmp_path / "out", baselines)
+    with pytest.raises(SpecError, match="given twice"):
+        merge([tmp_path / "s1", tmp_path / "s1"], tmp_path / "out", baselines)
