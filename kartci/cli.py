@@ -74,13 +74,13 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
         out.write_text(text + "\n", encoding="utf-8")
 
 
-def _print_verdicts(results: list[ScenarioResult]) -> None:
+def _print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
     for r in results:
         if r.error:
             out_console.print(f"[bold]{r.name}[/]: {MARK[r.status]} error: {r.error}",
                               markup=True, highlight=False)
             continue
-        table = Table("metric", "value", "baseline", "delta", "tolerance", "verdict",
+        table = Table("metric", "value", words.base, "delta", "tolerance", "verdict",
                       title=f"{r.name}: {MARK[r.status]} {r.status.value}", title_justify="left")
         for v in r.verdicts:
             table.add_row(v.name, num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
@@ -97,7 +97,7 @@ def _finish(results: list[ScenarioResult], out: Path, words: Wording = RUN) -> N
     from kartci.report.ci import annotation_lines, append_step_summary, in_github_actions
 
     paths = write_all(results, out, words)
-    _print_verdicts(results)
+    _print_verdicts(results, words)
     append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
     if in_github_actions():
         for line in annotation_lines(results):
@@ -183,6 +183,27 @@ def merge(
     from kartci.runner.merge import merge as join
 
     _finish(join(dirs, out, _baselines(baselines)), out)
+
+
+@app.command("compare")
+def compare_cmd(
+    base: Annotated[Path, typer.Argument(help="The base run's OUT (e.g. the target branch).")],
+    head: Annotated[Path, typer.Argument(help="The head run's OUT (e.g. the pull request).")],
+    out: OutOpt = Path("reports/compare"),
+    baselines: BaselinesOpt = None,
+    alpha: Annotated[float, typer.Option(
+        help="Significance level across --repeat samples (Mann-Whitney U).")] = 0.05,
+) -> None:
+    """Compare head with base, scenario by scenario and metric by metric: base, head, delta,
+    verdict (tolerances and directions as for baselines; with repeats, a change must also be
+    significant). Reports both runs' paths and time series overlaid. Exit 1 when head
+    regressed, 0 when not, 2 when a run failed."""
+    from kartci.report import COMPARE
+    from kartci.runner.compare import compare_outs
+
+    if not 0 < alpha < 1:
+        raise SpecError(f"--alpha {alpha:g}: expected 0 < alpha < 1")
+    _finish(compare_outs(base, head, _baselines(baselines), alpha), out, COMPARE)
 
 
 @app.command()

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import pytest
+from junitparser import JUnitXml
 from test_cli import kartci
 
 from kartci.errors import SpecError
@@ -41,8 +42,10 @@ def test_j2_and_two_merged_shards_equal_one_serial_run(tmp_path: Path,
     assert _metrics(tmp_path / "merged") == serial
     merged = json.loads((tmp_path / "merged" / "summary.json").read_text())
     assert merged == json.loads((tmp_path / "serial" / "summary.json").read_text())
-    for name in ("report.html", "summary.md", "junit.xml"):
+    for name in ("report.html", "summary.md"):
         assert (tmp_path / "merged" / name).exists()
+    xml = JUnitXml.fromfile(str(tmp_path / "merged" / "junit.xml"))
+    assert sorted(case.name for suite in xml for case in suite) == sorted(PAIR)
     log = json.loads((tmp_path / "merged" / "line_circle" / "run.json").read_text())["log"]
     assert Path(log).parent == tmp_path / "merged" / "line_circle"
 

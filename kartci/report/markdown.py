@@ -35,7 +35,9 @@ def summary_md(results: list[ScenarioResult], words: Wording = RUN) -> str:
         failed = [c for c in r.criteria if not c.ok]
         if not bad and not failed:
             continue
-        lines += ["", f"### `{r.name}`", ""]
+        lines += ["", f"### `{r.name}`"]
+        if failed:
+            lines.append("")
         for c in failed:
             lines.append(f"- ❌ criterion `{c.name}` {c.bound}: got {num(c.value)}")
         if bad:
