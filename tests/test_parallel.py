@@ -21,33 +21,66 @@ def _metrics(out: Path) -> dict[str, bytes]:
     return {p.parent.name: p.read_bytes() for p in sorted(out.glob("*/metrics.json"))}
 
 
-def test_j2_and_two_merged_shards_equal_one_serial_run(tmp_path: Path,
-                                                        baselines: Path) -> None:
-    def run(out: str, *extra: str) -> None:
-        p = kartci("run", *PAIR, *QUICK, "--out", tmp_path / out, "--baselines", baselines,
-                   *extra)
-        assert p.returncode == 0, p.stderr
+def _run(out: Path, baselines: Path, *extra: str | Path) -> None:
+    p = kartci("run", *PAIR, *QUICK, "--out", out, "--baselines", baselines, *extra)
+    assert p.returncode == 0, p.stderr
 
-    run("serial")
-    run("pool", "-j", "2")
-    run("s1", "--shard", "1/2")
-    run("s2", "--shard", "2/2")
-    serial = _metrics(tmp_path / "serial")
-    assert sorted(serial) == sorted(PAIR)
-    assert _metrics(tmp_path / "pool") == serial  # byte-identical in other processes
+
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One plain serial run of the pair: what every other executor must reproduce."""
+    root = tmp_path_factory.mktemp("serial")
+    (root / "baselines").mkdir()
+    _run(root / "out", root / "baselines")
+    assert sorted(_metrics(root / "out")) == sorted(PAIR)
+    return root
+
+
+def test_j2_and_two_merged_shards_equal_one_serial_run(serial: Path, tmp_path: Path) -> None:
+    baselines = serial / "baselines"
+    _run(tmp_path / "pool", baselines, "-j", "2")
+    _run(tmp_path / "s1", baselines, "--shard", "1/2")
+    _run(tmp_path / "s2", baselines, "--shard", "2/2")
+    expected = _metrics(serial / "out")
+    assert _metrics(tmp_path / "pool") == expected  # byte-identical in other processes
     assert len(_metrics(tmp_path / "s1")) == len(_metrics(tmp_path / "s2")) == 1
     m = kartci("merge", tmp_path / "s1", tmp_path / "s2", "--out", tmp_path / "merged",
                "--baselines", baselines)
     assert m.returncode == 0, m.stderr
-    assert _metrics(tmp_path / "merged") == serial
+    assert _metrics(tmp_path / "merged") == expected
     merged = json.loads((tmp_path / "merged" / "summary.json").read_text())
-    assert merged == json.loads((tmp_path / "serial" / "summary.json").read_text())
+    assert merged == json.loads((serial / "out" / "summary.json").read_text())
     for name in ("report.html", "summary.md"):
         assert (tmp_path / "merged" / name).exists()
     xml = JUnitXml.fromfile(str(tmp_path / "merged" / "junit.xml"))
     assert sorted(case.name for suite in xml for case in suite) == sorted(PAIR)
     log = json.loads((tmp_path / "merged" / "line_circle" / "run.json").read_text())["log"]
     assert Path(log).parent == tmp_path / "merged" / "line_circle"
+
+
+def test_a_sweep_on_local_ray_gives_the_same_metrics(serial: Path, tmp_path: Path) -> None:
+    """Each sweep point a Ray task; the points equal to the scenarios' own gains reproduce the
+    serial run byte for byte, and sweep points are judged as NEW (no baseline of their own)."""
+    pytest.importorskip("ray", reason='Ray is not installed (pip install "kartci[ray]")')
+    _run(tmp_path, serial / "baselines", "--executor", "ray", "-j", "2",
+         "--sweep", "agents.lt0.controller.kp=50,100")
+    got = _metrics(tmp_path)
+    assert sorted(got) == [f"{n}@agents.lt0.controller.kp={k}" for n in sorted(PAIR)
+                           for k in (100, 50)]
+    expected = _metrics(serial / "out")
+    assert got["line_straight@agents.lt0.controller.kp=100"] == expected["line_straight"]
+    assert got["line_circle@agents.lt0.controller.kp=50"] == expected["line_circle"]
+    assert got["line_circle@agents.lt0.controller.kp=100"] != expected["line_circle"]
+    summary = json.loads((tmp_path / "summary.json").read_text())["scenarios"]
+    assert {s["status"] for s in summary.values()} == {"new"}
+
+
+def test_ray_missing_is_one_line(tmp_path: Path) -> None:
+    (tmp_path / "ray.py").write_text("raise ImportError('not here')\n")
+    p = kartci("run", "line_straight", "--executor", "ray", "--out", tmp_path / "o",
+               env={"PYTHONPATH": str(tmp_path)})
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert p.stderr.strip() == 'kartci: error: --executor ray needs Ray: pip install "kartci[ray]"'
 
 
 def test_shards_are_disjoint_deterministic_and_cover_everything() -> None:
