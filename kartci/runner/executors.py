@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import queue as queue_mod
+from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
@@ -42,8 +44,21 @@ Listener = Callable[[Event], None]
 
 def serial(jobs: Sequence[Job], ctx: Context, emit: Listener) -> Iterator[Outcome]:
     for job in jobs:
-        emit(Event(EventKind.STARTED, job.folder))
-        yield run_job(job, ctx, lambda f, t: emit(Event(EventKind.PROGRESS, f, t)))
+        yield _here(job, ctx, emit)
+
+
+def _here(job: Job, ctx: Context, emit: Listener,
+          tick: Callable[[], None] | None = None) -> Outcome:
+    """Run a job in this process; `tick` is called with every progress report."""
+    def progress(folder: str, t: float) -> None:
+        emit(Event(EventKind.PROGRESS, folder, t))
+        if tick is not None:
+            tick()
+
+    emit(Event(EventKind.STARTED, job.folder))
+    outcome = run_job(job, ctx, progress)
+    emit(Event(EventKind.FINISHED, job.folder, outcome=outcome))
+    return outcome
 
 
 _QUEUE: Any = None  # the worker's end of the progress queue (set by _init_worker)
@@ -63,30 +78,63 @@ def _work(job: Job, ctx: Context) -> Outcome:
     return run_job(job, ctx, _report)
 
 
-def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Iterator[Outcome]:
-    """A spawn-context process pool: fresh interpreters, as a CLI run would be on any OS."""
-    mpc = mp.get_context("spawn")
-    events = mpc.Queue()
+class _Workers:
+    """Spawned worker processes (fresh interpreters, as on any OS), each given one run at a
+    time so that no run waits behind a busy worker while another is free."""
 
-    def drain() -> None:
+    def __init__(self, ctx: Context, emit: Listener, n: int) -> None:
+        self.ctx, self.emit, self.slots = ctx, emit, n
+        mpc = mp.get_context("spawn")
+        self.events = mpc.Queue()
+        self.ex = ProcessPoolExecutor(max_workers=n, mp_context=mpc,
+                                      initializer=_init_worker, initargs=(self.events,))
+        self.running: dict[Future[Outcome], Job] = {}
+        self.finished: deque[Outcome] = deque()
+
+    def tick(self, todo: deque[Job]) -> None:
+        """Relay the workers' events, collect finished runs, hand out new ones."""
         while True:
             try:
-                kind, folder, t = events.get_nowait()
+                kind, folder, t = self.events.get_nowait()
             except queue_mod.Empty:
-                return
-            emit(Event(kind, folder, t))
+                break
+            self.emit(Event(kind, folder, t))
+        for fut in [f for f in self.running if f.done()]:
+            outcome = _outcome(fut, self.running.pop(fut))
+            self.emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
+            self.finished.append(outcome)
+        while todo and len(self.running) < self.slots:
+            try:
+                self.running[self.ex.submit(_work, todo[0], self.ctx)] = todo[0]
+            except BrokenProcessPool:  # the workers cannot start: this process does the rest
+                self.slots = 0
+                break
+            todo.popleft()
 
-    with ProcessPoolExecutor(max_workers=workers, mp_context=mpc, initializer=_init_worker,
-                             initargs=(events,)) as ex:
-        futures: dict[Future[Outcome], Job] = {ex.submit(_work, j, ctx): j for j in jobs}
-        pending = set(futures)
-        while pending:
-            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-            drain()
-            for fut in done:
-                yield _outcome(fut, futures[fut])
-    drain()
-    events.close()
+    def close(self) -> None:
+        self.ex.shutdown(wait=True, cancel_futures=True)
+        self.events.close()
+
+
+def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Iterator[Outcome]:
+    """`workers - 1` worker processes plus this one. This process has everything imported, so
+    it starts the first (longest) run at once while the workers start up (2-3 s each), and it
+    takes the next run whenever it is free. A hard crash (a segfault) in a run done here ends
+    the whole command, as with -j 1; in a worker it is an error for that run only."""
+    todo = deque(jobs)
+    others = _Workers(ctx, emit, workers - 1)
+    try:
+        while todo or others.running or others.finished:
+            mine = todo.popleft() if todo else None
+            others.tick(todo)
+            while others.finished:
+                yield others.finished.popleft()
+            if mine is not None:
+                yield _here(mine, ctx, emit, lambda: others.tick(todo))
+            elif others.running:
+                wait(others.running, timeout=0.2, return_when=FIRST_COMPLETED)
+    finally:
+        others.close()
 
 
 def _outcome(fut: Future[Outcome], job: Job) -> Outcome:
@@ -99,7 +147,7 @@ def _outcome(fut: Future[Outcome], job: Job) -> Outcome:
 def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,
             kind: ExecutorKind = ExecutorKind.LOCAL,
             ray_address: str | None = None) -> Iterator[Outcome]:
-    """Outcomes in the order jobs finish; FINISHED events are the caller's to emit."""
+    """Outcomes in the order jobs finish, each also announced as a FINISHED event."""
     if kind is ExecutorKind.RAY:
         from kartci.runner.ray_executor import ray_tasks
 

@@ -13,7 +13,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 from kartci.errors import RunError, SpecError
-from kartci.runner.executors import Listener
+from kartci.runner.executors import Event, EventKind, Listener
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 
 
@@ -43,9 +43,11 @@ def ray_tasks(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
             for ref in ready:
                 job = refs.pop(ref)
                 try:
-                    yield ray.get(ref)
+                    outcome: Outcome = ray.get(ref)
                 except Exception as err:  # the task's worker died
-                    yield Outcome.failed(job, f"Ray task failed: {type(err).__name__}: {err}")
+                    outcome = Outcome.failed(job, f"Ray task failed: {type(err).__name__}: {err}")
+                emit(Event(EventKind.FINISHED, job.folder, outcome=outcome))
+                yield outcome
     finally:
         if started:
             ray.shutdown()

@@ -6,7 +6,7 @@ import shutil
 from pathlib import Path
 
 from kartci.results import ScenarioResult
-from kartci.runner.executors import Event, EventKind, ExecutorKind, Listener, execute
+from kartci.runner.executors import Event, ExecutorKind, Listener, execute
 from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome
 
 
@@ -27,7 +27,6 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
     outcomes: dict[str, Outcome] = {}
     for outcome in execute(order, ctx, emit, workers, executor, ray_address):
         outcomes[outcome.job.folder] = outcome
-        emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
     results = []
     for job in (j for j in jobs if j.repeat == 0):
         main = outcomes[job.folder]
