@@ -34,7 +34,7 @@ def _one_clean_line(p: subprocess.CompletedProcess[str]) -> str:
 
 def test_help_on_every_command() -> None:
     for cmd in ([], ["list"], ["show"], ["run"], ["report"], ["schema"], ["characterise"],
-                ["baseline"], ["baseline", "update"]):
+                ["baseline"], ["baseline", "update"], ["merge"], ["compare"]):
         p = kartci(*cmd, "--help")
         assert p.returncode == 0, (cmd, p.stderr)
         assert "Usage" in p.stdout

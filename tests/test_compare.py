@@ -15,7 +15,7 @@ from kartci.report.ci import annotation_lines, truncate
 from kartci.report.markdown import summary_md
 from kartci.results import ScenarioResult
 from kartci.verdict import MetricVerdict, Status
-from kartci.verdict.compare import compare_runs, significant
+from kartci.verdict.runs import compare_runs, significant
 
 
 @pytest.fixture(scope="module")

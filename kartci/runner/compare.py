@@ -12,7 +12,7 @@ from kartci.results import ScenarioResult, overlay
 from kartci.runner.jobs import REPEAT_PREFIX
 from kartci.runner.run import evaluate, scenario_folders
 from kartci.verdict import load, read_metrics
-from kartci.verdict.compare import ALPHA, Samples, compare_runs
+from kartci.verdict.runs import ALPHA, Samples, compare_runs
 
 
 def samples(folder: Path) -> Samples:

@@ -1,7 +1,9 @@
 """Run scenarios into an output folder, score their logs and judge them against baselines.
 
 Layout of OUT: `<scenario>/run.mcap` (the log), `<scenario>/metrics.json` (deterministic),
-`<scenario>/run.json` (wall-clock facts), and the suite reports at the top.
+`<scenario>/run.json` (wall-clock facts), `<scenario>/error.json` (the last run failed), with
+`--repeat K` also `<scenario>/repeat_<k>/` (seed + k, same files), and at the top the suite
+reports and, for a shard, `shard.json`. A sweep point's folder is `<scenario>@<key>=<value>`.
 """
 
 from __future__ import annotations
