@@ -91,15 +91,18 @@ def _print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
         out_console.print(table)
 
 
-def _finish(results: list[ScenarioResult], out: Path, words: Wording = RUN) -> None:
-    """Write every report, print the verdicts and CI outputs, exit with the gating code."""
+def _finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
+            ci: bool = True) -> None:
+    """Write every report, print the verdicts and (unless `ci` is off, as for a shard, whose
+    merge reports for it) the CI outputs; exit with the gating code."""
     from kartci.report import write_all
     from kartci.report.ci import annotation_lines, append_step_summary, in_github_actions
 
     paths = write_all(results, out, words)
     _print_verdicts(results, words)
-    append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
-    if in_github_actions():
+    if ci:
+        append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
+    if ci and in_github_actions():
         for line in annotation_lines(results):
             typer.echo(line)
     code = exit_code(results)
@@ -169,7 +172,7 @@ def run(
         results = run_jobs(todo, out, _baselines(baselines), workers=workers,
                            executor=executor, ray_address=ray_address, timeout_s=timeout_s,
                            on_event=view)
-    _finish(results, out)
+    _finish(results, out, ci=part is None)
 
 
 @app.command()
