@@ -118,8 +118,8 @@ def run(
     out: OutOpt = Path("reports/latest"),
     baselines: BaselinesOpt = None,
     jobs: Annotated[int | None, typer.Option(
-        "--jobs", "-j", help="Scenarios run at once: processes (local) or Ray CPUs "
-                             "[default: 1 local, all cores on Ray].")] = None,
+        "--jobs", "-j", help="Runs at once: this process and N-1 worker processes (local), "
+                             "or Ray CPUs [default: 1 local, all cores on Ray].")] = None,
     shard: Annotated[str | None, typer.Option(
         help="I/N: run share I of N (labels sorted, dealt round-robin); OUT holds a partial "
              "result for `kartci merge`.")] = None,
