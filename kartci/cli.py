@@ -15,8 +15,9 @@ from rich.console import Console
 from rich.table import Table
 
 from kartci.errors import KartciError, SpecError
-from kartci.report.tables import MARK, delta, num, tolerance
+from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code
+from kartci.runner.executors import ExecutorKind
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
                   help="Run robot scenarios headless, record them, score them against baselines.")
@@ -73,13 +74,13 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
         out.write_text(text + "\n", encoding="utf-8")
 
 
-def _print_verdicts(results: list[ScenarioResult]) -> None:
+def _print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
     for r in results:
         if r.error:
             out_console.print(f"[bold]{r.name}[/]: {MARK[r.status]} error: {r.error}",
                               markup=True, highlight=False)
             continue
-        table = Table("metric", "value", "baseline", "delta", "tolerance", "verdict",
+        table = Table("metric", "value", words.base, "delta", "tolerance", "verdict",
                       title=f"{r.name}: {MARK[r.status]} {r.status.value}", title_justify="left")
         for v in r.verdicts:
             table.add_row(v.name, num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
@@ -90,15 +91,20 @@ def _print_verdicts(results: list[ScenarioResult]) -> None:
         out_console.print(table)
 
 
-def _finish(results: list[ScenarioResult], out: Path) -> None:
-    from kartci.report import summary_md, write_all
+def _finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
+            ci: bool = True) -> None:
+    """Write every report, print the verdicts and (unless `ci` is off, as for a shard, whose
+    merge reports for it) the CI outputs; exit with the gating code."""
+    from kartci.report import write_all
+    from kartci.report.ci import annotation_lines, append_step_summary, in_github_actions
 
-    paths = write_all(results, out)
-    _print_verdicts(results)
-    step_summary = os.environ.get("GITHUB_STEP_SUMMARY")
-    if step_summary:
-        with Path(step_summary).open("a", encoding="utf-8") as f:
-            f.write(summary_md(results)[: 1_000_000])
+    paths = write_all(results, out, words)
+    _print_verdicts(results, words)
+    if ci:
+        append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
+    if ci and in_github_actions():
+        for line in annotation_lines(results):
+            typer.echo(line)
     code = exit_code(results)
     out_console.print(f"report: {paths['html']}  (exit {code})", highlight=False)
     raise typer.Exit(code)
@@ -111,35 +117,96 @@ def run(
     set_: SetOpt = None,
     out: OutOpt = Path("reports/latest"),
     baselines: BaselinesOpt = None,
+    jobs: Annotated[int | None, typer.Option(
+        "--jobs", "-j", help="Runs at once: this process and N-1 worker processes (local), "
+                             "or Ray CPUs [default: 1 local, all cores on Ray].")] = None,
+    shard: Annotated[str | None, typer.Option(
+        help="I/N: run share I of N (labels sorted, dealt round-robin); OUT holds a partial "
+             "result for `kartci merge`.")] = None,
+    executor: Annotated[ExecutorKind, typer.Option(
+        help="local: this process, or a process pool with -j N; ray: one Ray task per run "
+             '(pip install "kartci[ray]").')] = ExecutorKind.LOCAL,
+    ray_address: Annotated[str | None, typer.Option(
+        help="Ray cluster to use (default: start a local Ray instance).")] = None,
+    sweep: Annotated[list[str] | None, typer.Option(
+        help="key=v1,v2,...: one run per value, into OUT/<scenario>@<key>=<value> "
+             "(repeatable: every combination).")] = None,
+    repeat: Annotated[int, typer.Option(
+        help="Run K seeds (seed, seed+1, ...): extra runs in OUT/<scenario>/repeat_<k>/, for "
+             "`kartci compare`.")] = 1,
+    timeout_s: Annotated[float | None, typer.Option(
+        "--timeout-s", help="Wall-clock limit per run, s: a slower run is an error.")] = None,
 ) -> None:
     """Run scenarios, record each as OUT/<scenario>/run.mcap, score and judge them.
 
     Exit 0 when everything passes, 1 on a regression or failed criterion, 2 on bad input or a
     run error. Reports: OUT/report.html, summary.md, summary.json, junit.xml.
     """
-    from kartci.runner import run_suite
+    from kartci.report.progress import ProgressView
+    from kartci.runner import expand, parse_shard, run_jobs
+    from kartci.runner import shard as share
+    from kartci.runner.merge import write_marker
     from kartci.spec import load_scenario, scenario_names
 
+    if jobs is not None and jobs < 1:
+        raise SpecError(f"--jobs {jobs}: expected 1 or more")
+    if timeout_s is not None and not timeout_s > 0:
+        raise SpecError(f"--timeout-s {timeout_s:g}: expected a positive number of seconds")
+    if ray_address and executor is not ExecutorKind.RAY:
+        raise SpecError("--ray-address needs --executor ray")
+    part = parse_shard(shard) if shard else None
     selected = names or [n for n in scenario_names() if "tool" not in
                          load_scenario(n).tags]
     if not selected:
         raise SpecError("no scenarios to run: scenarios/ is empty (set KARTCI_ROOT to the "
                         "project folder)")
-    quiet = not out_console.is_terminal or bool(os.environ.get("CI"))
+    todo = expand(selected, set_ or [], sweep, repeat)
+    if part is not None:
+        todo = share(todo, *part)
     out.mkdir(parents=True, exist_ok=True)  # an unusable --out fails here, before any run
+    index, total = part or (None, None)
+    write_marker(out, index, total, [j.label for j in todo if j.repeat == 0])
+    workers = jobs or (os.cpu_count() or 1 if executor is ExecutorKind.RAY else 1)
+    live = err_console.is_terminal and not os.environ.get("CI")
+    with ProgressView(todo, err_console, live) as view:
+        results = run_jobs(todo, out, _baselines(baselines), workers=workers,
+                           executor=executor, ray_address=ray_address, timeout_s=timeout_s,
+                           on_event=view)
+    _finish(results, out, ci=part is None)
 
-    def done(name: str, r: ScenarioResult) -> None:
-        rtf = r.run.get("real_time_factor")
-        err_console.print(f"{MARK[r.status]} {name}: {r.status.value} "
-                          f"(sim {num(r.run.get('sim_time_s'), 's')}, {num(rtf)}x real time)",
-                          highlight=False)
 
-    def progress(name: str, t: float) -> None:
-        if not quiet:
-            err_console.print(f"  {name}: t = {t:6.1f} s", end="\r", highlight=False)
+@app.command()
+def merge(
+    dirs: Annotated[list[Path], typer.Argument(help="Partial results (`run --shard` OUTs).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")],
+    baselines: BaselinesOpt = None,
+) -> None:
+    """Join partial results into one run: copy the scenario folders into OUT, then judge and
+    report them exactly as an unsharded run would (same summary, verdicts, exit code)."""
+    from kartci.runner.merge import merge as join
 
-    results = run_suite(selected, set_ or [], out, _baselines(baselines), done, progress)
-    _finish(results, out)
+    _finish(join(dirs, out, _baselines(baselines)), out)
+
+
+@app.command("compare")
+def compare_cmd(
+    base: Annotated[Path, typer.Argument(help="The base run's OUT (e.g. the target branch).")],
+    head: Annotated[Path, typer.Argument(help="The head run's OUT (e.g. the pull request).")],
+    out: OutOpt = Path("reports/compare"),
+    baselines: BaselinesOpt = None,
+    alpha: Annotated[float, typer.Option(
+        help="Significance level across --repeat samples (Mann-Whitney U).")] = 0.05,
+) -> None:
+    """Compare head with base, scenario by scenario and metric by metric: base, head, delta,
+    verdict (tolerances and directions as for baselines; with repeats, a change must also be
+    significant). Reports both runs' paths and time series overlaid. Exit 1 when head
+    regressed, 0 when not, 2 when a run failed."""
+    from kartci.report import COMPARE
+    from kartci.runner.compare import compare_outs
+
+    if not 0 < alpha < 1:
+        raise SpecError(f"--alpha {alpha:g}: expected 0 < alpha < 1")
+    _finish(compare_outs(base, head, _baselines(baselines), alpha), out, COMPARE)
 
 
 @app.command()
@@ -162,7 +229,7 @@ def replay(
     commands. Log time is re-based so the first message is at sim time 0."""
     from kartci.agents.kart import COMMANDS, JOY
     from kartci.logs import topics
-    from kartci.runner import run_specs
+    from kartci.runner import Job, run_jobs
     from kartci.spec import load_scenario
     from kartci.spec.models import CommandsController, LogSource, ManualController
 
@@ -192,7 +259,7 @@ def replay(
     out.mkdir(parents=True, exist_ok=True)
     err_console.print(f"replaying {chosen.topic} ({chosen.msgtype}, {chosen.count} messages) "
                       f"into {spec.name}/{name}", highlight=False)
-    _finish(run_specs([spec], out, _baselines(baselines)), out)
+    _finish(run_jobs([Job(spec, spec.name)], out, _baselines(baselines)), out)
 
 
 @app.command()

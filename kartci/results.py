@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -49,3 +49,17 @@ def exit_code(results: list[ScenarioResult]) -> int:
     if any(r.status is Status.ERROR for r in results):
         return 2
     return 1 if any(r.status.bad for r in results) else 0
+
+
+def overlay(base: Plots | None, head: Plots | None) -> Plots | None:
+    """Both runs in one set of plots: every series keyed `base <agent>` / `head <agent>`, drawn
+    on head's course (or base's when head has none)."""
+    if base is None or head is None:
+        return head or base
+
+    def both(field_name: str) -> dict[str, pd.DataFrame]:
+        return {f"{who} {agent}": frame for who, p in (("base", base), ("head", head))
+                for agent, frame in getattr(p, field_name).items()}
+
+    return replace(head, tracks=both("tracks"), wheels=both("wheels"),
+                   commands=both("commands"), collisions=both("collisions"))

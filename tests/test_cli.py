@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -13,9 +14,14 @@ import pytest
 SHORT = ["--set", "duration_s=6", "--set", "criteria={}", "--set", "metrics.transient_s=2"]
 
 
-def kartci(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+def kartci(*args: str | Path, cwd: Path | None = None,
+           env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """Run the CLI in a fresh process, outside any GitHub job unless `env` says otherwise."""
+    base = {k: v for k, v in os.environ.items()
+            if k not in ("GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY")}
     return subprocess.run([sys.executable, "-m", "kartci.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=300)
+                          capture_output=True, text=True, cwd=cwd, timeout=300,
+                          env={**base, **(env or {})})
 
 
 def _one_clean_line(p: subprocess.CompletedProcess[str]) -> str:
@@ -28,7 +34,7 @@ def _one_clean_line(p: subprocess.CompletedProcess[str]) -> str:
 
 def test_help_on_every_command() -> None:
     for cmd in ([], ["list"], ["show"], ["run"], ["report"], ["schema"], ["characterise"],
-                ["baseline"], ["baseline", "update"]):
+                ["baseline"], ["baseline", "update"], ["merge"], ["compare"]):
         p = kartci(*cmd, "--help")
         assert p.returncode == 0, (cmd, p.stderr)
         assert "Usage" in p.stdout

@@ -9,6 +9,7 @@ from typing import Any
 from kartci.report.html import report_html
 from kartci.report.junit import junit_xml
 from kartci.report.markdown import summary_md
+from kartci.report.tables import COMPARE, RUN, Wording
 from kartci.results import ScenarioResult, exit_code
 from kartci.verdict import write_json_atomic
 
@@ -36,16 +37,17 @@ def _write_text(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-def write_all(results: list[ScenarioResult], out: Path) -> dict[str, Path]:
+def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN) -> dict[str, Path]:
     """report.html, summary.md, summary.json and junit.xml in `out`."""
     out.mkdir(parents=True, exist_ok=True)
     paths = {"html": out / "report.html", "markdown": out / "summary.md",
              "json": out / "summary.json", "junit": out / "junit.xml"}
-    _write_text(paths["html"], report_html(results))
-    _write_text(paths["markdown"], summary_md(results))
+    _write_text(paths["html"], report_html(results, words))
+    _write_text(paths["markdown"], summary_md(results, words))
     write_json_atomic(paths["json"], summary_json(results))
-    _write_text(paths["junit"], junit_xml(results, str(paths["html"])))
+    _write_text(paths["junit"], junit_xml(results, str(paths["html"]), words))
     return paths
 
 
-__all__ = ["junit_xml", "report_html", "summary_json", "summary_md", "write_all"]
+__all__ = ["COMPARE", "RUN", "Wording", "junit_xml", "report_html", "summary_json", "summary_md",
+           "write_all"]

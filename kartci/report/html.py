@@ -7,7 +7,7 @@ from datetime import UTC, datetime
 
 from kartci.report import plots as figs
 from kartci.report.markdown import VERDICT_WORD
-from kartci.report.tables import MARK, delta, num, tolerance
+from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code
 
 CSS = """
@@ -20,7 +20,7 @@ section{border-top:2px solid #ddd;margin-top:1.5em}code{background:#f6f6f6;paddi
 """
 
 
-def _scenario(r: ScenarioResult) -> str:
+def _scenario(r: ScenarioResult, words: Wording) -> str:
     st = r.status.value
     out = [f'<section id="{html.escape(r.name)}"><h2>{html.escape(r.name)} '
            f'<span class="{st}">{MARK[r.status]} {st}</span></h2>',
@@ -33,7 +33,7 @@ def _scenario(r: ScenarioResult) -> str:
                    f"{num(r.run.get('wall_s'), 's')}, real-time factor "
                    f"{num(r.run.get('real_time_factor'))}; log <code>"
                    f"{html.escape(str(r.run.get('log', '')))}</code></p>")
-    out.append("<table><tr><th>metric</th><th>value</th><th>baseline</th><th>delta</th>"
+    out.append(f"<table><tr><th>metric</th><th>value</th><th>{words.base}</th><th>delta</th>"
                "<th>tolerance</th><th>verdict</th></tr>")
     for v in r.verdicts:
         out.append(f"<tr><td>{html.escape(v.name)}</td><td>{num(v.value, v.unit)}</td>"
@@ -61,13 +61,14 @@ def _scenario(r: ScenarioResult) -> str:
     return "\n".join(out)
 
 
-def report_html(results: list[ScenarioResult], title: str = "kartci report") -> str:
+def report_html(results: list[ScenarioResult], words: Wording = RUN) -> str:
     code = exit_code(results)
     rows = "".join(f'<tr><td><a href="#{html.escape(r.name)}">{html.escape(r.name)}</a></td>'
                    f'<td class="{r.status.value}">{MARK[r.status]} {r.status.value}</td></tr>'
                    for r in results)
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    body = "\n".join(_scenario(r) for r in results)
+    body = "\n".join(_scenario(r, words) for r in results)
+    title = f"{words.title} report"
     return (f"<!doctype html><html><head><meta charset=\"utf-8\"><title>{html.escape(title)}"
             f"</title><style>{CSS}</style></head><body><h1>{html.escape(title)}: "
             f"{VERDICT_WORD[code]}</h1><p>written {stamp}; exit code {code}</p>"

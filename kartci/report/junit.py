@@ -1,14 +1,15 @@
-"""JUnit XML: one test case per scenario, one failure line per regressed or failed metric."""
+"""JUnit XML: a test case per scenario, a failure element per regressed or failed metric (the
+`failures` count is of failed scenarios), the report path in system-out."""
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
-from kartci.report.tables import num
+from kartci.report.tables import RUN, Wording, num
 from kartci.results import ScenarioResult
 
 
-def junit_xml(results: list[ScenarioResult], report_path: str) -> str:
+def junit_xml(results: list[ScenarioResult], report_path: str, words: Wording = RUN) -> str:
     suite = ET.Element("testsuite", name="kartci", tests=str(len(results)))
     failures = errors = 0
     for r in results:
@@ -20,11 +21,11 @@ def junit_xml(results: list[ScenarioResult], report_path: str) -> str:
         else:
             problems = [f"criterion {c.name} {c.bound}: got {num(c.value)}"
                         for c in r.criteria if not c.ok]
-            problems += [f"{v.name} {v.status.value}: {num(v.value, v.unit)} vs baseline "
+            problems += [f"{v.name} {v.status.value}: {num(v.value, v.unit)} vs {words.base} "
                          f"{num(v.baseline, v.unit)}" for v in r.verdicts if v.status.bad]
-            if problems:
-                failures += 1
-                ET.SubElement(case, "failure", message=problems[0]).text = "\n".join(problems)
+            failures += bool(problems)
+            for problem in problems:  # one failure element per regressed or failed metric
+                ET.SubElement(case, "failure", message=problem, type="kartci").text = problem
         ET.SubElement(case, "system-out").text = f"report: {report_path}"
     suite.set("failures", str(failures))
     suite.set("errors", str(errors))

@@ -1,23 +1,33 @@
-"""The pull-request summary: short, worst news first."""
+"""The pull-request summary: short, worst news first (errors, then the largest regressions)."""
 
 from __future__ import annotations
 
-from kartci.report.tables import MARK, delta, num, tolerance
+from kartci.report.tables import MARK, RUN, Wording, delta, num, regression_size, tolerance
 from kartci.results import ScenarioResult, exit_code
-from kartci.verdict import Status
+from kartci.verdict import SEVERITY, MetricVerdict, Status
 
 VERDICT_WORD = {0: "all scenarios pass", 1: "regressions or failed criteria", 2: "run errors"}
 
 
-def summary_md(results: list[ScenarioResult]) -> str:
+def _verdict_key(v: MetricVerdict) -> tuple[bool, float, str]:
+    return (not v.status.bad, -regression_size(v), v.name)
+
+
+def _scenario_key(r: ScenarioResult) -> tuple[int, float, str]:
+    worst = max((regression_size(v) for v in r.verdicts if v.status.bad), default=0.0)
+    return (SEVERITY.index(r.status), -worst, r.name)
+
+
+def summary_md(results: list[ScenarioResult], words: Wording = RUN) -> str:
     code = exit_code(results)
-    lines = [f"## kartci: {VERDICT_WORD[code]}", "",
+    ordered = sorted(results, key=_scenario_key)
+    lines = [f"## {words.title}: {VERDICT_WORD[code]}", "",
              "| scenario | status | sim time | real-time factor |", "|---|---|---|---|"]
-    for r in results:
+    for r in ordered:
         rtf = r.run.get("real_time_factor")
         lines.append(f"| `{r.name}` | {MARK[r.status]} {r.status.value} | "
                      f"{num(r.run.get('sim_time_s'), 's')} | {num(rtf)} |")
-    for r in results:
+    for r in ordered:
         if r.error:
             lines += ["", f"### `{r.name}`: error", "", f"> {r.error}"]
             continue
@@ -25,13 +35,15 @@ def summary_md(results: list[ScenarioResult]) -> str:
         failed = [c for c in r.criteria if not c.ok]
         if not bad and not failed:
             continue
-        lines += ["", f"### `{r.name}`", ""]
+        lines += ["", f"### `{r.name}`"]
+        if failed:
+            lines.append("")
         for c in failed:
             lines.append(f"- ❌ criterion `{c.name}` {c.bound}: got {num(c.value)}")
         if bad:
-            lines += ["", "| metric | value | baseline | delta | tolerance | verdict |",
+            lines += ["", f"| metric | value | {words.base} | delta | tolerance | verdict |",
                       "|---|---|---|---|---|---|"]
-            for v in sorted(bad, key=lambda v: (not v.status.bad, v.name)):
+            for v in sorted(bad, key=_verdict_key):
                 lines.append(f"| `{v.name}` | {num(v.value, v.unit)} | {num(v.baseline, v.unit)}"
                              f" | {delta(v)} | {tolerance(v)} | {MARK[v.status]} "
                              f"{v.status.value} |")

@@ -31,11 +31,12 @@ def top_view(p: Plots) -> str:
             ax.plot(*_closed(edge), color="black", lw=1)
         ax.plot(*_closed(p.course), color="grey", lw=0.6, ls="--", label="centreline")
         ax.plot(*p.course[0], marker="|", color="black", ms=14, label="start / finish")
-        vmax = max([float(tr["speed"].max()) for tr in p.tracks.values()] + [1.0])
-        for agent, tr in p.tracks.items():
+        if len(p.tracks) > 1:  # several karts, or base and head: one colour per path
+            for agent, tr in p.tracks.items():
+                ax.plot(tr["x"], tr["y"], lw=1.2, label=f"{agent} path")
+        for agent, tr in p.tracks.items() if len(p.tracks) == 1 else ():
             sc = ax.scatter(tr["x"], tr["y"], c=tr["speed"], s=2, cmap="viridis", vmin=0,
-                            vmax=vmax, label=f"{agent} path")
-        if p.tracks:
+                            vmax=max(float(tr["speed"].max()), 1.0), label=f"{agent} path")
             fig.colorbar(sc, ax=ax, label="speed [m/s]", shrink=0.8)
         for agent, col in p.collisions.items():
             ax.scatter(col["x"], col["y"], marker="x", color="red", s=60, zorder=5,

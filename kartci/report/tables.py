@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from kartci.verdict import MetricVerdict, Status
 
 MARK = {Status.PASS: "✅", Status.IMPROVED: "🟢", Status.REGRESSED: "❌", Status.FAILED: "❌",
@@ -22,3 +24,26 @@ def delta(v: MetricVerdict) -> str:
 
 def tolerance(v: MetricVerdict) -> str:
     return "—" if v.tolerance is None else f"±{v.tolerance:.3g} ({v.direction.value})"
+
+
+def regression_size(v: MetricVerdict) -> float:
+    """How far past its tolerance a change is (|delta| / tolerance): sorts the worst first.
+    A value that vanished, or any change against a zero tolerance, counts as infinite."""
+    d = v.delta
+    if d is None:
+        return 0.0 if v.value is None and v.baseline is None else float("inf")
+    if not v.tolerance:
+        return float("inf") if d else 0.0
+    return abs(d) / v.tolerance
+
+
+@dataclass(frozen=True)
+class Wording:
+    """Names in a report: a run judged against baselines, or head compared with base."""
+
+    title: str = "kartci"
+    base: str = "baseline"
+
+
+RUN = Wording()
+COMPARE = Wording("kartci compare", "base")

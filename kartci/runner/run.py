@@ -1,7 +1,9 @@
 """Run scenarios into an output folder, score their logs and judge them against baselines.
 
 Layout of OUT: `<scenario>/run.mcap` (the log), `<scenario>/metrics.json` (deterministic),
-`<scenario>/run.json` (wall-clock facts), and the suite reports at the top.
+`<scenario>/run.json` (wall-clock facts), `<scenario>/error.json` (the last run failed), with
+`--repeat K` also `<scenario>/repeat_<k>/` (seed + k, same files), and at the top the suite
+reports and, for a shard, `shard.json`. A sweep point's folder is `<scenario>@<key>=<value>`.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
 from kartci.results import Plots, ScenarioResult
 from kartci.sim import simulate
-from kartci.spec import Scenario, load_scenario, project_root
+from kartci.spec import Scenario, project_root
 from kartci.spec.models import HallWorld, line_parts
 from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
 
@@ -33,9 +35,11 @@ def default_baselines() -> Path:
 
 
 def run_one(scenario: Scenario, out: Path,
-            on_progress: Callable[[float], None] | None = None) -> dict[str, Any]:
-    """Simulate one scenario and score its log; returns the run facts (raises KartciError)."""
-    folder = out / scenario.name
+            on_progress: Callable[[float], None] | None = None,
+            folder: Path | None = None) -> dict[str, Any]:
+    """Simulate one scenario into `folder` (default OUT/<scenario>) and score its log; returns
+    the run facts (raises KartciError)."""
+    folder = folder or out / scenario.name
     t0 = time.perf_counter()
     try:
         info = simulate(scenario, folder / LOG_NAME, on_progress)
@@ -56,6 +60,7 @@ def run_one(scenario: Scenario, out: Path,
 def score(folder: Path) -> dict[str, Any]:
     """Compute metrics.json from the log in `folder` (byte-identical for identical logs)."""
     scenario, values = metrics.compute(folder / LOG_NAME)
+
     def timing(name: str) -> bool:
         d = metrics.DEFS.get(name.rsplit(".", 1)[-1])
         return d is not None and d.timing
@@ -134,18 +139,8 @@ def _recorded(folder: Path) -> tuple[Scenario, dict[str, pd.DataFrame]]:
     return metrics.recorded_scenario(t, folder / LOG_NAME), t
 
 
-def run_suite(names: list[str], overrides: list[str], out: Path, baselines: Path,
-              on_done: Callable[[str, ScenarioResult], None] | None = None,
-              on_progress: Callable[[str, float], None] | None = None) -> list[ScenarioResult]:
-    """Validate every scenario first (bad input stops everything), then run each; a run that
-    fails is an ERROR result for that scenario only, and its earlier outputs stay in place."""
-    return run_specs([load_scenario(n, overrides) for n in names], out, baselines, on_done,
-                     on_progress)
-
-
-def run_specs(specs: list[Scenario], out: Path, baselines: Path,
-              on_done: Callable[[str, ScenarioResult], None] | None = None,
-              on_progress: Callable[[str, float], None] | None = None) -> list[ScenarioResult]:
+def check_criteria_names(specs: list[Scenario]) -> None:
+    """Criteria must name known metrics: a typo is bad input, found before anything runs."""
     for spec in specs:
         unknown = sorted(
             c for c in spec.criteria if c not in metrics.DEFS and not (
@@ -153,27 +148,12 @@ def run_specs(specs: list[Scenario], out: Path, baselines: Path,
         if unknown:
             raise SpecError(f"scenario {spec.name}: criteria on unknown metrics: "
                             f"{', '.join(unknown)} (known: {', '.join(sorted(metrics.DEFS))})")
-    results = []
-    for spec in specs:
-        try:
-            run_one(spec, out, _bind(on_progress, spec.name))
-            result = evaluate(out / spec.name, baselines)
-        except KartciError as err:
-            result = ScenarioResult(spec.name, spec.description, error=str(err))
-        except Exception as err:  # a crashing controller must not take the suite down
-            result = ScenarioResult(spec.name, spec.description,
-                                    error=f"run crashed: {type(err).__name__}: {err}")
-        results.append(result)
-        if on_done is not None:
-            on_done(spec.name, result)
-    return results
 
 
-def _bind(cb: Callable[[str, float], None] | None,
-          name: str) -> Callable[[float], None] | None:
-    if cb is None:
-        return None
-    return lambda t: cb(name, t)
+def scenario_folders(out: Path) -> list[Path]:
+    """The scenario folders of a run: those holding metrics.json or a failed-run marker."""
+    return sorted({p.parent for pattern in ("*/metrics.json", f"*/{ERROR_NAME}")
+                   for p in out.glob(pattern)})
 
 
 def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:

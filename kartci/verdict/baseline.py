@@ -70,7 +70,7 @@ def _num(x: Any) -> float | None:
     return None if x is None or (isinstance(x, float) and math.isnan(x)) else float(x)
 
 
-def _definition(name: str) -> MetricDef | None:
+def definition(name: str) -> MetricDef | None:
     return DEFS.get(name.rsplit(".", 1)[-1])
 
 
@@ -130,7 +130,7 @@ def read_metrics(path: Path) -> dict[str, dict[str, Any]]:
 
 def judge(value: float | None, unit: str, name: str,
           entry: dict[str, Any] | None) -> MetricVerdict:
-    d = _definition(name)
+    d = definition(name)
     direction = Direction(entry["direction"]) if entry else (d.direction if d else
                                                              Direction.EQUAL)
     if entry is None:
@@ -227,7 +227,7 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]]) -> lis
     for name, m in sorted(metrics.items()):
         value = _num(m.get("value"))
         prev = old.get(name)
-        d = _definition(name)
+        d = definition(name)
         if prev is not None and prev.get("value") is not None:
             tol, direction = prev["tolerance"], prev["direction"]  # hand-set: kept
         else:

@@ -1,0 +1,58 @@
+"""`kartci compare BASE_OUT HEAD_OUT`: two run folders, scenario by scenario, as results the
+reports render (value = head, baseline = base; plots of both runs overlaid)."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from pathlib import Path
+
+from kartci.errors import SpecError
+from kartci.results import ScenarioResult, overlay
+from kartci.runner.jobs import REPEAT_PREFIX
+from kartci.runner.run import evaluate, scenario_folders
+from kartci.verdict import load, read_metrics
+from kartci.verdict.runs import ALPHA, Samples, compare_runs
+
+
+def samples(folder: Path) -> Samples:
+    """The judged run's metrics plus those of its repeats (`repeat_<k>/metrics.json`)."""
+    repeats = sorted((p for p in folder.glob(f"{REPEAT_PREFIX}*/metrics.json")),
+                     key=lambda p: int(re.sub(r"\D", "", p.parent.name) or 0))
+    out: Samples = {}
+    for path in [folder / "metrics.json", *repeats]:
+        for name, m in read_metrics(path).items():
+            entry = out.setdefault(name, {"unit": str(m.get("unit", "")), "values": []})
+            entry["values"].append(m.get("value"))
+    return out
+
+
+def compare_outs(base_out: Path, head_out: Path, baselines: Path,
+                 alpha: float = ALPHA) -> list[ScenarioResult]:
+    for d in (base_out, head_out):
+        if not d.is_dir():
+            raise SpecError(f"{d}: no such folder")
+    base = {p.name: p for p in scenario_folders(base_out)}
+    head = {p.name: p for p in scenario_folders(head_out)}
+    if not base and not head:
+        raise SpecError(f"{base_out}, {head_out}: no scenario folders; run `kartci run` first")
+    return [_one(label, base.get(label), head.get(label), baselines, alpha)
+            for label in sorted(set(base) | set(head))]
+
+
+def _one(label: str, b: Path | None, h: Path | None, baselines: Path,
+         alpha: float) -> ScenarioResult:
+    """A scenario in one run only: its metrics are all NEW (head) or MISSING (base)."""
+    hr = evaluate(h, baselines) if h is not None else None
+    br = evaluate(b, baselines) if b is not None else None
+    for side, r in (("head", hr), ("base", br)):
+        if r is not None and r.error:
+            return ScenarioResult(label, r.description, error=f"{side}: {r.error}")
+    verdicts = compare_runs(samples(b) if b else {}, samples(h) if h else {},
+                            load(baselines / f"{label}.json"), alpha)
+    first = hr or br
+    assert first is not None
+    plots = overlay(br.plots if br else None, hr.plots if hr else None)
+    note = "" if hr and br else f" (only in {'head' if hr else 'base'})"
+    return replace(first, description=first.description + note, verdicts=verdicts,
+                   criteria=[], plots=plots)

@@ -1,0 +1,157 @@
+"""Where jobs run: in this process, in a pool of processes, or as Ray tasks.
+
+Each executor yields an Outcome per job as it finishes and reports what it knows as Events
+(a job started, its sim time, its end). Every job writes only its own folder, and a
+scenario + seed gives the same bytes in any process, so all executors give the same results.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import queue as queue_mod
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+from kartci.runner.jobs import Context, Job, Outcome, run_job
+
+
+class ExecutorKind(StrEnum):
+    LOCAL = "local"  # this process with -j 1, a process pool with -j N
+    RAY = "ray"  # one Ray task per job, local Ray or a cluster
+
+
+class EventKind(StrEnum):
+    STARTED = "started"
+    PROGRESS = "progress"
+    FINISHED = "finished"
+
+
+@dataclass(frozen=True)
+class Event:
+    kind: EventKind
+    folder: str  # the job's folder, relative to OUT
+    sim_t: float = 0.0
+    outcome: Outcome | None = None  # FINISHED only
+
+
+Listener = Callable[[Event], None]
+
+
+def serial(jobs: Sequence[Job], ctx: Context, emit: Listener) -> Iterator[Outcome]:
+    for job in jobs:
+        yield _here(job, ctx, emit)
+
+
+def _here(job: Job, ctx: Context, emit: Listener,
+          tick: Callable[[], None] | None = None) -> Outcome:
+    """Run a job in this process; `tick` is called with every progress report."""
+    def progress(folder: str, t: float) -> None:
+        emit(Event(EventKind.PROGRESS, folder, t))
+        if tick is not None:
+            tick()
+
+    emit(Event(EventKind.STARTED, job.folder))
+    outcome = run_job(job, ctx, progress)
+    emit(Event(EventKind.FINISHED, job.folder, outcome=outcome))
+    return outcome
+
+
+_QUEUE: Any = None  # the worker's end of the progress queue (set by _init_worker)
+
+
+def _init_worker(q: Any) -> None:
+    global _QUEUE
+    _QUEUE = q
+
+
+def _report(folder: str, t: float) -> None:
+    _QUEUE.put((EventKind.PROGRESS, folder, t))
+
+
+def _work(job: Job, ctx: Context) -> Outcome:
+    _QUEUE.put((EventKind.STARTED, job.folder, 0.0))
+    return run_job(job, ctx, _report)
+
+
+class _Workers:
+    """Spawned worker processes (fresh interpreters, as on any OS), each given one run at a
+    time so that no run waits behind a busy worker while another is free."""
+
+    def __init__(self, ctx: Context, emit: Listener, n: int) -> None:
+        self.ctx, self.emit, self.slots = ctx, emit, n
+        mpc = mp.get_context("spawn")
+        self.events = mpc.Queue()
+        self.ex = ProcessPoolExecutor(max_workers=n, mp_context=mpc,
+                                      initializer=_init_worker, initargs=(self.events,))
+        self.running: dict[Future[Outcome], Job] = {}
+        self.finished: deque[Outcome] = deque()
+
+    def tick(self, todo: deque[Job]) -> None:
+        """Relay the workers' events, collect finished runs, hand out new ones."""
+        while True:
+            try:
+                kind, folder, t = self.events.get_nowait()
+            except queue_mod.Empty:
+                break
+            self.emit(Event(kind, folder, t))
+        for fut in [f for f in self.running if f.done()]:
+            outcome = _outcome(fut, self.running.pop(fut))
+            self.emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
+            self.finished.append(outcome)
+        while todo and len(self.running) < self.slots:
+            try:
+                self.running[self.ex.submit(_work, todo[0], self.ctx)] = todo[0]
+            except BrokenProcessPool:  # the workers cannot start: this process does the rest
+                self.slots = 0
+                break
+            todo.popleft()
+
+    def close(self) -> None:
+        self.ex.shutdown(wait=True, cancel_futures=True)
+        self.events.close()
+
+
+def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Iterator[Outcome]:
+    """`workers - 1` worker processes plus this one. This process has everything imported, so
+    it starts the first (longest) run at once while the workers start up (2-3 s each), and it
+    takes the next run whenever it is free. A hard crash (a segfault) in a run done here ends
+    the whole command, as with -j 1; in a worker it is an error for that run only."""
+    todo = deque(jobs)
+    others = _Workers(ctx, emit, workers - 1)
+    try:
+        while todo or others.running or others.finished:
+            mine = todo.popleft() if todo else None
+            others.tick(todo)
+            while others.finished:
+                yield others.finished.popleft()
+            if mine is not None:
+                yield _here(mine, ctx, emit, lambda: others.tick(todo))
+            elif others.running:
+                wait(others.running, timeout=0.2, return_when=FIRST_COMPLETED)
+    finally:
+        others.close()
+
+
+def _outcome(fut: Future[Outcome], job: Job) -> Outcome:
+    try:
+        return fut.result()
+    except Exception as err:  # the worker process died (e.g. a segfault in native code)
+        return Outcome.failed(job, f"worker process failed: {type(err).__name__}: {err}")
+
+
+def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,
+            kind: ExecutorKind = ExecutorKind.LOCAL,
+            ray_address: str | None = None) -> Iterator[Outcome]:
+    """Outcomes in the order jobs finish, each also announced as a FINISHED event."""
+    if kind is ExecutorKind.RAY:
+        from kartci.runner.ray_executor import ray_tasks
+
+        return ray_tasks(jobs, ctx, emit, workers, ray_address)
+    if workers <= 1 or len(jobs) <= 1:
+        return serial(jobs, ctx, emit)
+    return pool(jobs, ctx, emit, min(workers, len(jobs)))

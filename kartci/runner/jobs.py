@@ -1,0 +1,135 @@
+"""Units of work: one simulation of one scenario into one folder, picklable for any executor.
+
+A *label* names a scenario result and its folder in OUT: the scenario name, or for a sweep
+point `<scenario>@<key>=<value>`. With `--repeat K`, seed + k runs into `<label>/repeat_<k>/`
+(k = 1 .. K-1) beside the seed's own run in `<label>/`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from kartci.errors import KartciError, RunError, SpecError
+from kartci.results import ScenarioResult
+from kartci.runner.run import check_criteria_names, evaluate, run_one
+from kartci.spec import Scenario, load_scenario
+
+REPEAT_PREFIX = "repeat_"
+Report = Callable[[str, float], None]  # (job folder, sim time s), called from the worker
+
+
+@dataclass(frozen=True)
+class Job:
+    spec: Scenario
+    label: str  # the scenario result's name and top-level folder
+    repeat: int = 0  # k: the run with seed + k; 0 is the judged run
+
+    @property
+    def folder(self) -> str:
+        return self.label if self.repeat == 0 else f"{self.label}/{REPEAT_PREFIX}{self.repeat}"
+
+
+@dataclass(frozen=True)
+class Outcome:
+    job: Job
+    error: str | None = None
+    result: ScenarioResult | None = None  # the judged run (repeat 0) only
+    run: dict[str, Any] = field(default_factory=dict)  # run.json facts
+
+    @classmethod
+    def failed(cls, job: Job, error: str) -> Outcome:
+        return cls(job, error, ScenarioResult(job.label, job.spec.description, error=error)
+                   if job.repeat == 0 else None)
+
+
+@dataclass(frozen=True)
+class Context:
+    """What every job of one `kartci run` shares."""
+
+    out: Path
+    baselines: Path
+    timeout_s: float | None = None
+
+
+def parse_sweep(text: str) -> tuple[str, list[str]]:
+    key, sep, values = text.partition("=")
+    items = [v.strip() for v in values.split(",") if v.strip()]
+    if not sep or not key.strip() or not items:
+        raise SpecError(f"--sweep {text!r}: expected dotted.key=v1,v2,...")
+    return key.strip(), items
+
+
+def _safe(text: str) -> str:
+    """Folder-name safe and still readable: `/`, spaces and the like become `_`."""
+    return re.sub(r"[^A-Za-z0-9_.=@+,-]", "_", text)
+
+
+def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = None,
+           repeat: int = 1) -> list[Job]:
+    """Every job of a run, all validated before anything runs (bad input stops everything)."""
+    if repeat < 1:
+        raise SpecError(f"--repeat {repeat}: expected 1 or more")
+    axes = [parse_sweep(s) for s in sweeps or []]
+    points: list[list[tuple[str, str]]] = [list(p) for p in itertools.product(
+        *[[(k, v) for v in values] for k, values in axes])]
+    jobs: list[Job] = []
+    for name in names:
+        for point in points:
+            spec = load_scenario(name, [*overrides, *(f"{k}={v}" for k, v in point)])
+            label = spec.name + ("@" + ",".join(f"{k}={v}" for k, v in point) if point else "")
+            jobs += [Job(spec if k == 0 else spec.model_copy(update={"seed": spec.seed + k}),
+                         _safe(label), k) for k in range(repeat)]
+    check_criteria_names([j.spec for j in jobs])
+    labels = [j.label for j in jobs if j.repeat == 0]
+    twice = sorted({x for x in labels if labels.count(x) > 1})
+    if twice:
+        raise SpecError(f"scenario selected twice: {', '.join(twice)}")
+    return jobs
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    index, sep, total = text.partition("/")
+    try:
+        i, n = int(index), int(total)
+    except ValueError:
+        i = n = 0
+    if not sep or not 1 <= i <= n:
+        raise SpecError(f"--shard {text!r}: expected I/N with 1 <= I <= N, e.g. 1/4")
+    return i, n
+
+
+def shard(jobs: list[Job], index: int, total: int) -> list[Job]:
+    """Shard `index` of `total` (1-based): labels sorted by name, dealt round-robin, so every
+    shard gets the same count (±1) and a label with its repeats stays on one shard."""
+    labels = sorted({j.label for j in jobs})
+    mine = {label for i, label in enumerate(labels) if i % total == index - 1}
+    return [j for j in jobs if j.label in mine]
+
+
+def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
+    """Simulate, score and (for the judged run) evaluate one job; never raises for a failed run,
+    so one crashing scenario cannot take the others down. Runs in any process."""
+    start = time.perf_counter()
+
+    def progress(t: float) -> None:
+        if ctx.timeout_s is not None and time.perf_counter() - start > ctx.timeout_s:
+            raise RunError(f"time limit: over {ctx.timeout_s:g} s wall clock (at sim time "
+                           f"{t:.1f} s)")
+        if report is not None:
+            report(job.folder, t)
+
+    try:
+        run = run_one(job.spec, ctx.out, progress, ctx.out / job.folder)
+        result = evaluate(ctx.out / job.folder, ctx.baselines) if job.repeat == 0 else None
+        return Outcome(job, None, result, run)
+    except KartciError as err:
+        error = str(err)
+    except Exception as err:  # a crashing controller must not take the suite down
+        error = f"run crashed: {type(err).__name__}: {err}"
+    return Outcome.failed(job, error)

@@ -1,0 +1,53 @@
+"""Jobs as Ray tasks: a new local Ray instance by default, or an existing cluster by address.
+
+Optional (`pip install "kartci[ray]"`). On a cluster every node needs kartci installed and OUT
+on a shared filesystem, since each task writes its scenario folder there itself. Ray tasks
+report no live sim time: the progress view shows them queued until they finish.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+from collections.abc import Iterator, Sequence
+from typing import Any
+
+from kartci.errors import RunError, SpecError
+from kartci.runner.executors import Event, EventKind, Listener
+from kartci.runner.jobs import Context, Job, Outcome, run_job
+
+
+def _ray() -> Any:
+    try:
+        return importlib.import_module("ray")
+    except ImportError:
+        raise SpecError('--executor ray needs Ray: pip install "kartci[ray]"') from None
+
+
+def ray_tasks(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
+              address: str | None) -> Iterator[Outcome]:
+    ray = _ray()
+    started = not ray.is_initialized()
+    if started:
+        try:
+            ray.init(address=address or "local", num_cpus=None if address else workers,
+                     include_dashboard=False, log_to_driver=False,
+                     logging_level=logging.WARNING)
+        except Exception as err:  # an unreachable address, a broken local start
+            raise RunError(f"cannot start Ray ({address or 'local'}): {err}") from None
+    try:
+        task = ray.remote(num_cpus=1, max_retries=0)(run_job)
+        refs = {task.remote(job, ctx): job for job in jobs}
+        while refs:
+            ready, _ = ray.wait(list(refs), num_returns=1)
+            for ref in ready:
+                job = refs.pop(ref)
+                try:
+                    outcome: Outcome = ray.get(ref)
+                except Exception as err:  # the task's worker died
+                    outcome = Outcome.failed(job, f"Ray task failed: {type(err).__name__}: {err}")
+                emit(Event(EventKind.FINISHED, job.folder, outcome=outcome))
+                yield outcome
+    finally:
+        if started:
+            ray.shutdown()

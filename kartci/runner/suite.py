@@ -1,0 +1,50 @@
+"""Run a list of jobs on an executor and gather one result per label, in the order given."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from kartci.results import ScenarioResult
+from kartci.runner.executors import Event, ExecutorKind, Listener, execute
+from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome
+
+
+def _ignore(_: Event) -> None:
+    pass
+
+
+def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
+             executor: ExecutorKind = ExecutorKind.LOCAL, ray_address: str | None = None,
+             timeout_s: float | None = None,
+             on_event: Listener | None = None) -> list[ScenarioResult]:
+    """A run that fails is an ERROR result for its label only (a failed repeat included);
+    earlier outputs of a failed run stay in place."""
+    emit = on_event or _ignore
+    ctx = Context(out, baselines, timeout_s)
+    # Longest first: a cheap schedule that keeps the last worker from running alone.
+    order = sorted(jobs, key=lambda j: -j.spec.duration_s)
+    outcomes: dict[str, Outcome] = {}
+    for outcome in execute(order, ctx, emit, workers, executor, ray_address):
+        outcomes[outcome.job.folder] = outcome
+    results = []
+    for job in (j for j in jobs if j.repeat == 0):
+        main = outcomes[job.folder]
+        result = main.result or ScenarioResult(job.label, job.spec.description, error=main.error)
+        mine = [outcomes[j.folder] for j in jobs if j.label == job.label]
+        failed = [o for o in mine if o.error and o.job.repeat > 0]
+        if result.error is None and failed:
+            o = failed[0]
+            result = ScenarioResult(job.label, job.spec.description,
+                                    error=f"{o.job.folder} (seed {o.job.spec.seed}): {o.error}")
+        if main.error is None:
+            _drop_stale_repeats(out / job.label, {o.job.folder.rsplit("/", 1)[-1] for o in mine})
+        results.append(result)
+    return results
+
+
+def _drop_stale_repeats(folder: Path, keep: set[str]) -> None:
+    """Repeats of an earlier run with a larger --repeat would pollute `compare`'s samples."""
+    for old in folder.glob(f"{REPEAT_PREFIX}*"):
+        if old.is_dir() and old.name not in keep:
+            shutil.rmtree(old)

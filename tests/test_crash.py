@@ -1,0 +1,68 @@
+"""A run that crashes, goes NaN or overruns its time limit is an error for that scenario only."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+from test_cli import kartci
+from test_parallel import PAIR, QUICK
+
+from kartci.agents.base import Outbox
+from kartci.agents.line_pid import LinePid
+from kartci.report import write_all
+from kartci.results import exit_code
+from kartci.runner import expand, run_jobs
+from kartci.verdict import Status
+
+
+def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baselines: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    real = LinePid.step
+
+    def step(self: LinePid, t_ns: int) -> Outbox:
+        if self.spec.kp == 100.0 and t_ns > 500_000_000:  # line_straight's gain, after 0.5 s
+            raise ZeroDivisionError("controller bug")
+        return real(self, t_ns)
+
+    monkeypatch.setattr(LinePid, "step", step)
+    jobs = expand(PAIR, ["duration_s=2", "criteria={}", "metrics.transient_s=0.5"])
+    results = {r.name: r for r in run_jobs(jobs, tmp_path, baselines)}
+    assert results["line_straight"].status is Status.ERROR
+    assert "ZeroDivisionError: controller bug" in (results["line_straight"].error or "")
+    assert results["line_circle"].status is Status.NEW  # finished and scored
+    assert (tmp_path / "line_circle" / "metrics.json").exists()
+    assert (tmp_path / "line_straight" / "error.json").exists()
+    paths = write_all(list(results.values()), tmp_path)
+    assert "controller bug" in paths["html"].read_text()
+    assert exit_code(list(results.values())) == 2
+
+
+def test_nan_state_in_a_pool_and_the_report_is_still_written(tmp_path: Path,
+                                                             baselines: Path) -> None:
+    spec = yaml.safe_load((Path(__file__).parents[1] / "scenarios" / "line_straight.yaml")
+                          .read_text())
+    spec["agents"]["lt0"]["controller"]["kp"] = float("nan")
+    bad = tmp_path / "nan_straight.yaml"
+    bad.write_text(yaml.safe_dump(spec))
+    out = tmp_path / "out"
+    p = kartci("run", "line_circle", bad, *QUICK, "-j", "2", "--out", out,
+               "--baselines", baselines)
+    assert p.returncode == 2, p.stderr
+    assert "Traceback" not in p.stdout + p.stderr
+    summary = json.loads((out / "summary.json").read_text())["scenarios"]
+    assert summary["nan_straight"]["status"] == "error"
+    assert "non-finite state" in summary["nan_straight"]["error"]
+    assert summary["line_circle"]["status"] == "new"
+    assert (out / "report.html").exists() and (out / "junit.xml").exists()
+
+
+def test_a_run_over_its_time_limit_is_an_error(tmp_path: Path, baselines: Path) -> None:
+    p = kartci("run", "line_straight", *QUICK, "--timeout-s", "0.01", "--out", tmp_path,
+               "--baselines", baselines)
+    assert p.returncode == 2
+    assert "time limit: over 0.01 s wall clock" in p.stdout + p.stderr
+    bad = kartci("run", "line_straight", "--timeout-s", "-1", "--out", tmp_path)
+    assert bad.returncode == 2 and "--timeout-s" in bad.stderr
