@@ -23,6 +23,9 @@ class Plots:
     commands: dict[str, pd.DataFrame]  # agent -> t, left, right (commanded, rad/s)
     collisions: dict[str, pd.DataFrame]  # agent -> t, x, y, other, impulse_ns
     transient_s: float = 0.0  # start-up transient the metrics leave out
+    obstacles: list[np.ndarray] = field(default_factory=list)  # (4, 2) box footprints, m
+    horizons: dict[str, list[np.ndarray]] = field(default_factory=dict)  # agent -> MPCC plans
+    solves: dict[str, pd.DataFrame] = field(default_factory=dict)  # agent -> t, solve_ms
 
 
 @dataclass(frozen=True)
@@ -62,4 +65,5 @@ def overlay(base: Plots | None, head: Plots | None) -> Plots | None:
                 for agent, frame in getattr(p, field_name).items()}
 
     return replace(head, tracks=both("tracks"), wheels=both("wheels"),
-                   commands=both("commands"), collisions=both("collisions"))
+                   commands=both("commands"), collisions=both("collisions"),
+                   solves=both("solves"), horizons={})

@@ -57,6 +57,8 @@ FLATTENERS: dict[str, Callable[[Any], Row]] = {
                                            "brake_mps2", "reverse", "emergency_stop"),
     "kartci_msgs/msg/SolverStats": _fields("success", "status", "solve_ms", "iterations",
                                            "cost", "failures", "max_slack_m"),
+    "nav_msgs/msg/Path": lambda m: {"xs": [p.pose.position.x for p in m.poses],
+                                    "ys": [p.pose.position.y for p in m.poses]},
     "sensor_msgs/msg/Imu": lambda m: {"ax": m.linear_acceleration.x,
                                       "ay": m.linear_acceleration.y,
                                       "az": m.linear_acceleration.z, "wz": m.angular_velocity.z},

@@ -53,6 +53,8 @@ def _scenario(r: ScenarioResult, words: Wording) -> str:
         out.append('<div class="figs">')
         if r.plots.kind == "track":
             out += [figs.top_view(r.plots), figs.speed(r.plots), figs.wheel_speeds(r.plots)]
+            if r.plots.solves:
+                out.append(figs.solve_times(r.plots))
         else:
             out += [figs.top_view(r.plots), figs.tracking_error(r.plots),
                     figs.wheel_speeds(r.plots)]

@@ -38,6 +38,13 @@ def top_view(p: Plots) -> str:
             sc = ax.scatter(tr["x"], tr["y"], c=tr["speed"], s=2, cmap="viridis", vmin=0,
                             vmax=max(float(tr["speed"].max()), 1.0), label=f"{agent} path")
             fig.colorbar(sc, ax=ax, label="speed [m/s]", shrink=0.8)
+        for i, box in enumerate(p.obstacles):
+            ax.fill(*_closed(box), color="saddlebrown", zorder=4,
+                    label="obstacles" if i == 0 else None)
+        for agent, plans in p.horizons.items():
+            for i, plan in enumerate(plans):
+                ax.plot(plan[:, 0], plan[:, 1], color="magenta", lw=2, alpha=0.9, zorder=6,
+                        label=f"{agent} MPCC horizons" if i == 0 else None)
         for agent, col in p.collisions.items():
             ax.scatter(col["x"], col["y"], marker="x", color="red", s=60, zorder=5,
                        label=f"{agent} collisions ({len(col)})")
@@ -67,6 +74,22 @@ def speed(p: Plots) -> str:
     ax.set_xlabel("sim time [s]")
     ax.set_ylabel("speed [m/s]")
     ax.set_title("speed (dotted red: collisions)")
+    ax.legend(loc="best", fontsize=8)
+    return _svg(fig)
+
+
+def solve_times(p: Plots) -> str:
+    fig, ax = plt.subplots(figsize=(5.5, 3.0))
+    for agent, st in p.solves.items():
+        ax.plot(st["t"], st["solve_ms"], lw=0.8, label=f"{agent}")
+        failed = st[~st["success"].astype(bool)]
+        if len(failed):
+            ax.scatter(failed["t"], failed["solve_ms"], marker="x", color="red", s=30,
+                       label=f"{agent} failed ({len(failed)})")
+    ax.set_xlabel("sim time [s]")
+    ax.set_ylabel("solve time [ms]")
+    ax.set_yscale("log")
+    ax.set_title("MPCC solve time (wall clock)")
     ax.legend(loc="best", fontsize=8)
     return _svg(fig)
 

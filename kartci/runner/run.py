@@ -20,6 +20,7 @@ import pandas as pd
 from kartci import geometry, metrics
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
+from kartci.metrics import race
 from kartci.results import Plots, ScenarioResult
 from kartci.sim import simulate
 from kartci.spec import Scenario, project_root
@@ -104,8 +105,22 @@ def plots(folder: Path, scenario: Scenario) -> Plots:
         if col is not None:
             collisions[agent] = col
     if track is not None:
+        world = scenario.world
+        assert isinstance(world, HallWorld)
+        obstacles = [race.rect(b.center_m[0], b.center_m[1], b.size_m[0], b.size_m[1],
+                               b.yaw_rad) for b in world.obstacles]
+        horizons, solves = {}, {}
+        for agent in scenario.agents:
+            plans = t.get(f"/{agent}/mpcc/horizon")
+            if plans is not None and len(plans):  # a few moments, evenly spread
+                rows = plans.iloc[np.linspace(0, len(plans) - 1, 8).astype(int)[1:]]
+                horizons[agent] = [np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+                                   for x, y in zip(rows["xs"], rows["ys"], strict=True)]
+            stats = t.get(f"/{agent}/mpcc/stats")
+            if stats is not None:
+                solves[agent] = stats[["t", "solve_ms", "success"]]
         return Plots("track", track.xy, list(track.bounds()), tracks, wheels, commands,
-                     collisions)
+                     collisions, obstacles=obstacles, horizons=horizons, solves=solves)
     world, _ = line_parts(scenario, next(iter(scenario.agents)))
     return Plots("line", np.asarray(geometry.polyline(world.course, 400)), [], tracks, wheels,
                  commands, collisions, scenario.metrics.transient_s)
