@@ -11,7 +11,7 @@ import numpy as np
 from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command, load_mapping, to_command, to_joy
 from kartci.agents.source import Recorded
-from kartci.logs.types import header, msg
+from kartci.logs.types import header, msg, yaw_of
 from kartci.spec.models import (
     CommandsController,
     GokartModel,
@@ -130,7 +130,7 @@ class JoyDriver:
     def on_message(self, topic: str, message: Any) -> None:
         if topic == "odom":
             p, q = message.pose.pose.position, message.pose.pose.orientation
-            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            yaw = yaw_of(q)
             self._pose = (p.x, p.y, yaw, float(message.twist.twist.linear.x))
 
     def step(self, t_ns: int) -> Outbox:

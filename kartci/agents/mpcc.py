@@ -12,17 +12,13 @@ import numpy as np
 
 from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command
-from kartci.logs.types import header, msg
+from kartci.logs.types import header, msg, yaw_of
 from kartci.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
 from kartci.spec.models import Box, GokartModel, MpccController
 from kartci.track import Track
 from kartci.vehicle import KartInput, column_for_wheel_angle, wheel_angles
 
 MAP_FRAME = "map"
-
-
-def _yaw(q: Any) -> float:
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
 
 
 class MpccAgent:
@@ -49,7 +45,7 @@ class MpccAgent:
                 self._delta = sum(wheel_angles(self.model, col)) / 2
             return
         p, tw = message.pose.pose.position, message.twist.twist
-        yaw, c = _yaw(message.pose.pose.orientation), self.spec.vehicle.cog_x_m
+        yaw, c = yaw_of(message.pose.pose.orientation), self.spec.vehicle.cog_x_m
         x, y = p.x + c * math.cos(yaw), p.y + c * math.sin(yaw)
         vx, vy, r = float(tw.linear.x), float(tw.linear.y) + c * float(tw.angular.z), float(
             tw.angular.z)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections import defaultdict
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -11,19 +10,15 @@ from typing import Any
 import pandas as pd
 
 from kartci.logs.reader import messages
-from kartci.logs.types import stamp_ns
+from kartci.logs.types import stamp_ns, yaw_of
 
 Row = dict[str, Any]
-
-
-def _yaw(q: Any) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 def _odometry(m: Any) -> Row:
     p, q = m.pose.pose.position, m.pose.pose.orientation
     tw = m.twist.twist
-    return {"x": p.x, "y": p.y, "z": p.z, "yaw": _yaw(q), "vx": tw.linear.x, "vy": tw.linear.y,
+    return {"x": p.x, "y": p.y, "z": p.z, "yaw": yaw_of(q), "vx": tw.linear.x, "vy": tw.linear.y,
             "wz": tw.angular.z}
 
 

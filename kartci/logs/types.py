@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from functools import cache
 from importlib import resources
 from typing import Any
@@ -34,6 +35,11 @@ def header(t_ns: int, frame_id: str) -> Any:
     sec, nsec = divmod(t_ns, 1_000_000_000)
     stamp = msg("builtin_interfaces/msg/Time", sec=sec, nanosec=nsec)
     return msg("std_msgs/msg/Header", stamp=stamp, frame_id=frame_id)
+
+
+def yaw_of(q: Any) -> float:
+    """Heading (rad) of a geometry_msgs/Quaternion, rotation about z."""
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 def stamp_ns(hdr: Any) -> int:

@@ -6,6 +6,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+
 from kartci.errors import LogError
 from kartci.logs import tables
 from kartci.metrics import race
@@ -31,39 +33,43 @@ def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
     out: dict[str, Metric] = {}
     many = len(scenario.agents) > 1
     track = recorded_track(log_tables, log_path) if isinstance(scenario.world, HallWorld) else None
+    odoms = {}
     for agent in scenario.agents:
         odom = log_tables.get(f"/{agent}/odom")
         if odom is None or odom.empty:
             raise LogError(f"{log_path}: no /{agent}/odom messages")
+        odoms[agent] = odom
+    # each kart's path along the track and footprints, once: every agent's metrics use them
+    paths = {a: kart_track(track, o) for a, o in odoms.items()} if track is not None else {}
+    rects = {a: race.kart_rects(o) for a, o in odoms.items()} if track is not None else {}
+    for agent, odom in odoms.items():
         if track is None:
             values = line_metrics(scenario, agent, odom)
         else:
-            values = kart_metrics(scenario, agent, track, odom,
+            values = kart_metrics(scenario, agent, track, paths[agent],
                                   log_tables.get(f"/{agent}/collision"))
-            values += race_metrics(scenario, agent, track, log_tables)
+            values += race_metrics(scenario, agent, paths, rects,
+                                   log_tables.get(f"/{agent}/mpcc/stats"))
         for m in values:
             out[f"{agent}.{m.name}" if many else m.name] = m
     return scenario, out
 
 
-def race_metrics(scenario: Scenario, agent: str, track: Track,
-                 log_tables: Mapping[str, Any]) -> list[Metric]:
+def race_metrics(scenario: Scenario, agent: str, paths: Mapping[str, pd.DataFrame],
+                 rects: Mapping[str, list[race.Rect]],
+                 stats: pd.DataFrame | None) -> list[Metric]:
     """Clearance, overtakes and solver statistics, where the run has what they need."""
     world = scenario.world
     assert isinstance(world, HallWorld)
-    odom = log_tables[f"/{agent}/odom"]
-    others = [n for n in scenario.agents if n != agent]
-    other_odom = [log_tables[f"/{n}/odom"] for n in others if f"/{n}/odom" in log_tables]
+    others = [n for n in paths if n != agent]
     out = []
-    if world.obstacles or other_odom:
-        gap = race.min_clearance_m(race.kart_rects(odom), world.obstacles,
-                                   [race.kart_rects(o) for o in other_odom])
+    if world.obstacles or others:
+        gap = race.min_clearance_m(rects[agent], world.obstacles, [rects[n] for n in others])
         out.append(Metric("min_clearance_m", gap, "m"))
-    if other_odom:
-        mine = kart_track(track, odom)["s_total"].to_numpy()
-        theirs = [kart_track(track, o)["s_total"].to_numpy() for o in other_odom]
-        out.append(Metric("overtakes", float(race.overtakes(mine, theirs)), "count"))
-    stats = log_tables.get(f"/{agent}/mpcc/stats")
+    if others:
+        theirs = [paths[n]["s_total"].to_numpy() for n in others]
+        out.append(Metric("overtakes", float(race.overtakes(paths[agent]["s_total"].to_numpy(),
+                                                            theirs)), "count"))
     if stats is not None and not stats.empty:
         failures, timing = race.solver_values(stats)
         out.append(Metric("solver_failures", float(failures), "count"))

@@ -29,11 +29,11 @@ def kart_track(track: Track, odom: pd.DataFrame) -> pd.DataFrame:
                          "s_total": total, "yaw": odom["yaw"].to_numpy()})
 
 
-def kart_metrics(scenario: Scenario, agent: str, track: Track, odom: pd.DataFrame,
+def kart_metrics(scenario: Scenario, agent: str, track: Track, tr: pd.DataFrame,
                  collisions: pd.DataFrame | None) -> list[Metric]:
+    """Lap, collision and track metrics from the agent's `kart_track` path."""
     model = scenario.agents[agent].model
     assert isinstance(model, GokartModel)
-    tr = kart_track(track, odom)
     t, total = tr["t"].to_numpy(), tr["s_total"].to_numpy()
     crossings = []
     for lap in range(1, int(max(total.max(), 0) // track.length_m) + 1):

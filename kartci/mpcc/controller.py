@@ -115,7 +115,7 @@ class Mpcc:
             offset = x0[S] - xs[0, S]
             xs[:, S] += offset
         else:
-            s = progress_guess(self.track, float(x0[S]), float(x0[VX]), sp.step_s,
+            s = progress_guess(float(x0[S]), float(x0[VX]), sp.step_s,
                                sp.horizon_steps, sp.max_speed_mps)
             xs = np.tile(x0, (sp.horizon_steps + 1, 1))
             xs[1:, S] = s

@@ -75,7 +75,7 @@ def stage_params(track: Track, s_bar: np.ndarray, step_s: float, padding_m: floa
     return np.column_stack([xy, np.cos(heading), np.sin(heading), s_ref, lo, hi, s_max])
 
 
-def progress_guess(track: Track, s0: float, v0: float, step_s: float, n: int,
+def progress_guess(s0: float, v0: float, step_s: float, n: int,
                    v_max: float) -> np.ndarray:
     """A first guess of the predicted progress: accelerate gently from the current speed."""
     v = np.minimum(max(v0, 1.0) + 1.0 * step_s * np.arange(1, n + 1), v_max)

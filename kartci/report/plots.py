@@ -9,11 +9,21 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from kartci.results import Plots
 
 plt.rcParams.update({"svg.hashsalt": "kartci", "figure.dpi": 96, "font.size": 9})
+
+
+def _finish(fig: Figure, ax: Axes, xlabel: str, ylabel: str, title: str) -> str:
+    """Labels, title and legend, then the figure as inline SVG."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    return _svg(fig)
 
 
 def _svg(fig: Figure) -> str:
@@ -53,11 +63,7 @@ def top_view(p: Plots) -> str:
         for agent, tr in p.tracks.items():
             ax.plot(tr["x"], tr["y"], lw=1.2, label=f"{agent} sensor point")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_title("path seen from above")
-    ax.legend(loc="best", fontsize=8)
-    return _svg(fig)
+    return _finish(fig, ax, "x [m]", "y [m]", "path seen from above")
 
 
 def _closed(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -71,11 +77,7 @@ def speed(p: Plots) -> str:
     for col in p.collisions.values():
         for t in col["t"]:
             ax.axvline(t, color="red", lw=0.8, ls=":")
-    ax.set_xlabel("sim time [s]")
-    ax.set_ylabel("speed [m/s]")
-    ax.set_title("speed (dotted red: collisions)")
-    ax.legend(loc="best", fontsize=8)
-    return _svg(fig)
+    return _finish(fig, ax, "sim time [s]", "speed [m/s]", "speed (dotted red: collisions)")
 
 
 def solve_times(p: Plots) -> str:
@@ -86,12 +88,8 @@ def solve_times(p: Plots) -> str:
         if len(failed):
             ax.scatter(failed["t"], failed["solve_ms"], marker="x", color="red", s=30,
                        label=f"{agent} failed ({len(failed)})")
-    ax.set_xlabel("sim time [s]")
-    ax.set_ylabel("solve time [ms]")
     ax.set_yscale("log")
-    ax.set_title("MPCC solve time (wall clock)")
-    ax.legend(loc="best", fontsize=8)
-    return _svg(fig)
+    return _finish(fig, ax, "sim time [s]", "solve time [ms]", "MPCC solve time (wall clock)")
 
 
 def tracking_error(p: Plots, band_m: float = 0.008) -> str:
@@ -102,11 +100,8 @@ def tracking_error(p: Plots, band_m: float = 0.008) -> str:
         ax.axhline(s * band_m * 1000, color="red", ls="--", lw=0.8)
     if p.transient_s > 0:
         ax.axvspan(0, p.transient_s, color="grey", alpha=0.15, label="transient (not scored)")
-    ax.set_xlabel("sim time [s]")
-    ax.set_ylabel("cross-track error [mm]")
-    ax.set_title(f"tracking error (dashed: ±{band_m * 1000:g} mm sensor range)")
-    ax.legend(loc="best", fontsize=8)
-    return _svg(fig)
+    return _finish(fig, ax, "sim time [s]", "cross-track error [mm]",
+                   f"tracking error (dashed: ±{band_m * 1000:g} mm sensor range)")
 
 
 def wheel_speeds(p: Plots) -> str:
@@ -130,8 +125,4 @@ def sensor_sweep(offsets_m: list[float], curves: dict[str, list[float]], title: 
         ax.plot([o * 1000 for o in offsets_m], ys, lw=1.2, label=label)
     ax.axvline(-8, color="grey", ls="--", lw=0.8)
     ax.axvline(8, color="grey", ls="--", lw=0.8)
-    ax.set_xlabel("offset of the sensor from the line axis [mm]")
-    ax.set_ylabel("luminance")
-    ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    return _svg(fig)
+    return _finish(fig, ax, "offset of the sensor from the line axis [mm]", "luminance", title)
