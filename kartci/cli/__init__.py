@@ -1,0 +1,28 @@
+"""The `kartci` command: one module per command group, each a thin function over the library.
+Errors: one line on stderr, exit 2."""
+
+from __future__ import annotations
+
+import sys
+
+from kartci.cli import baseline, line, logs, results, run, scenarios  # noqa: F401  (commands)
+from kartci.cli.common import app
+from kartci.errors import KartciError
+
+__all__ = ["app", "main"]
+
+
+def main() -> None:
+    """Entry point: every KartciError becomes one line on stderr and exit code 2."""
+    try:
+        app()
+    except KartciError as err:
+        print(f"kartci: error: {err}", file=sys.stderr)
+        sys.exit(2)
+    except OSError as err:
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"kartci: error: {where}{err.strerror or err}", file=sys.stderr)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        print("kartci: interrupted", file=sys.stderr)
+        sys.exit(130)

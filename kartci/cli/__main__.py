@@ -1,0 +1,5 @@
+"""`python -m kartci.cli`."""
+
+from kartci.cli import main
+
+main()

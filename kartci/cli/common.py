@@ -1,0 +1,74 @@
+"""What every command shares: the typer app, consoles, common options, the verdict printout and
+the one way a command ends (reports written, exit code)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from kartci.errors import SpecError
+from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
+from kartci.results import ScenarioResult, exit_code
+
+app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
+                  help="Run robot scenarios headless, record them, score them against baselines.")
+baseline_app = typer.Typer(help="Inspect and update stored baselines.", no_args_is_help=True)
+app.add_typer(baseline_app, name="baseline")
+# In CI logs (no terminal) rich would wrap at 80 columns and cut metric names: use 160.
+out_console = Console(width=None if sys.stdout.isatty() else 160)
+err_console = Console(stderr=True, width=None if sys.stderr.isatty() else 160)
+
+SetOpt = Annotated[list[str] | None, typer.Option(
+    "--set", help="Override a scenario value: dotted.key=value (repeatable).")]
+OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder.")]
+BaselinesOpt = Annotated[Path | None, typer.Option(
+    help="Folder of baseline files (default: the project's baselines/).")]
+
+
+def baselines_dir(path: Path | None, must_exist: bool = True) -> Path:
+    from kartci.runner import default_baselines
+
+    if path is not None and must_exist and not path.is_dir():
+        raise SpecError(f"--baselines {path}: no such folder")
+    return path or default_baselines()
+
+
+def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
+    for r in results:
+        if r.error:
+            out_console.print(f"[bold]{r.name}[/]: {MARK[r.status]} error: {r.error}",
+                              markup=True, highlight=False)
+            continue
+        table = Table("metric", "value", words.base, "delta", "tolerance", "verdict",
+                      title=f"{r.name}: {MARK[r.status]} {r.status.value}", title_justify="left")
+        for v in r.verdicts:
+            table.add_row(v.name, num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
+                          tolerance(v), f"{MARK[v.status]} {v.status.value}")
+        for c in r.criteria:
+            table.add_row(f"criterion {c.name}", num(c.value), c.bound, "", "",
+                          "✅ pass" if c.ok else "❌ failed")
+        out_console.print(table)
+
+
+def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
+            ci: bool = True) -> None:
+    """Write every report, print the verdicts and (unless `ci` is off, as for a shard, whose
+    merge reports for it) the CI outputs; exit with the gating code."""
+    from kartci.report import write_all
+    from kartci.report.ci import annotation_lines, append_step_summary, in_github_actions
+
+    paths = write_all(results, out, words)
+    print_verdicts(results, words)
+    if ci:
+        append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
+    if ci and in_github_actions():
+        for line in annotation_lines(results):
+            typer.echo(line)
+    code = exit_code(results)
+    out_console.print(f"report: {paths['html']}  (exit {code})", highlight=False)
+    raise typer.Exit(code)

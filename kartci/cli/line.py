@@ -1,0 +1,82 @@
+"""`kartci characterise`: the line tracker's sensor characterisation."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from kartci.cli.common import OutOpt, SetOpt, app, out_console
+from kartci.errors import SpecError
+
+
+@app.command()
+def characterise(
+    out: OutOpt = Path("reports/characterisation"),
+    scenario: Annotated[str, typer.Option(help="Scenario whose robot and world are used.")]
+    = "line_straight",
+    fovs: Annotated[str, typer.Option(help="Fields of view to compare, rad, comma-separated.")]
+    = "0.5,0.75,1.0,1.2,1.4,1.5,2.0",
+    step_m: Annotated[float, typer.Option(help="Offset step of the sweep, m.")] = 0.0005,
+    set_: SetOpt = None,
+) -> None:
+    """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
+    6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
+    from kartci.report.plots import sensor_sweep
+    from kartci.sim.characterise import sweep
+    from kartci.spec import load_scenario
+
+    spec = load_scenario(scenario, set_ or [])
+    agent = next(iter(spec.agents))
+    try:
+        fov_list = [float(f) for f in fovs.split(",") if f.strip()]
+    except ValueError:
+        raise SpecError(f"--fovs {fovs!r}: expected comma-separated numbers") from None
+    if not fov_list or not all(0.05 < f < 3.0 for f in fov_list):
+        raise SpecError(f"--fovs {fovs!r}: each field of view must be in (0.05, 3.0) rad")
+    if not 0 < step_m <= 0.005:
+        raise SpecError(f"--step-m {step_m}: expected 0 < step <= 0.005")
+    offsets = np.round(np.arange(-0.03, 0.03 + step_m / 2, step_m), 9)
+    out.mkdir(parents=True, exist_ok=True)
+    geo = sweep(spec, agent, offsets, mode="geometric")
+    ren = sweep(spec, agent, offsets, mode="rendered")
+    with (out / "sweep.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["offset_m", "left", "right", "difference", "left_rendered",
+                    "right_rendered", "difference_rendered"])
+        for i, d in enumerate(offsets):
+            w.writerow([f"{d:.6f}", f"{geo.left[i]:.6f}", f"{geo.right[i]:.6f}",
+                        f"{geo.difference[i]:.6f}", f"{ren.left[i]:.6f}", f"{ren.right[i]:.6f}",
+                        f"{ren.difference[i]:.6f}"])
+    fov_curves = {f: sweep(spec, agent, offsets, fov_rad=f, mode="geometric") for f in fov_list}
+    with (out / "fov_sweep.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["offset_m", *[f"difference_fov_{x:g}" for x in fov_list]])
+        for i, d in enumerate(offsets):
+            w.writerow([f"{d:.6f}", *[f"{fov_curves[x].difference[i]:.6f}" for x in fov_list]])
+    slope, intercept, r2 = geo.fit()
+    rslope, rintercept, rr2 = ren.fit()
+    lines = [f"geometric: y = {slope:.2f} d + {intercept:.4f}  (R^2 {r2:.4f} over |d| <= 8 mm)",
+             f"rendered:  y = {rslope:.2f} d + {rintercept:.4f}  (R^2 {rr2:.4f})",
+             "seed (Eq. 6.12): y = 39.4022 d + 0.0036"]
+    for x in fov_list:
+        s, _, r = fov_curves[x].fit()
+        lines.append(f"fov {x:g} rad: slope {s:.2f} /m, R^2 {r:.3f}")
+    figs = [sensor_sweep(list(offsets), {"left": list(geo.left), "right": list(geo.right),
+                                         "left - right": list(geo.difference),
+                                         "left - right (rendered)": list(ren.difference)},
+                         "camera outputs across the line (fov 1.2 rad)"),
+            sensor_sweep(list(offsets), {f"fov {x:g} rad": list(c.difference)
+                                         for x, c in fov_curves.items()},
+                         "left - right for several fields of view")]
+    html_text = ("<!doctype html><html><head><meta charset='utf-8'><title>line sensor "
+                 "characterisation</title></head><body><h1>Line-sensor characterisation</h1><pre>"
+                 + "\n".join(lines) + "</pre>" + "".join(figs) + "</body></html>\n")
+    (out / "characterisation.html").write_text(html_text, encoding="utf-8")
+    for line in lines:
+        out_console.print(line, highlight=False)
+    out_console.print(f"wrote {out}/sweep.csv, fov_sweep.csv, characterisation.html",
+                      highlight=False)

@@ -1,0 +1,78 @@
+"""`kartci run`: run, record, score and judge scenarios."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from kartci.cli.common import BaselinesOpt, OutOpt, SetOpt, app, baselines_dir, err_console, finish
+from kartci.errors import SpecError
+from kartci.runner.executors import ExecutorKind
+
+
+@app.command()
+def run(
+    names: Annotated[list[str] | None, typer.Argument(
+        help="Scenario names or YAML paths (default: every scenario in scenarios/).")] = None,
+    set_: SetOpt = None,
+    out: OutOpt = Path("reports/latest"),
+    baselines: BaselinesOpt = None,
+    jobs: Annotated[int | None, typer.Option(
+        "--jobs", "-j", help="Runs at once: this process and N-1 worker processes (local), "
+                             "or Ray CPUs [default: 1 local, all cores on Ray].")] = None,
+    shard: Annotated[str | None, typer.Option(
+        help="I/N: run share I of N (labels sorted, dealt round-robin); OUT holds a partial "
+             "result for `kartci merge`.")] = None,
+    executor: Annotated[ExecutorKind, typer.Option(
+        help="local: this process, or a process pool with -j N; ray: one Ray task per run "
+             '(pip install "kartci[ray]").')] = ExecutorKind.LOCAL,
+    ray_address: Annotated[str | None, typer.Option(
+        help="Ray cluster to use (default: start a local Ray instance).")] = None,
+    sweep: Annotated[list[str] | None, typer.Option(
+        help="key=v1,v2,...: one run per value, into OUT/<scenario>@<key>=<value> "
+             "(repeatable: every combination).")] = None,
+    repeat: Annotated[int, typer.Option(
+        help="Run K seeds (seed, seed+1, ...): extra runs in OUT/<scenario>/repeat_<k>/, for "
+             "`kartci compare`.")] = 1,
+    timeout_s: Annotated[float | None, typer.Option(
+        "--timeout-s", help="Wall-clock limit per run, s: a slower run is an error.")] = None,
+) -> None:
+    """Run scenarios, record each as OUT/<scenario>/run.mcap, score and judge them.
+
+    Exit 0 when everything passes, 1 on a regression or failed criterion, 2 on bad input or a
+    run error. Reports: OUT/report.html, summary.md, summary.json, junit.xml.
+    """
+    from kartci.report.progress import ProgressView
+    from kartci.runner import expand, parse_shard, run_jobs
+    from kartci.runner import shard as share
+    from kartci.runner.merge import write_marker
+    from kartci.spec import load_scenario, scenario_names
+
+    if jobs is not None and jobs < 1:
+        raise SpecError(f"--jobs {jobs}: expected 1 or more")
+    if timeout_s is not None and not timeout_s > 0:
+        raise SpecError(f"--timeout-s {timeout_s:g}: expected a positive number of seconds")
+    if ray_address and executor is not ExecutorKind.RAY:
+        raise SpecError("--ray-address needs --executor ray")
+    part = parse_shard(shard) if shard else None
+    selected = names or [n for n in scenario_names() if "tool" not in
+                         load_scenario(n).tags]
+    if not selected:
+        raise SpecError("no scenarios to run: scenarios/ is empty (set KARTCI_ROOT to the "
+                        "project folder)")
+    todo = expand(selected, set_ or [], sweep, repeat)
+    if part is not None:
+        todo = share(todo, *part)
+    out.mkdir(parents=True, exist_ok=True)  # an unusable --out fails here, before any run
+    index, total = part or (None, None)
+    write_marker(out, index, total, [j.label for j in todo if j.repeat == 0])
+    workers = jobs or (os.cpu_count() or 1 if executor is ExecutorKind.RAY else 1)
+    live = err_console.is_terminal and not os.environ.get("CI")
+    with ProgressView(todo, err_console, live) as view:
+        results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
+                           executor=executor, ray_address=ray_address, timeout_s=timeout_s,
+                           on_event=view)
+    finish(results, out, ci=part is None)
