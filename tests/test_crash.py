@@ -42,7 +42,7 @@ def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baseline
 
 def test_nan_state_in_a_pool_and_the_report_is_still_written(tmp_path: Path,
                                                              baselines: Path) -> None:
-    spec = yaml.safe_load((Path(__file__).parents[1] / "scenarios" / "line_straight.yaml")
+    spec = yaml.safe_load((Path(__file__).parents[1] / "kartci" / "data" / "scenarios" / "line_straight.yaml")
                           .read_text())
     spec["agents"]["lt0"]["controller"]["kp"] = float("nan")
     bad = tmp_path / "nan_straight.yaml"

@@ -4,15 +4,17 @@ steering, reverse and emergency stop. One YAML file per controller in models/gok
 from __future__ import annotations
 
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from kartci import project
 from kartci.errors import SpecError
 from kartci.logs.types import header, msg
-from kartci.spec import project_root
+from kartci.project import did_you_mean
 from kartci.spec.models import GokartModel
 from kartci.vehicle import KartInput
 
@@ -49,10 +51,20 @@ class JoyMapping(_M):
 
 @cache
 def load_mapping(name: str) -> JoyMapping:
-    path = project_root() / "models" / "gokart" / "joy" / f"{name}.yaml"
-    if not path.exists():
-        known = sorted(p.stem for p in path.parent.glob("*.yaml"))
-        raise SpecError(f"unknown joystick mapping '{name}' (known: {', '.join(known)})")
+    """A mapping by name (`gokart/joy/<name>.yaml` on the project's model path) or by path to a
+    YAML file."""
+    if name.endswith((".yaml", ".yml")):
+        path = Path(name)
+        if not path.is_file():
+            raise SpecError(f"joystick mapping {name}: file not found")
+    else:
+        proj = project.current()
+        known = sorted({p.stem for folder in proj.model_path
+                        for p in (folder / "gokart" / "joy").glob("*.yaml")})
+        if name not in known:
+            raise SpecError(f"unknown joystick mapping '{name}'{did_you_mean(name, known)}; "
+                            "or give a path to a mapping YAML file")
+        path = proj.model_file(f"gokart/joy/{name}.yaml")
     try:
         return JoyMapping.model_validate(yaml.safe_load(path.read_text(encoding="utf-8")))
     except (ValidationError, yaml.YAMLError) as err:

@@ -8,13 +8,13 @@ from typing import Any
 
 from kartci.errors import LogError
 from kartci.logs import messages, topics
-from kartci.spec import project_root
 from kartci.spec.models import LogSource
 
 
 def resolve(path: str) -> Path:
-    p = Path(path)
-    return p if p.is_absolute() else project_root() / p
+    """Log paths are made absolute when the scenario is loaded; a relative one left over (a
+    scenario built in Python) is relative to the working directory."""
+    return Path(path).resolve()
 
 
 class Recorded:

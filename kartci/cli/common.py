@@ -25,7 +25,8 @@ err_console = Console(stderr=True, width=None if sys.stderr.isatty() else 160)
 
 SetOpt = Annotated[list[str] | None, typer.Option(
     "--set", help="Override a scenario value: dotted.key=value (repeatable).")]
-OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder.")]
+OutOpt = Annotated[Path | None, typer.Option(
+    "--out", "-o", help="Output folder [default: the project's reports/<command>].")]
 BaselinesOpt = Annotated[Path | None, typer.Option(
     help="Folder of baseline files (default: the project's baselines/).")]
 
@@ -36,6 +37,13 @@ def baselines_dir(path: Path | None, must_exist: bool = True) -> Path:
     if path is not None and must_exist and not path.is_dir():
         raise SpecError(f"--baselines {path}: no such folder")
     return path or default_baselines()
+
+
+def out_dir(out: Path | None, name: str) -> Path:
+    """`--out`, or `<the project's reports folder>/<name>`."""
+    from kartci import project
+
+    return out if out is not None else project.current().reports / name
 
 
 def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:

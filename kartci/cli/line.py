@@ -3,19 +3,18 @@
 from __future__ import annotations
 
 import csv
-from pathlib import Path
 from typing import Annotated
 
 import numpy as np
 import typer
 
-from kartci.cli.common import OutOpt, SetOpt, app, out_console
+from kartci.cli.common import OutOpt, SetOpt, app, out_console, out_dir
 from kartci.errors import SpecError
 
 
 @app.command()
 def characterise(
-    out: OutOpt = Path("reports/characterisation"),
+    out: OutOpt = None,
     scenario: Annotated[str, typer.Option(help="Scenario whose robot and world are used.")]
     = "line_straight",
     fovs: Annotated[str, typer.Option(help="Fields of view to compare, rad, comma-separated.")]
@@ -29,6 +28,7 @@ def characterise(
     from kartci.sim.characterise import sweep
     from kartci.spec import load_scenario
 
+    out = out_dir(out, "characterisation")
     spec = load_scenario(scenario, set_ or [])
     agent = next(iter(spec.agents))
     try:

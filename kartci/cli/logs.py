@@ -16,6 +16,7 @@ from kartci.cli.common import (
     err_console,
     finish,
     out_console,
+    out_dir,
 )
 from kartci.errors import SpecError
 
@@ -32,7 +33,7 @@ def replay(
     agent: Annotated[str | None, typer.Option(help="Agent to drive (default: the first).")]
     = None,
     set_: SetOpt = None,
-    out: OutOpt = Path("reports/replay"),
+    out: OutOpt = None,
     baselines: BaselinesOpt = None,
 ) -> None:
     """Run a scenario with a recorded input stream driving one kart: sensor_msgs/Joy through a
@@ -44,6 +45,7 @@ def replay(
     from kartci.spec import load_scenario
     from kartci.spec.models import CommandsController, LogSource, ManualController
 
+    out = out_dir(out, "replay")
     spec = load_scenario(scenario, set_ or [])
     name = agent or next(iter(spec.agents))
     if name not in spec.agents:

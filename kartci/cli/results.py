@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from kartci.cli.common import BaselinesOpt, OutOpt, app, baselines_dir, finish
+from kartci.cli.common import BaselinesOpt, OutOpt, app, baselines_dir, finish, out_dir
 from kartci.errors import SpecError
 
 
@@ -28,7 +28,7 @@ def merge(
 def compare_cmd(
     base: Annotated[Path, typer.Argument(help="The base run's OUT (e.g. the target branch).")],
     head: Annotated[Path, typer.Argument(help="The head run's OUT (e.g. the pull request).")],
-    out: OutOpt = Path("reports/compare"),
+    out: OutOpt = None,
     baselines: BaselinesOpt = None,
     alpha: Annotated[float, typer.Option(
         help="Significance level across --repeat samples (Mann-Whitney U).")] = 0.05,
@@ -40,6 +40,7 @@ def compare_cmd(
     from kartci.report import COMPARE
     from kartci.runner.compare import compare_outs
 
+    out = out_dir(out, "compare")
     if not 0 < alpha < 1:
         raise SpecError(f"--alpha {alpha:g}: expected 0 < alpha < 1")
     finish(compare_outs(base, head, baselines_dir(baselines), alpha), out, COMPARE)

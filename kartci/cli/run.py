@@ -3,12 +3,20 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from kartci.cli.common import BaselinesOpt, OutOpt, SetOpt, app, baselines_dir, err_console, finish
+from kartci.cli.common import (
+    BaselinesOpt,
+    OutOpt,
+    SetOpt,
+    app,
+    baselines_dir,
+    err_console,
+    finish,
+    out_dir,
+)
 from kartci.errors import SpecError
 from kartci.runner.executors import ExecutorKind
 
@@ -18,7 +26,7 @@ def run(
     names: Annotated[list[str] | None, typer.Argument(
         help="Scenario names or YAML paths (default: every scenario in scenarios/).")] = None,
     set_: SetOpt = None,
-    out: OutOpt = Path("reports/latest"),
+    out: OutOpt = None,
     baselines: BaselinesOpt = None,
     jobs: Annotated[int | None, typer.Option(
         "--jobs", "-j", help="Runs at once: this process and N-1 worker processes (local), "
@@ -51,6 +59,7 @@ def run(
     from kartci.runner.merge import write_marker
     from kartci.spec import load_scenario, scenario_names
 
+    out = out_dir(out, "latest")
     if jobs is not None and jobs < 1:
         raise SpecError(f"--jobs {jobs}: expected 1 or more")
     if timeout_s is not None and not timeout_s > 0:

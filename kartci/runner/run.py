@@ -17,13 +17,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from kartci import geometry, metrics
+from kartci import geometry, metrics, project
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
 from kartci.metrics import race
 from kartci.results import Plots, ScenarioResult
 from kartci.sim import simulate
-from kartci.spec import Scenario, project_root
+from kartci.spec import Scenario
 from kartci.spec.models import HallWorld, line_parts
 from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
 
@@ -32,7 +32,8 @@ ERROR_NAME = "error.json"  # marks a scenario whose last run failed (older outpu
 
 
 def default_baselines() -> Path:
-    return project_root() / "baselines"
+    """The active project's baselines folder."""
+    return project.current().baselines
 
 
 def run_one(scenario: Scenario, out: Path,

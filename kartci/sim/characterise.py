@@ -13,8 +13,9 @@ import numpy as np
 from kartci._bullet import pb
 from kartci.sim.line_tracker import LineTracker
 from kartci.sim.sensors import LineCamera
+from kartci.sim.urdf import urdf_path
 from kartci.sim.world import World
-from kartci.spec import Scenario, project_root
+from kartci.spec import Scenario
 from kartci.spec.models import line_parts
 
 
@@ -50,7 +51,7 @@ def sweep(scenario: Scenario, agent: str, offsets_m: np.ndarray, fov_rad: float 
     world = World(scenario.world, scenario.physics.dt_s)
     try:
         robot = LineTracker(world.client, spec, lab,
-                            project_root() / "models" / spec.model.kind, scenario.physics.dt_s)
+                            urdf_path(spec.model).parent, scenario.physics.dt_s)
         camera = LineCamera(world.client, sensor, lab)
         start = robot.state()
         yaw = float(pb.getEulerFromQuaternion(start.quat)[2])

@@ -10,13 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from kartci import geometry
+from kartci import geometry, project
 from kartci.agents import make_agent
 from kartci.logs import McapLogWriter, header, msg
 from kartci.sim.messages import WORLD_FRAME, pose, tf_message
 from kartci.sim.robots import KartRobot, LineTrackerRobot
+from kartci.sim.urdf import urdf_path
 from kartci.sim.world import World
-from kartci.spec import Scenario, project_root
+from kartci.spec import Scenario
 from kartci.spec.models import HallWorld, LineLabWorld, StraightCourse
 from kartci.track import Track, load_track
 
@@ -30,8 +31,9 @@ class RunInfo:
 
 
 def track_path(world: HallWorld) -> Path:
+    """The track file, resolved on the project's world path when the scenario was loaded."""
     p = Path(world.track)
-    return (p if p.is_absolute() else project_root() / "sims" / p).resolve()
+    return p if p.is_absolute() else project.current().world_file(world.track)
 
 
 def track_of(scenario: Scenario) -> Track | None:
@@ -57,7 +59,7 @@ def simulate(scenario: Scenario, log_path: Path,
         for name, spec in scenario.agents.items():
             agent = make_agent(spec, track, obstacles,
                                tuple(n for n in scenario.agents if n != name))
-            model_dir = project_root() / "models" / spec.model.kind
+            model_dir = urdf_path(spec.model).parent
             if isinstance(scenario.world, LineLabWorld):
                 robots.append(LineTrackerRobot(name, spec, world, agent, dt, model_dir,
                                                odom_every, rng))

@@ -7,11 +7,21 @@ import os
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from kartci.errors import SpecError
+
+
+def urdf_path(model: Any) -> Path:
+    """A robot model's URDF: an absolute path as resolved when the scenario was loaded, or a
+    name relative to `<kind>/` on the project's model path."""
+    from kartci import project
+
+    path = Path(str(model.urdf))
+    return path if path.is_absolute() else project.current().model_file(f"{model.kind}/{path}")
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> NDArray[np.float64]:

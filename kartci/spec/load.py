@@ -2,30 +2,27 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
-import os
 from pathlib import Path
 from typing import Any
 
 import yaml
 from pydantic import ValidationError
 
+from kartci import project
 from kartci.errors import SpecError
 from kartci.spec.models import Scenario
 
 
 def project_root() -> Path:
-    """The folder holding scenarios/, sims/, models/ and baselines/ (KARTCI_ROOT overrides)."""
-    env = os.environ.get("KARTCI_ROOT")
-    return Path(env) if env else Path(__file__).resolve().parents[2]
-
-
-def scenario_dir() -> Path:
-    return project_root() / "scenarios"
+    """The active project's root folder (see `kartci.project`)."""
+    return project.current().root
 
 
 def scenario_names() -> list[str]:
-    return sorted(p.stem for p in scenario_dir().glob("*.yaml"))
+    """Every scenario reachable by name: the project's own, then the built-in ones."""
+    return list(project.current().all_scenarios())
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:
@@ -50,30 +47,68 @@ def _read_yaml(path: Path) -> dict[str, Any]:
 
 
 def scenario_path(name: str) -> Path:
-    """A scenario by name (scenarios/NAME.yaml) or by path to a YAML file."""
+    """A scenario by name (on the project's scenario path) or by path to a YAML file."""
     if name.endswith((".yaml", ".yml")) or "/" in name:
         return Path(name)
-    path = scenario_dir() / f"{name}.yaml"
-    if not path.exists():
-        known = ", ".join(scenario_names()) or "none"
-        raise SpecError(f"unknown scenario '{name}' (known: {known}); see `kartci list`")
-    return path
+    return project.current().find_scenario(name)
 
 
 def _resolve_refs(data: dict[str, Any], path: Path) -> None:
-    root = project_root()
+    """World and model names become their files' contents; data files named inside them become
+    absolute paths found on the project's search path (never outside it)."""
+    proj = project.current()
     world = data.get("world")
     if isinstance(world, str):
-        data["world"] = _read_yaml(root / "sims" / f"{world}.yaml")
+        data["world"] = _read_yaml(proj.find_world(world))
     elif isinstance(world, dict) and isinstance(world.get("from"), str):
-        # `world: {from: winti/hall, obstacles: [...]}`: a sims file with keys replaced
-        data["world"] = {**_read_yaml(root / "sims" / f"{world['from']}.yaml"),
+        # `world: {from: winti/hall, obstacles: [...]}`: a world file with keys replaced
+        data["world"] = {**_read_yaml(proj.find_world(world["from"])),
                          **{k: v for k, v in world.items() if k != "from"}}
+    world = data.get("world")
+    if isinstance(world, dict) and isinstance(world.get("track"), str):
+        track = world["track"]
+        if not Path(track).is_absolute():
+            with contextlib.suppress(SpecError):  # may be a command-line path: checked below
+                world["track"] = str(proj.world_file(track))
     agents = data.get("agents")
-    if isinstance(agents, dict):
-        for agent in agents.values():
-            if isinstance(agent, dict) and isinstance(agent.get("model"), str):
-                agent["model"] = _read_yaml(root / "models" / agent["model"] / "params.yaml")
+    if not isinstance(agents, dict):
+        return
+    for agent in agents.values():
+        if not isinstance(agent, dict):
+            continue
+        model = agent.get("model")
+        if isinstance(model, str):
+            params = _read_yaml(proj.find_model(model))
+            urdf = params.get("urdf")
+            if isinstance(urdf, str) and not Path(urdf).is_absolute():
+                params["urdf"] = str(proj.model_file(f"{model}/{urdf}"))
+            agent["model"] = params
+        controller = agent.get("controller")
+        source = controller.get("source") if isinstance(controller, dict) else None
+        if isinstance(source, dict) and isinstance(source.get("log"), str):
+            log = Path(source["log"])
+            if not log.is_absolute():  # relative to the scenario file
+                source["log"] = str((path.parent / log).resolve())
+
+
+def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str]) -> None:
+    """A data path given with `--set` may name any file, relative to the working directory as
+    a user typing it expects; one in a file must be on the project's search path."""
+    keys = {o.partition("=")[0].strip() for o in overrides}
+    world = data.get("world")
+    if isinstance(world, dict) and isinstance(world.get("track"), str):
+        track = Path(world["track"])
+        if not track.is_absolute():
+            if keys & {"world.track", "world"} and track.is_file():
+                world["track"] = str(track.resolve())
+            else:
+                project.current().world_file(str(track))  # raises: not on the search path
+    for agent in (data.get("agents") or {}).values() if isinstance(data.get("agents"),
+                                                                     dict) else ():
+        controller = agent.get("controller") if isinstance(agent, dict) else None
+        source = controller.get("source") if isinstance(controller, dict) else None
+        if isinstance(source, dict) and isinstance(source.get("log"), str):
+            source["log"] = str(Path(source["log"]).resolve())
 
 
 def apply_override(data: dict[str, Any], assignment: str) -> None:
@@ -124,6 +159,7 @@ def load_scenario(name: str, overrides: list[str] | None = None) -> Scenario:
     for assignment in overrides:
         apply_override(data, assignment)
         _resolve_refs(data, path)  # `--set world=line_lab/circle` names a file too
+    _resolve_command_line_paths(data, overrides)
     try:
         return Scenario.model_validate(data)
     except ValidationError as err:
@@ -142,10 +178,12 @@ def json_schema() -> dict[str, Any]:
     """JSON Schema of a scenario file; `world` and `model` may also name a file by string."""
     schema = Scenario.model_json_schema()
     props = schema["properties"]
-    props["world"] = {"anyOf": [{"type": "string", "description": "sims/<name>.yaml"},
+    props["world"] = {"anyOf": [{"type": "string",
+                                 "description": "a world on the project's world path"},
                                 props["world"]]}
     agent = schema["$defs"]["AgentSpec"]["properties"]
-    agent["model"] = {"anyOf": [{"type": "string", "description": "models/<name>/params.yaml"},
+    agent["model"] = {"anyOf": [{"type": "string",
+                                 "description": "a robot model on the model path"},
                                 agent["model"]]}
     schema["required"] = [r for r in schema.get("required", []) if r != "name"]
     return schema

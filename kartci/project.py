@@ -1,0 +1,203 @@
+"""The user's project: where its scenarios, worlds, robot models and baselines live.
+
+kartci finds its project the way pytest finds its rootdir: the nearest folder, from the working
+directory up, holding a `kartci.toml` or a `pyproject.toml` with a `[tool.kartci]` table.
+`KARTCI_ROOT` names the folder directly. Without either, the working directory is the project
+(with the default folder names). Data files are looked up in the project's folders first, then
+in the built-in data shipped inside the package (`kartci/data/`), so an empty project can still
+run the built-in line tracker and go-kart.
+"""
+
+from __future__ import annotations
+
+import difflib
+import os
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from kartci.errors import SpecError
+
+BUILTIN = Path(__file__).resolve().parent / "data"
+CONFIG_NAMES = ("kartci.toml", "pyproject.toml")
+
+
+class ProjectConfig(BaseModel):
+    """`[tool.kartci]` in pyproject.toml, or the whole of kartci.toml. Paths are relative to
+    the file's folder."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    scenarios: tuple[str, ...] = Field(("scenarios",), description="folders of scenario YAML")
+    worlds: tuple[str, ...] = Field(("worlds",), description="folders of world YAML and tracks")
+    models: tuple[str, ...] = Field(("models",), description="folders of robot models: "
+                                    "<name>/params.yaml with its URDF")
+    baselines: str = Field("baselines", description="folder of baseline files")
+    reports: str = Field("reports", description="folder for run outputs")
+    plugins: tuple[str, ...] = Field((), description="Python modules to import for their "
+                                     "controllers, robots, worlds and metrics")
+    builtin_scenarios: bool = Field(False, description="run kartci's built-in scenarios too "
+                                    "when `kartci run` is given no names")
+
+
+@dataclass(frozen=True)
+class Project:
+    """Where things are; a plain value, so it travels to worker processes and Ray tasks."""
+
+    root: Path
+    config_file: Path | None
+    scenarios: tuple[Path, ...]
+    worlds: tuple[Path, ...]
+    models: tuple[Path, ...]
+    baselines: Path
+    reports: Path
+    plugins: tuple[str, ...] = ()
+    builtin_scenarios: bool = False
+
+    @property
+    def scenario_path(self) -> tuple[Path, ...]:
+        """Scenario folders in search order: the project's own, then the built-in ones."""
+        return _unique((*self.scenarios, BUILTIN / "scenarios"))
+
+    @property
+    def world_path(self) -> tuple[Path, ...]:
+        return _unique((*self.worlds, BUILTIN / "worlds"))
+
+    @property
+    def model_path(self) -> tuple[Path, ...]:
+        return _unique((*self.models, BUILTIN / "models"))
+
+    def own_scenarios(self) -> list[Path]:
+        """The project's own scenario files (and the built-in ones when asked for), by name;
+        a name found twice is taken from the first folder."""
+        folders = self.scenario_path if self.builtin_scenarios else _unique(self.scenarios)
+        return list(_yaml_files(folders).values())
+
+    def all_scenarios(self) -> dict[str, Path]:
+        """Every scenario reachable by name: the project's, then the built-in ones."""
+        return _yaml_files(self.scenario_path)
+
+    def find_scenario(self, name: str) -> Path:
+        known = self.all_scenarios()
+        if name in known:
+            return known[name]
+        raise SpecError(f"unknown scenario '{name}'{did_you_mean(name, known)}; "
+                        "see `kartci list`")
+
+    def find_world(self, name: str) -> Path:
+        """`winti/hall` -> the first `<world folder>/winti/hall.yaml` on the search path."""
+        return self._find(self.world_path, f"{name}.yaml", f"world '{name}'")
+
+    def find_model(self, name: str) -> Path:
+        """`gokart` -> the first `<model folder>/gokart/params.yaml` on the search path."""
+        return self._find(self.model_path, f"{name}/params.yaml", f"robot model '{name}'")
+
+    def world_file(self, rel: str) -> Path:
+        """A data file named relative to the world folders (a track CSV, a mesh)."""
+        return self._find(self.world_path, rel, f"world data file '{rel}'")
+
+    def model_file(self, rel: str) -> Path:
+        """A data file named relative to the model folders (a URDF, a joystick mapping)."""
+        return self._find(self.model_path, rel, f"model data file '{rel}'")
+
+    @staticmethod
+    def _find(path: tuple[Path, ...], rel: str, what: str) -> Path:
+        if Path(rel).is_absolute() or ".." in Path(rel).parts:
+            raise SpecError(f"{what}: expected a name relative to the search path "
+                            "(no absolute path, no '..')")
+        for folder in path:
+            candidate = folder / rel
+            if candidate.is_file():
+                return candidate
+        where = ", ".join(str(p) for p in path)
+        raise SpecError(f"{what} not found (searched {where})")
+
+
+def _unique(paths: tuple[Path, ...]) -> tuple[Path, ...]:
+    seen: dict[Path, None] = {}
+    for p in paths:
+        seen.setdefault(p.resolve(), None)
+    return tuple(seen)
+
+
+def _yaml_files(folders: tuple[Path, ...]) -> dict[str, Path]:
+    out: dict[str, Path] = {}
+    for folder in folders:
+        if not folder.is_dir():
+            continue
+        for p in sorted(folder.glob("*.yaml")):
+            out.setdefault(p.stem, p)
+    return dict(sorted(out.items()))
+
+
+def did_you_mean(name: str, known: object) -> str:
+    """' (did you mean 'x'?)' for a near miss, else the list of known names."""
+    names = sorted(str(k) for k in known)  # type: ignore[attr-defined]
+    close = difflib.get_close_matches(name, names, n=1)
+    if close:
+        return f" (did you mean '{close[0]}'?)"
+    shown = ", ".join(names[:20]) + (", ..." if len(names) > 20 else "")
+    return f" (known: {shown or 'none'})"
+
+
+def _config_in(folder: Path) -> tuple[Path, dict[str, object]] | None:
+    """The kartci table of a folder's kartci.toml or pyproject.toml, if it has one."""
+    for name in CONFIG_NAMES:
+        path = folder / name
+        if not path.is_file():
+            continue
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
+            raise SpecError(f"{path}: cannot read ({err})") from err
+        if name == "kartci.toml":
+            return path, data
+        tool = data.get("tool")
+        if isinstance(tool, dict) and isinstance(tool.get("kartci"), dict):
+            return path, tool["kartci"]
+    return None
+
+
+def find_project(start: Path | None = None) -> Project:
+    """The project for a working directory (default: the current one); KARTCI_ROOT wins."""
+    env = os.environ.get("KARTCI_ROOT")
+    if env:
+        root = Path(env).resolve()
+        if not root.is_dir():
+            raise SpecError(f"KARTCI_ROOT={env}: no such folder")
+        found = _config_in(root)
+    else:
+        here = (start or Path.cwd()).resolve()
+        found, root = None, here
+        for folder in (here, *here.parents):
+            found = _config_in(folder)
+            if found is not None:
+                root = folder
+                break
+    path, table = found if found is not None else (None, {})
+    try:
+        cfg = ProjectConfig.model_validate(table)
+    except ValidationError as err:
+        first = err.errors()[0]
+        key = ".".join(str(p) for p in first["loc"])
+        raise SpecError(f"{path}: [tool.kartci] {key}: {first['msg']}") from err
+    return Project(root, path, tuple(root / s for s in cfg.scenarios),
+                   tuple(root / w for w in cfg.worlds), tuple(root / m for m in cfg.models),
+                   root / cfg.baselines, root / cfg.reports, cfg.plugins, cfg.builtin_scenarios)
+
+
+_CURRENT: Project | None = None
+
+
+def current() -> Project:
+    """The active project: one set by `activate` (a worker given its parent's project), else
+    the one found from the working directory."""
+    return _CURRENT if _CURRENT is not None else find_project()
+
+
+def activate(project: Project | None) -> None:
+    """Make `project` the active one in this process (None: find it from the working dir)."""
+    global _CURRENT
+    _CURRENT = project
