@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from kartci.sim import lidar, simulate
+from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
-from kartci.sim.world import World
 from kartci.spec import load_scenario
 from kartci.spec.models import HallWorld
 

@@ -30,8 +30,8 @@ def setup_times() -> None:
         first = get_solver(spec)  # type: ignore[arg-type]
         cached = [get_solver(spec).setup_s for _ in range(5)]  # type: ignore[arg-type]
         del os.environ["KARTCI_CACHE_DIR"]
-    n = spec.horizon_steps  # type: ignore[union-attr]
-    step = spec.step_s  # type: ignore[union-attr]
+    n = spec.horizon_steps  # type: ignore[attr-defined]
+    step = spec.step_s  # type: ignore[attr-defined]
     print(f"horizon: {n} steps x {step} s = {n * step:.2f} s")
     print(f"first run (generate C + compile): {first.setup_s:.1f} s (aim < 60 s)")
     print(f"cached start (load the binary): median {np.median(cached) * 1e3:.0f} ms "

@@ -78,6 +78,10 @@ def parse_csv(path: Path, text: str | None = None) -> Array:
     return rows
 
 
+TRACK_TOPIC = "/kartci/track"  # std_msgs/String: the track CSV, published at t = 0
+OBSTACLES_TOPIC = "/kartci/obstacles"  # visualization_msgs/MarkerArray: boxes, at t = 0
+
+
 @cache
 def load_track(path: Path) -> Track:
     return track_from_rows(parse_csv(path), path)

@@ -14,7 +14,7 @@ from kartci.report import COMPARE, write_all
 from kartci.runner import expand, run_jobs
 from kartci.runner.compare import compare_outs
 
-QUICK = ["duration_s=3", "criteria={}", "metrics.transient_s=1"]
+QUICK = ["duration_s=3", "criteria={}", "metrics.line_tracking.transient_s=1"]
 PLOTS = """JSON.stringify([...document.querySelectorAll('svg')].map(s => {
   const r = s.getBoundingClientRect();
   return [r.width, r.height, s.querySelectorAll('path, use').length];

@@ -11,7 +11,12 @@ from pathlib import Path
 
 import pytest
 
-SHORT = ["--set", "duration_s=6", "--set", "criteria={}", "--set", "metrics.transient_s=2"]
+from kartci.project import BUILTIN
+
+SCENARIOS = BUILTIN / "scenarios"
+
+SHORT = ["--set", "duration_s=6", "--set", "criteria={}",
+         "--set", "metrics.line_tracking.transient_s=2"]
 
 
 def kartci(*args: str | Path, cwd: Path | None = None,
@@ -160,7 +165,7 @@ def test_bad_inputs_found_in_review_are_one_line_each(tmp_path: Path) -> None:
     assert "no such folder" in _one_clean_line(kartci("report", tmp_path, "--baselines",
                                                       tmp_path / "typo"))
     crit = tmp_path / "crit.yaml"
-    crit.write_text((Path(__file__).parents[1] / "kartci" / "data" / "scenarios" / "line_straight.yaml").read_text()
+    crit.write_text((SCENARIOS / "line_straight.yaml").read_text()
                     + "\n" + "tags: []\n")
     assert "unknown metrics: cross_track_maxx_m" in _one_clean_line(kartci(
         "run", crit, "--set", "criteria={cross_track_maxx_m: {max: 1}}", "--out", tmp_path / "o"))

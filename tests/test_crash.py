@@ -12,10 +12,13 @@ from test_parallel import PAIR, QUICK
 
 from kartci.agents.base import Outbox
 from kartci.agents.line_pid import LinePid
+from kartci.project import BUILTIN
 from kartci.report import write_all
 from kartci.results import exit_code
 from kartci.runner import expand, run_jobs
 from kartci.verdict import Status
+
+SCENARIOS = BUILTIN / "scenarios"
 
 
 def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baselines: Path,
@@ -28,7 +31,7 @@ def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baseline
         return real(self, t_ns)
 
     monkeypatch.setattr(LinePid, "step", step)
-    jobs = expand(PAIR, ["duration_s=2", "criteria={}", "metrics.transient_s=0.5"])
+    jobs = expand(PAIR, ["duration_s=2", "criteria={}", "metrics.line_tracking.transient_s=0.5"])
     results = {r.name: r for r in run_jobs(jobs, tmp_path, baselines)}
     assert results["line_straight"].status is Status.ERROR
     assert "ZeroDivisionError: controller bug" in (results["line_straight"].error or "")
@@ -42,7 +45,7 @@ def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baseline
 
 def test_nan_state_in_a_pool_and_the_report_is_still_written(tmp_path: Path,
                                                              baselines: Path) -> None:
-    spec = yaml.safe_load((Path(__file__).parents[1] / "kartci" / "data" / "scenarios" / "line_straight.yaml")
+    spec = yaml.safe_load((SCENARIOS / "line_straight.yaml")
                           .read_text())
     spec["agents"]["lt0"]["controller"]["kp"] = float("nan")
     bad = tmp_path / "nan_straight.yaml"

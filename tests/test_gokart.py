@@ -12,8 +12,8 @@ from kartci._bullet import pb
 from kartci.metrics import compute
 from kartci.sim import lidar, simulate
 from kartci.sim.gokart import Gokart
+from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
-from kartci.sim.world import World
 from kartci.spec import load_scenario, project_root
 from kartci.spec.models import GokartModel, HallWorld
 from kartci.vehicle import KartInput, wheel_angles

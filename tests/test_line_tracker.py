@@ -10,8 +10,8 @@ import pytest
 
 from kartci.metrics import compute
 from kartci.sim import simulate
+from kartci.sim.line_lab import LineLab as World
 from kartci.sim.line_tracker import LineTracker
-from kartci.sim.world import World
 from kartci.spec import load_scenario, project_root
 
 DT = 0.002

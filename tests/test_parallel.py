@@ -13,7 +13,8 @@ from kartci.errors import SpecError
 from kartci.runner import expand, parse_shard, shard
 from kartci.runner.merge import merge
 
-QUICK = ["--set", "duration_s=3", "--set", "criteria={}", "--set", "metrics.transient_s=1"]
+QUICK = ["--set", "duration_s=3", "--set", "criteria={}",
+         "--set", "metrics.line_tracking.transient_s=1"]
 PAIR = ["line_straight", "line_circle"]
 
 

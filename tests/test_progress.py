@@ -14,7 +14,7 @@ from kartci.runner import Event, EventKind, Outcome, expand, run_jobs
 
 def test_pool_workers_report_start_sim_time_and_end(tmp_path: Path, baselines: Path) -> None:
     events: list[Event] = []
-    jobs = expand(PAIR, ["duration_s=2.5", "criteria={}", "metrics.transient_s=0.5"])
+    jobs = expand(PAIR, ["duration_s=2.5", "criteria={}", "metrics.line_tracking.transient_s=0.5"])
     run_jobs(jobs, tmp_path, baselines, workers=2, on_event=events.append)
     for name in PAIR:
         mine = [e for e in events if e.folder == name]

@@ -48,7 +48,7 @@ def test_characterisation_matches_seed_slope_and_linear_range(geometric_and_rend
 def test_each_camera_dims_over_the_line_and_sees_white_far_away(geometric_and_rendered: Pair
                                                                 ) -> None:
     geo, _ = geometric_and_rendered
-    light = load_scenario("line_straight").world.light_level  # type: ignore[union-attr]
+    light = load_scenario("line_straight").world.light_level  # type: ignore[attr-defined]
     assert geo.left[0] == pytest.approx(light) and geo.right[-1] == pytest.approx(light)
     assert geo.left.min() < 0.5 * light
     # the two cameras are 0.01 m apart: their curves are shifted copies of each other

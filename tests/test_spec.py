@@ -23,7 +23,7 @@ def test_set_overrides_any_value() -> None:
     ctrl = spec.agents["lt0"].controller
     assert isinstance(ctrl, LinePidController)
     assert (ctrl.period_s, ctrl.kp, spec.seed) == (0.06, 20.0, 7)
-    assert spec.world.course.radius_m == 0.8  # type: ignore[union-attr]
+    assert spec.world.course.radius_m == 0.8  # type: ignore[attr-defined]
 
 
 def test_unknown_set_key_names_the_key() -> None:

@@ -7,8 +7,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from kartci.metrics import line_metrics
+from kartci.metrics.line import line_metrics
 from kartci.spec import Criterion, load_scenario
+from kartci.spec.models import LineMetricsParams
 from kartci.verdict import Status, check_criteria, compare, update
 from kartci.verdict import load as load_baseline
 
@@ -59,15 +60,15 @@ def test_update_keeps_hand_tolerance_but_replaces_one_set_on_a_null(tmp_path: Pa
 
 def test_circle_completion_counts_one_lap_from_any_start() -> None:
     spec = load_scenario("line_circle", ["agents.lt0.start.along_m=2.0"])
-    r = spec.world.course.radius_m  # type: ignore[union-attr]
+    r = spec.world.course.radius_m  # type: ignore[attr-defined]
     import numpy as np
 
     a0 = -np.pi / 2 + 2.0 / r
     a = a0 + np.linspace(0, 2 * np.pi * 1.01, 400)
-    lever = spec.agents["lt0"].model.sensor_point_x_m  # type: ignore[union-attr]
+    lever = spec.agents["lt0"].model.sensor_point_x_m  # type: ignore[attr-defined]
     yaw = a + np.pi / 2
     odom = pd.DataFrame({"t": np.linspace(0, 30, 400), "x": r * np.cos(a) - lever * np.cos(yaw),
                          "y": r * np.sin(a) - lever * np.sin(yaw), "yaw": yaw, "vx": 0.1})
-    m = {x.name: x for x in line_metrics(spec, "lt0", odom)}
+    m = {x.name: x for x in line_metrics(spec, "lt0", odom, LineMetricsParams())}
     assert m["completion"].value == pytest.approx(1.0)
     assert m["line_lost"].value == 0

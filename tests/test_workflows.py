@@ -76,7 +76,7 @@ def _project(tmp_path: Path) -> Path:
     for name in PAIR:
         spec = yaml.safe_load((ROOT / "kartci" / "data" / "scenarios" / f"{name}.yaml")
                               .read_text())
-        spec.update(duration_s=3.0, criteria={}, metrics={"transient_s": 1.0})
+        spec.update(duration_s=3.0, criteria={}, metrics={"line_tracking": {"transient_s": 1.0}})
         (proj / "scenarios" / f"{name}.yaml").write_text(yaml.safe_dump(spec))
     return proj
 

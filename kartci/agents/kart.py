@@ -12,6 +12,7 @@ from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command, load_mapping, to_command, to_joy
 from kartci.agents.source import Recorded
 from kartci.logs.types import header, msg, yaw_of
+from kartci.plugins import AgentContext
 from kartci.spec.models import (
     CommandsController,
     GokartModel,
@@ -19,12 +20,17 @@ from kartci.spec.models import (
     ManualController,
     ScriptController,
 )
-from kartci.track import Track
+from kartci.track import TRACK_TOPIC, Track, track_from_text
 from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle
 
 JOY = ("sensor_msgs/msg/Joy",)
 COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",
             "geometry_msgs/msg/Twist")
+
+
+def _kart(ctx: AgentContext) -> GokartModel:
+    assert isinstance(ctx.model, GokartModel)  # Controller.build checked the robot kind
+    return ctx.model
 
 
 class ManualAgent:
@@ -33,8 +39,8 @@ class ManualAgent:
 
     inputs: tuple[str, ...] = ()
 
-    def __init__(self, spec: ManualController, model: GokartModel) -> None:
-        self.period_s, self.model = spec.period_s, model
+    def __init__(self, spec: ManualController, ctx: AgentContext) -> None:
+        self.period_s, self.model = spec.period_s, _kart(ctx)
         self.mapping = load_mapping(spec.mapping)
         self.source = Recorded(spec.source, JOY)
         self._last = -1
@@ -71,8 +77,8 @@ class CommandsAgent:
 
     inputs: tuple[str, ...] = ("odom",)
 
-    def __init__(self, spec: CommandsController, model: GokartModel) -> None:
-        self.spec, self.model, self.period_s = spec, model, spec.period_s
+    def __init__(self, spec: CommandsController, ctx: AgentContext) -> None:
+        self.spec, self.model, self.period_s = spec, _kart(ctx), spec.period_s
         self.source = Recorded(spec.source, COMMANDS)
         self._v = 0.0
 
@@ -99,7 +105,7 @@ class CommandsAgent:
 class ScriptAgent:
     inputs: tuple[str, ...] = ()
 
-    def __init__(self, spec: ScriptController) -> None:
+    def __init__(self, spec: ScriptController, ctx: AgentContext) -> None:
         self.steps = sorted(spec.steps, key=lambda s: s.t_s)
         self.period_s = spec.period_s
 
@@ -120,21 +126,24 @@ class JoyDriver:
     curvature ahead, and who only touches the joystick: its Joy messages go through the same
     mapping as the manual agent's, so replaying them reproduces the drive."""
 
-    inputs: tuple[str, ...] = ("odom",)
+    inputs: tuple[str, ...] = ("odom", TRACK_TOPIC)
 
-    def __init__(self, spec: JoyDriverController, model: GokartModel, track: Track) -> None:
-        self.spec, self.model, self.track, self.period_s = spec, model, track, spec.period_s
+    def __init__(self, spec: JoyDriverController, ctx: AgentContext) -> None:
+        self.spec, self.model, self.period_s = spec, _kart(ctx), spec.period_s
         self.mapping = load_mapping(spec.mapping)
         self._pose: tuple[float, float, float, float] | None = None
+        self.track: Track | None = None
 
     def on_message(self, topic: str, message: Any) -> None:
-        if topic == "odom":
+        if topic == TRACK_TOPIC:
+            self.track = track_from_text(message.data, TRACK_TOPIC)
+        elif topic == "odom":
             p, q = message.pose.pose.position, message.pose.pose.orientation
             yaw = yaw_of(q)
             self._pose = (p.x, p.y, yaw, float(message.twist.twist.linear.x))
 
     def step(self, t_ns: int) -> Outbox:
-        if self._pose is None:
+        if self._pose is None or self.track is None:
             return []
         x, y, yaw, v = self._pose
         sp = self.spec

@@ -9,6 +9,7 @@ import numpy as np
 
 from kartci.agents.base import Outbox
 from kartci.logs.types import header, msg
+from kartci.plugins import AgentContext
 from kartci.spec.models import LinePidController, LineTrackerModel
 
 
@@ -22,8 +23,9 @@ class LinePid:
 
     inputs: tuple[str, ...] = ("line_sensor", "sonar")
 
-    def __init__(self, spec: LinePidController, model: LineTrackerModel) -> None:
-        self.spec, self.model = spec, model
+    def __init__(self, spec: LinePidController, ctx: AgentContext) -> None:
+        assert isinstance(ctx.model, LineTrackerModel)  # Controller.build checked the kind
+        self.spec, self.model = spec, ctx.model
         self.period_s = spec.period_s
         self._left = self._right = 0.0
         self._range = math.inf

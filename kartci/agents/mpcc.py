@@ -14,23 +14,28 @@ from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command
 from kartci.logs.types import header, msg, yaw_of
 from kartci.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
-from kartci.spec.models import Box, GokartModel, MpccController
-from kartci.track import Track
+from kartci.plugins import AgentContext
+from kartci.spec.models import GokartModel, MpccController
+from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
 from kartci.vehicle import KartInput, column_for_wheel_angle, wheel_angles
 
 MAP_FRAME = "map"
 
 
 class MpccAgent:
-    def __init__(self, spec: MpccController, model: GokartModel, track: Track,
-                 obstacles: tuple[Box, ...] = (), other_karts: tuple[str, ...] = ()) -> None:
-        self.spec, self.model, self.track, self.period_s = spec, model, track, spec.period_s
-        self.mpcc = Mpcc(spec, model, track)
-        self.static = [obstacle_from_xy(track, b.center_m[0], b.center_m[1],
-                                        0.5 * math.hypot(b.size_m[0], b.size_m[1]))
-                       for b in obstacles]
-        self.others = {f"/{name}/odom": name for name in other_karts}
-        self.inputs = (spec.state_topic, "joint_states", *self.others)
+    """Built on the track it is sent (`/kartci/track`, at t = 0); static obstacles come as
+    boxes on `/kartci/obstacles`, other karts from their odometry."""
+
+    def __init__(self, spec: MpccController, ctx: AgentContext) -> None:
+        assert isinstance(ctx.model, GokartModel)  # Controller.build checked the robot kind
+        self.spec, self.model, self.period_s = spec, ctx.model, spec.period_s
+        self.track: Track | None = None
+        self.mpcc: Mpcc | None = None
+        self.static: list[Obstacle] = []
+        self._boxes: list[tuple[float, float, float]] = []  # centre x, y and radius, m
+        self.others = {f"/{name}/odom": name for name in ctx.others}
+        self.inputs = (TRACK_TOPIC, OBSTACLES_TOPIC, spec.state_topic, "joint_states",
+                       *self.others)
         self._state: np.ndarray | None = None  # [X, Y, psi, vx, vy, r] of the CoG
         self._delta = 0.0
         self._accel = 0.0
@@ -38,6 +43,17 @@ class MpccAgent:
         self._karts: dict[str, tuple[float, float, float, float]] = {}
 
     def on_message(self, topic: str, message: Any) -> None:
+        if topic == TRACK_TOPIC:
+            self.track = track_from_text(message.data, TRACK_TOPIC)
+            self.mpcc = Mpcc(self.spec, self.model, self.track)
+            self._place_obstacles()
+            return
+        if topic == OBSTACLES_TOPIC:
+            self._boxes = [(float(m.pose.position.x), float(m.pose.position.y),
+                            0.5 * math.hypot(float(m.scale.x), float(m.scale.y)))
+                           for m in message.markers]
+            self._place_obstacles()
+            return
         if topic == "joint_states":
             names = list(message.name)
             if "steering_column" in names:
@@ -54,7 +70,12 @@ class MpccAgent:
         elif topic in self.others:
             self._karts[topic] = (x, y, yaw, vx)
 
+    def _place_obstacles(self) -> None:
+        if self.track is not None:
+            self.static = [obstacle_from_xy(self.track, x, y, r) for x, y, r in self._boxes]
+
     def _obstacles(self) -> list[Obstacle]:
+        assert self.track is not None
         out = list(self.static)
         radius = 0.5 * self.spec.kart_width_m
         for x, y, yaw, v in self._karts.values():
@@ -66,7 +87,7 @@ class MpccAgent:
         return out
 
     def step(self, t_ns: int) -> Outbox:
-        if self._state is None:
+        if self._state is None or self.mpcc is None or self.track is None:
             return []
         st = self._state
         proj = float(self.track.project(st[None, :2])[0][0])
@@ -101,5 +122,6 @@ class MpccAgent:
     def _stats(self, plan: Plan, t_ns: int) -> Any:
         return msg("kartci_msgs/msg/SolverStats", header=header(t_ns, MAP_FRAME),
                    success=plan.success, status=plan.status, solve_ms=plan.solve_ms,
-                   iterations=plan.iterations, cost=plan.cost, failures=self.mpcc.failures,
+                   iterations=plan.iterations, cost=plan.cost,
+                   failures=self.mpcc.failures if self.mpcc else 0,
                    max_slack_m=plan.max_slack_m)

@@ -53,11 +53,12 @@ def run(
     Exit 0 when everything passes, 1 on a regression or failed criterion, 2 on bad input or a
     run error. Reports: OUT/report.html, summary.md, summary.json, junit.xml.
     """
+    from kartci import project
     from kartci.report.progress import ProgressView
     from kartci.runner import expand, parse_shard, run_jobs
     from kartci.runner import shard as share
     from kartci.runner.merge import write_marker
-    from kartci.spec import load_scenario, scenario_names
+    from kartci.spec import load_scenario
 
     out = out_dir(out, "latest")
     if jobs is not None and jobs < 1:
@@ -67,11 +68,13 @@ def run(
     if ray_address and executor is not ExecutorKind.RAY:
         raise SpecError("--ray-address needs --executor ray")
     part = parse_shard(shard) if shard else None
-    selected = names or [n for n in scenario_names() if "tool" not in
-                         load_scenario(n).tags]
+    proj = project.current()
+    selected = names or [p.stem for p in proj.own_scenarios()
+                         if "tool" not in load_scenario(p.stem).tags]
     if not selected:
-        raise SpecError("no scenarios to run: scenarios/ is empty (set KARTCI_ROOT to the "
-                        "project folder)")
+        where = ", ".join(str(p) for p in proj.scenarios)
+        raise SpecError(f"no scenarios to run: none in {where}; name one (`kartci list` shows "
+                        "the built-in ones) or create a project with `kartci init`")
     todo = expand(selected, set_ or [], sweep, repeat)
     if part is not None:
         todo = share(todo, *part)

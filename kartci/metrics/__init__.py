@@ -1,22 +1,85 @@
-"""Metrics: functions from a run log to named numbers with units. Never touches the simulator."""
+"""Metrics: functions from a run log to named numbers with units. Never touches the simulator.
+
+Which metric sets run for an agent: its robot kind's own sets, then those the scenario names
+under `metrics:`; each set is a registered `MetricSet` (see `kartci.plugins`)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import pandas as pd
 
+from kartci import plugins
 from kartci.errors import LogError
 from kartci.logs import tables
-from kartci.metrics import race
-from kartci.metrics.base import DEFS, Direction, Metric, MetricDef
-from kartci.metrics.kart import kart_metrics, kart_track
-from kartci.metrics.line import line_metrics, sensor_track
+from kartci.metrics.base import Direction, Metric, MetricDef
 from kartci.spec import Scenario, scenario_from_json
-from kartci.spec.models import HallWorld
-from kartci.track import Track, track_from_text
+from kartci.spec.models import MetricParams
+from kartci.track import TRACK_TOPIC, Track, track_from_text
+
+T = TypeVar("T")
+
+
+@dataclass
+class ScoreContext:
+    """One agent's view of a run log, and a cache shared by all agents of that log (so a
+    derived table, say every kart's path along the track, is computed once)."""
+
+    scenario: Scenario
+    tables: Mapping[str, pd.DataFrame]
+    path: Path
+    agent: str
+    cache: dict[str, Any] = field(default_factory=dict)
+
+    def table(self, topic: str) -> pd.DataFrame | None:
+        """A topic's table (relative topics are in the agent's namespace), or None."""
+        full = topic if topic.startswith("/") else f"/{self.agent}/{topic}"
+        return self.tables.get(full)
+
+    @property
+    def odom(self) -> pd.DataFrame:
+        odom = self.table("odom")
+        if odom is None or odom.empty:
+            raise LogError(f"{self.path}: no /{self.agent}/odom messages")
+        return odom
+
+    def shared(self, key: str, make: Callable[[], T]) -> T:
+        if key not in self.cache:
+            self.cache[key] = make()
+        value: T = self.cache[key]
+        return value
+
+    def params(self, mset: plugins.MetricSet) -> Any:
+        """The set's parameters from the scenario, else its defaults."""
+        given = self.scenario.metrics.get(mset.name)
+        if given is not None:
+            return given
+        return mset.params() if mset.params is not None else MetricParams()
+
+
+def definitions() -> dict[str, MetricDef]:
+    """Every registered metric's definition by name."""
+    out: dict[str, MetricDef] = {}
+    for mset in plugins.METRICS.all():
+        for name, d in mset.defs.items():
+            out.setdefault(name, d)
+    return out
+
+
+def definition(name: str) -> MetricDef | None:
+    """The definition of a metric (`name` or `agent.name`), or None for an unknown one."""
+    return definitions().get(name.rsplit(".", 1)[-1])
+
+
+def metric_sets(scenario: Scenario, agent: str) -> list[plugins.MetricSet]:
+    """The sets computed for one agent: its robot kind's, then the scenario's, once each."""
+    kind = scenario.agents[agent].model.kind
+    names = [*plugins.ROBOTS.get(kind).metrics, *scenario.metrics]
+    sets = [plugins.METRICS.get(n) for n in dict.fromkeys(names)]
+    return [s for s in sets if not s.robots or kind in s.robots]
 
 
 def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
@@ -26,63 +89,29 @@ def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
     return scenario_from_json(str(table["data"].iloc[0]))
 
 
+def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
+    table = log_tables.get(TRACK_TOPIC)
+    if table is None or getattr(table, "empty", True):
+        raise LogError(f"{path}: no {TRACK_TOPIC} message; cannot score laps")
+    return track_from_text(str(table["data"].iloc[0]), "recorded track")
+
+
 def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
     """All metrics of a run log, keyed by name (single agent) or `agent.name` (several)."""
     log_tables = tables(log_path)
     scenario = recorded_scenario(log_tables, log_path)
-    out: dict[str, Metric] = {}
     many = len(scenario.agents) > 1
-    track = recorded_track(log_tables, log_path) if isinstance(scenario.world, HallWorld) else None
-    odoms = {}
-    for agent in scenario.agents:
-        odom = log_tables.get(f"/{agent}/odom")
-        if odom is None or odom.empty:
-            raise LogError(f"{log_path}: no /{agent}/odom messages")
-        odoms[agent] = odom
-    # each kart's path along the track and footprints, once: every agent's metrics use them
-    paths = {a: kart_track(track, o) for a, o in odoms.items()} if track is not None else {}
-    rects = {a: race.kart_rects(o) for a, o in odoms.items()} if track is not None else {}
-    for agent, odom in odoms.items():
-        if track is None:
-            values = line_metrics(scenario, agent, odom)
-        else:
-            values = kart_metrics(scenario, agent, track, paths[agent],
-                                  log_tables.get(f"/{agent}/collision"))
-            values += race_metrics(scenario, agent, paths, rects,
-                                   log_tables.get(f"/{agent}/mpcc/stats"))
-        for m in values:
-            out[f"{agent}.{m.name}" if many else m.name] = m
+    cache: dict[str, Any] = {}
+    contexts = [ScoreContext(scenario, log_tables, log_path, a, cache) for a in scenario.agents]
+    for ctx in contexts:
+        ctx.odom  # noqa: B018  (every agent must have odometry: fail before scoring any)
+    out: dict[str, Metric] = {}
+    for ctx in contexts:
+        for mset in metric_sets(scenario, ctx.agent):
+            for m in mset.compute(ctx, ctx.params(mset)):
+                out[f"{ctx.agent}.{m.name}" if many else m.name] = m
     return scenario, out
 
 
-def race_metrics(scenario: Scenario, agent: str, paths: Mapping[str, pd.DataFrame],
-                 rects: Mapping[str, list[race.Rect]],
-                 stats: pd.DataFrame | None) -> list[Metric]:
-    """Clearance, overtakes and solver statistics, where the run has what they need."""
-    world = scenario.world
-    assert isinstance(world, HallWorld)
-    others = [n for n in paths if n != agent]
-    out = []
-    if world.obstacles or others:
-        gap = race.min_clearance_m(rects[agent], world.obstacles, [rects[n] for n in others])
-        out.append(Metric("min_clearance_m", gap, "m"))
-    if others:
-        theirs = [paths[n]["s_total"].to_numpy() for n in others]
-        out.append(Metric("overtakes", float(race.overtakes(paths[agent]["s_total"].to_numpy(),
-                                                            theirs)), "count"))
-    if stats is not None and not stats.empty:
-        failures, timing = race.solver_values(stats)
-        out.append(Metric("solver_failures", float(failures), "count"))
-        out += [Metric(name, value, "ms") for name, value in timing.items()]
-    return out
-
-
-def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
-    table = log_tables.get("/kartci/track")
-    if table is None or getattr(table, "empty", True):
-        raise LogError(f"{path}: no /kartci/track message; cannot score laps")
-    return track_from_text(str(table["data"].iloc[0]), "recorded track")
-
-
-__all__ = ["DEFS", "Direction", "Metric", "MetricDef", "compute", "kart_metrics", "kart_track",
-           "line_metrics", "recorded_scenario", "recorded_track", "sensor_track"]
+__all__ = ["Direction", "Metric", "MetricDef", "ScoreContext", "compute", "definition",
+           "definitions", "metric_sets", "recorded_scenario", "recorded_track"]

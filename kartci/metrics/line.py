@@ -9,7 +9,7 @@ import pandas as pd
 
 from kartci import geometry
 from kartci.metrics.base import DEFS, Metric
-from kartci.spec.models import Scenario, StraightCourse, line_parts
+from kartci.spec.models import LineMetricsParams, Scenario, StraightCourse, line_parts
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:
@@ -30,11 +30,11 @@ def sensor_track(scenario: Scenario, agent: str, odom: pd.DataFrame) -> pd.DataF
                          "vx": odom["vx"].to_numpy()})
 
 
-def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame) -> list[Metric]:
+def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame,
+                 spec: LineMetricsParams) -> list[Metric]:
     if odom.empty:
         return []
     tr = sensor_track(scenario, agent, odom)
-    spec = scenario.metrics
     course = line_parts(scenario, agent)[0].course
     length = geometry.length_m(course)
     t, off, prog = tr["t"].to_numpy(), tr["offset"].to_numpy(), tr["progress"].to_numpy()

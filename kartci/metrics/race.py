@@ -4,10 +4,13 @@ MPCC's solver statistics."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from kartci.metrics.base import Metric
 from kartci.spec.models import Box
 from kartci.vehicle import FOOTPRINT_M
 
@@ -95,3 +98,23 @@ def solver_values(stats: pd.DataFrame) -> tuple[int, dict[str, float]]:
     return failures, {"solve_ms_median": float(np.median(ms)),
                       "solve_ms_p95": float(np.percentile(ms, 95)),
                       "solve_ms_max": float(ms.max())}
+
+
+def race_metrics(scenario: Any, agent: str, paths: Mapping[str, pd.DataFrame],
+                 rects: Mapping[str, list[Rect]], stats: pd.DataFrame | None) -> list[Metric]:
+    """Clearance, overtakes and solver statistics, where the run has what they need."""
+    obstacles = getattr(scenario.world, "obstacles", ())
+    others = [n for n in paths if n != agent]
+    out = []
+    if obstacles or others:
+        gap = min_clearance_m(rects[agent], obstacles, [rects[n] for n in others])
+        out.append(Metric("min_clearance_m", gap, "m"))
+    if others:
+        theirs = [paths[n]["s_total"].to_numpy() for n in others]
+        out.append(Metric("overtakes", float(overtakes(paths[agent]["s_total"].to_numpy(),
+                                                       theirs)), "count"))
+    if stats is not None and not stats.empty:
+        failures, timing = solver_values(stats)
+        out.append(Metric("solver_failures", float(failures), "count"))
+        out += [Metric(name, value, "ms") for name, value in timing.items()]
+    return out

@@ -14,17 +14,16 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
-from kartci import geometry, metrics, project
+from kartci import metrics, plugins, project
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
-from kartci.metrics import race
+from kartci.project import did_you_mean
+from kartci.report.data import PlotContext
 from kartci.results import Plots, ScenarioResult
 from kartci.sim import simulate
 from kartci.spec import Scenario
-from kartci.spec.models import HallWorld, line_parts
 from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
 
 LOG_NAME = "run.mcap"
@@ -64,7 +63,7 @@ def score(folder: Path) -> dict[str, Any]:
     scenario, values = metrics.compute(folder / LOG_NAME)
 
     def timing(name: str) -> bool:
-        d = metrics.DEFS.get(name.rsplit(".", 1)[-1])
+        d = metrics.definition(name)
         return d is not None and d.timing
 
     doc = {"scenario": scenario.name, "seed": scenario.seed,
@@ -74,57 +73,15 @@ def score(folder: Path) -> dict[str, Any]:
     return doc
 
 
-def plots(folder: Path, scenario: Scenario) -> Plots:
-    t = tables(folder / LOG_NAME)
-    tracks: dict[str, pd.DataFrame] = {}
-    wheels: dict[str, pd.DataFrame] = {}
-    commands: dict[str, pd.DataFrame] = {}
-    collisions: dict[str, pd.DataFrame] = {}
-    is_track = isinstance(scenario.world, HallWorld)
-    track = metrics.recorded_track(t, folder / LOG_NAME) if is_track else None
-    for agent in scenario.agents:
-        odom = t.get(f"/{agent}/odom")
-        if odom is not None and not odom.empty:
-            if track is not None:
-                tracks[agent] = metrics.kart_track(track, odom)
-            else:
-                tr = metrics.sensor_track(scenario, agent, odom)
-                tracks[agent] = tr.assign(speed=tr["vx"])
-        js = t.get(f"/{agent}/joint_states")
-        if js is not None:
-            cols = ([("left", "rear_left_wheel_joint"), ("right", "rear_right_wheel_joint")]
-                    if is_track else [("left", "left_wheel_hinge"),
-                                      ("right", "right_wheel_hinge")])
-            wheels[agent] = pd.DataFrame({"t": js["t"], **{k: js[f"{j}.velocity"]
-                                                           for k, j in cols}})
-        cmd = t.get(f"/{agent}/wheel_cmd")
-        if cmd is not None:
-            commands[agent] = pd.DataFrame({"t": cmd["t"],
-                                            "left": cmd["left_wheel_hinge.velocity"],
-                                            "right": cmd["right_wheel_hinge.velocity"]})
-        col = t.get(f"/{agent}/collision")
-        if col is not None:
-            collisions[agent] = col
-    if track is not None:
-        world = scenario.world
-        assert isinstance(world, HallWorld)
-        obstacles = [race.rect(b.center_m[0], b.center_m[1], b.size_m[0], b.size_m[1],
-                               b.yaw_rad) for b in world.obstacles]
-        horizons, solves = {}, {}
-        for agent in scenario.agents:
-            plans = t.get(f"/{agent}/mpcc/horizon")
-            if plans is not None and len(plans):  # a few moments, evenly spread
-                rows = plans.iloc[np.linspace(0, len(plans) - 1, 8).astype(int)[1:]]
-                horizons[agent] = [np.column_stack([np.asarray(x, float), np.asarray(y, float)])
-                                   for x, y in zip(rows["xs"], rows["ys"], strict=True)]
-            stats = t.get(f"/{agent}/mpcc/stats")
-            if stats is not None:
-                solves[agent] = stats[["t", "solve_ms", "success"]]
-        return Plots("track", track.xy, list(track.bounds()), tracks, wheels, commands,
-                     collisions, obstacles=obstacles, horizons=horizons, solves=solves)
-    world, _ = line_parts(scenario, next(iter(scenario.agents)))
-    return Plots("line", np.asarray(geometry.polyline(world.course, 400)), [], tracks, wheels,
-                 commands, collisions, scenario.metrics.transient_s)
+def plots(folder: Path, scenario: Scenario) -> Plots | None:
+    """The report's time series and geometry, from the log, drawn as the first agent's robot
+    kind says (None when the kind draws nothing)."""
+    kind = plugins.ROBOTS.get(next(iter(scenario.agents.values())).model.kind)
+    if kind.plots is None:
+        return None
+    result: Plots = kind.plots(PlotContext(scenario, tables(folder / LOG_NAME),
+                                           folder / LOG_NAME))
+    return result
 
 
 def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> ScenarioResult:
@@ -157,13 +114,14 @@ def _recorded(folder: Path) -> tuple[Scenario, dict[str, pd.DataFrame]]:
 
 def check_criteria_names(specs: list[Scenario]) -> None:
     """Criteria must name known metrics: a typo is bad input, found before anything runs."""
+    defs = metrics.definitions()
     for spec in specs:
         unknown = sorted(
-            c for c in spec.criteria if c not in metrics.DEFS and not (
-                c.partition(".")[0] in spec.agents and c.partition(".")[2] in metrics.DEFS))
+            c for c in spec.criteria if c not in defs and not (
+                c.partition(".")[0] in spec.agents and c.partition(".")[2] in defs))
         if unknown:
             raise SpecError(f"scenario {spec.name}: criteria on unknown metrics: "
-                            f"{', '.join(unknown)} (known: {', '.join(sorted(metrics.DEFS))})")
+                            f"{', '.join(unknown)}{did_you_mean(unknown[0], defs)}")
 
 
 def scenario_folders(out: Path) -> list[Path]:

@@ -11,10 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from kartci._bullet import pb
+from kartci.sim.line_lab import LineLab
 from kartci.sim.line_tracker import LineTracker
 from kartci.sim.sensors import LineCamera
 from kartci.sim.urdf import urdf_path
-from kartci.sim.world import World
 from kartci.spec import Scenario
 from kartci.spec.models import line_parts
 
@@ -48,7 +48,7 @@ def sweep(scenario: Scenario, agent: str, offsets_m: np.ndarray, fov_rad: float 
     lab, _ = line_parts(scenario, agent)
     sensor = spec.line_sensor.model_copy(update={
         k: v for k, v in (("fov_rad", fov_rad), ("mode", mode)) if v is not None})
-    world = World(scenario.world, scenario.physics.dt_s)
+    world = LineLab(lab, scenario.physics.dt_s)
     try:
         robot = LineTracker(world.client, spec, lab,
                             urdf_path(spec.model).parent, scenario.physics.dt_s)

@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -17,7 +15,8 @@ from kartci.logs import header, msg
 from kartci.sim import lidar as lidar_mod
 from kartci.sim.body import BodyState
 from kartci.sim.gokart import Gokart
-from kartci.sim.hall import Block, blocks
+from kartci.sim.hall import Block, Hall
+from kartci.sim.line_lab import LineLab
 from kartci.sim.line_tracker import LineTracker
 from kartci.sim.messages import (
     WORLD_FRAME,
@@ -27,13 +26,11 @@ from kartci.sim.messages import (
     tf_message,
     transform,
 )
+from kartci.sim.robot import Put, RobotContext
 from kartci.sim.sensors import LineCamera, Sonar
-from kartci.sim.world import World
-from kartci.spec.models import AgentSpec, GokartModel, HallWorld, LineLabWorld
-from kartci.track import Track
+from kartci.sim.urdf import urdf_path
+from kartci.spec.models import AgentSpec, GokartModel
 from kartci.vehicle import FOOTPRINT_M, KartInput
-
-Put = Callable[[str, Any, int], None]  # (topic relative to the namespace, message, t ns)
 
 
 def every(period_s: float, dt_s: float) -> int:
@@ -41,7 +38,7 @@ def every(period_s: float, dt_s: float) -> int:
 
 
 @dataclass
-class Robot:
+class RobotBase:
     name: str
     agent: Agent
     ctrl_every: int
@@ -63,17 +60,23 @@ class Robot:
                                          st.quat)]), t_ns)
 
 
-class LineTrackerRobot(Robot):
+class LineTrackerRobot(RobotBase):
     STATIC = ("line_sensor", "line_camera_left", "line_camera_right", "sonar")
 
-    def __init__(self, name: str, spec: AgentSpec, world: World, agent: Agent, dt_s: float,
-                 model_dir: Path, odom_every: int, rng: np.random.Generator) -> None:
-        assert isinstance(world.spec, LineLabWorld)
-        self.body = LineTracker(world.client, spec, world.spec, model_dir, dt_s)
-        super().__init__(name, agent, every(agent.period_s, dt_s), self.body.frames)
+    def __init__(self, ctx: RobotContext) -> None:
+        world, spec, dt_s = ctx.world, ctx.spec, ctx.dt_s
+        if not isinstance(world, LineLab):
+            raise SpecError(f"agent {ctx.name}: a line tracker needs a line_lab world, not "
+                            f"{world.spec.kind}")
+        self.world = world
+        self.body = LineTracker(world.client, spec, world.spec, urdf_path(spec.model).parent,
+                                dt_s)
+        super().__init__(ctx.name, ctx.agent, every(ctx.agent.period_s, dt_s), self.body.frames)
         self.camera = LineCamera(world.client, spec.line_sensor, world.spec)
         self.sonar = Sonar(world.client, spec.sonar) if spec.sonar.enabled else None
-        self.noise_std, self.odom_every, self.rng = spec.line_sensor.noise_std, odom_every, rng
+        self.noise_std, self.odom_every, self.rng = (spec.line_sensor.noise_std, ctx.odom_every,
+                                                     ctx.rng)
+        self.end_m = world.end_m()
 
     def static_transforms(self) -> list[Any]:
         return self.static_tf(self.STATIC)
@@ -109,9 +112,19 @@ class LineTrackerRobot(Robot):
     def pre_step(self, k: int) -> None:
         self.body.pre_step()
 
-    def past_end(self, course: Any, end_m: float) -> bool:
+    def post_step(self, t_ns: int, put: Put) -> None:
+        pass
+
+    def finish(self, put: Put) -> None:
+        pass
+
+    def done(self, k: int) -> bool:
+        """Past the end of a straight course (checked at the odometry rate)."""
+        if self.end_m is None or k % self.odom_every:
+            return False
         pt = self.body.frame_pose("line_sensor")[0][:2]
-        return bool(geometry.progress_m(course, pt[None, :])[0] > end_m + 0.02)
+        return bool(geometry.progress_m(self.world.spec.course, pt[None, :])[0]
+                    > self.end_m + 0.02)
 
 
 @dataclass
@@ -122,37 +135,37 @@ class _Contact:
     position: tuple[float, float, float]
 
 
-class KartRobot(Robot):
+class KartRobot(RobotBase):
     STATIC = ("cog_link", "imu_link", "velodyne_link", "camera_link")
     JOINTS = ("front_left_wheel_steer_joint", "front_right_wheel_steer_joint",
               "rear_left_wheel_joint", "rear_right_wheel_joint", "front_left_wheel_joint",
               "front_right_wheel_joint")
     CONTACT_GAP_NS = 100_000_000  # contacts closer than 0.1 s apart are one collision
 
-    def __init__(self, name: str, spec: AgentSpec, world: World, agent: Agent, dt_s: float,
-                 model_dir: Path, odom_every: int, rng: np.random.Generator, track: Track,
-                 names: dict[int, str]) -> None:
-        assert isinstance(world.spec, HallWorld)
-        self.spec, self.world_spec, self.rng, self.dt = spec, world.spec, rng, dt_s
+    def __init__(self, ctx: RobotContext) -> None:
+        world, spec, dt_s, name = ctx.world, ctx.spec, ctx.dt_s, ctx.name
+        if not isinstance(world, Hall):
+            raise SpecError(f"agent {name}: a go-kart needs a hall world, not {world.spec.kind}")
+        self.world = world
+        self.spec, self.world_spec, self.rng, self.dt = spec, world.spec, ctx.rng, dt_s
         model = spec.model
-        if not isinstance(model, GokartModel):
-            raise SpecError(f"agent {name}: a hall world needs gokart models, not {model.kind}")
+        assert isinstance(model, GokartModel)  # the robot registry chose this class by kind
         self.model = model
-        self.body = Gokart(world.client, model, model_dir,
-                           track.pose_at(spec.start.along_m, spec.start.lateral_m), dt_s)
-        super().__init__(name, agent, every(agent.period_s, dt_s), self.body.frames)
-        self.client, self.odom_every, self.names, self.floor = (world.client, odom_every, names,
-                                                                world.floor)
+        self.body = Gokart(world.client, model, urdf_path(model).parent,
+                           world.start_pose(spec.start), dt_s)
+        super().__init__(name, ctx.agent, every(ctx.agent.period_s, dt_s), self.body.frames)
+        self.client, self.odom_every, self.names, self.floor = (world.client, ctx.odom_every,
+                                                                world.names, world.floor)
+        world.names[self.body.body] = name
         self.imu_every = every(1.0 / spec.imu.rate_hz, dt_s)
         self.lidar_every = every(1.0 / spec.lidar.rate_hz, dt_s)
         self.camera_every = every(1.0 / spec.camera.rate_hz, dt_s)
         self.lidar = lidar_mod.MODELS[spec.lidar.model]
         self.azimuths = self.lidar.azimuths(spec.lidar.rate_hz)
-        self.blocks = blocks(self.world_spec)
+        self.blocks = world.blocks
         self._imu_prev: np.ndarray | None = None
         self._scans = 0
         self.contacts: dict[str, _Contact] = {}
-        self.others: list[KartRobot] = []
 
     def static_transforms(self) -> list[Any]:
         return self.static_tf(self.STATIC)
@@ -251,7 +264,8 @@ class KartRobot(Robot):
     def _lidar(self, st: BodyState, t_ns: int, put: Put) -> None:
         pos, _ = self.body.frame_pose("velodyne_link", st)
         yaw = st.yaw
-        extra = [o.footprint() for o in self.others]
+        extra = [o.footprint() for o in self.world.robots
+                 if o is not self and isinstance(o, KartRobot)]
         ranges = lidar_mod.scan_fast(self.lidar, self.azimuths, pos, yaw, self.blocks + extra,
                                      self.world_spec.wall_height_m, self.spec.lidar.range_m)
         std = self.spec.lidar.range_noise_std_m
@@ -271,17 +285,10 @@ class KartRobot(Robot):
             data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns)
 
     def _zone_friction(self, st: BodyState) -> None:
-        w = self.world_spec
-        mu = []
-        for x, y in self.body.wheel_contacts_xy(st):
-            f = w.floor_friction
-            for z in w.zones:
-                if z.min_m[0] <= x <= z.max_m[0] and z.min_m[1] <= y <= z.max_m[1]:
-                    f = z.friction
-            mu.append(f)
-        self.body.set_wheel_friction(mu)
+        self.body.set_wheel_friction([self.world.friction_at(float(x), float(y))
+                                      for x, y in self.body.wheel_contacts_xy(st)])
 
-    def track_contacts(self, t_ns: int, put: Put) -> None:
+    def post_step(self, t_ns: int, put: Put) -> None:
         """Contacts with anything but the floor, grouped into collisions (episodes)."""
         from kartci._bullet import pb
 
@@ -301,7 +308,7 @@ class KartRobot(Robot):
             if t_ns - self.contacts[other].last_ns > self.CONTACT_GAP_NS:
                 self._report(other, put)
 
-    def flush_contacts(self, put: Put) -> None:
+    def finish(self, put: Put) -> None:
         for other in list(self.contacts):
             self._report(other, put)
 
@@ -321,6 +328,9 @@ class KartRobot(Robot):
     def pre_step(self, k: int) -> None:
         self.body.pre_step()
 
+    def done(self, k: int) -> bool:
+        return False
+
 
 def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     q = [0.0, 0.0, 0.0, math.cos(angle / 2)]
@@ -334,8 +344,7 @@ IMU_NOISE = {"bumblebee": (0.01 * 8 * 9.81, 0.015 * math.radians(245)),  # IRIMU
 
 
 def _imu_noise(spec: AgentSpec) -> tuple[float, float]:
-    variant = getattr(spec.model, "variant", "bumblebee")
-    acc, gyro = IMU_NOISE[variant]
+    acc, gyro = IMU_NOISE.get(str(getattr(spec.model, "variant", "")), IMU_NOISE["bumblebee"])
     if spec.imu.accel_noise_std_mps2 is not None:
         acc = spec.imu.accel_noise_std_mps2
     if spec.imu.gyro_noise_std_radps is not None:

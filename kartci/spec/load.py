@@ -12,6 +12,8 @@ from pydantic import ValidationError
 
 from kartci import project
 from kartci.errors import SpecError
+from kartci.project import did_you_mean
+from kartci.spec.dispatch import ParamsError, with_allowed_keys
 from kartci.spec.models import Scenario
 
 
@@ -130,23 +132,37 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
         node[parts[-1]] = raw
 
 
-def _one_line(err: ValidationError, path: Path, overrides: list[str]) -> str:
-    first = err.errors()[0]
-    loc = ".".join(str(p) for p in first["loc"] if not str(p).startswith(("function-", "tagged")))
-    loc = ".".join(p for p in loc.split(".") if p not in ("straight", "circle", "line_pid"))
+def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
+              prefix: tuple[str | int, ...] = ()) -> str:
+    """The first validation error as `file: dotted.key (from --set): problem (got value)`."""
+    first = errors[0]
+    parts = [str(p) for p in (*prefix, *first.get("loc", ()))]
+    # a discriminated union (a line course) puts its tag into the location: not a key
+    loc = ".".join(p for p in parts if not p.startswith(("function-", "tagged"))
+                   and p not in COURSE_TAGS)
     source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
     msg = first["msg"]
     if first["type"] == "extra_forbidden":
-        msg = "unknown key"
-    elif first["type"] == "missing":
+        msg = "unknown key" + _did_you_mean_key(first)
+    elif first["type"] == "missing" and msg == "Field required":
         msg = "required key is missing"
     got = first.get("input")
-    shown = "" if first["type"] in ("missing", "extra_forbidden") or isinstance(got, dict) else (
-        f" (got {json.dumps(got, default=str)[:60]})"
-    )
-    n = len(err.errors())
-    more = f" [+{n - 1} more]" if n > 1 else ""
+    shown = "" if first["type"] in ("missing", "extra_forbidden", "unknown_plugin") or isinstance(
+        got, dict) else f" (got {json.dumps(got, default=str)[:60]})"
+    more = f" [+{len(errors) - 1} more]" if len(errors) > 1 else ""
     return f"{path}: {loc or '<top>'}{source}: {msg}{shown}{more}"
+
+
+COURSE_TAGS = ("straight", "circle")
+
+
+def _did_you_mean_key(error: dict[str, Any]) -> str:
+    """For an unknown key, the nearest key the model has (from the error's context)."""
+    ctx = error.get("ctx") or {}
+    allowed = ctx.get("allowed")
+    if not allowed:
+        return ""
+    return did_you_mean(str(error["loc"][-1]), allowed)
 
 
 def load_scenario(name: str, overrides: list[str] | None = None) -> Scenario:
@@ -162,8 +178,10 @@ def load_scenario(name: str, overrides: list[str] | None = None) -> Scenario:
     _resolve_command_line_paths(data, overrides)
     try:
         return Scenario.model_validate(data)
+    except ParamsError as err:
+        raise SpecError(_one_line(err.errors, path, overrides, err.loc)) from err
     except ValidationError as err:
-        raise SpecError(_one_line(err, path, overrides)) from None
+        raise SpecError(_one_line(with_allowed_keys(Scenario, err), path, overrides)) from err
 
 
 def scenario_from_json(text: str) -> Scenario:
@@ -171,7 +189,7 @@ def scenario_from_json(text: str) -> Scenario:
     try:
         return Scenario.model_validate_json(text)
     except ValidationError as err:
-        raise SpecError(f"recorded scenario: {err.errors()[0]['msg']}") from None
+        raise SpecError(f"recorded scenario: {err.errors()[0]['msg']}") from err
 
 
 def json_schema() -> dict[str, Any]:

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, model_validator
 
 from kartci.errors import SpecError
 
@@ -13,6 +13,36 @@ class Frozen(BaseModel):
     """Base for every spec: immutable, and unknown keys are errors, not silently ignored."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+# --- what plugins extend: each registered type validates its own parameters -----------------
+
+
+class ControllerParams(Frozen):
+    """Parameters of a controller type (`controller: {type: NAME, ...}`)."""
+
+    type: str = Field(description="a registered controller (`kartci plugins`)")
+    period_s: float = Field(0.02, gt=0.0, description="control period, s: a whole multiple of "
+                            "physics.dt_s")
+
+
+class RobotParams(Frozen):
+    """Parameters of a robot kind (`model: {kind: NAME, ...}` or a model folder's params)."""
+
+    kind: str = Field(description="a registered robot kind")
+    urdf: str = Field(description="the robot's URDF: absolute, or relative to <kind>/ on the "
+                      "project's model path")
+
+
+class WorldParams(Frozen):
+    """Parameters of a world kind (`world: {kind: NAME, ...}` or a world file)."""
+
+    kind: str = Field(description="a registered world kind")
+    description: str = ""
+
+
+class MetricParams(Frozen):
+    """Parameters of a metric set (`metrics: {NAME: {...}}`)."""
 
 
 # --- worlds -----------------------------------------------------------------------------------
@@ -52,7 +82,7 @@ class Box(Frozen):
     yaw_rad: float = 0.0
 
 
-class LineLabWorld(Frozen):
+class LineLabWorld(WorldParams):
     """White floor with one black line (seed 001, Sec. 5.2.1), plus optional obstacles."""
 
     kind: Literal["line_lab"] = "line_lab"
@@ -76,7 +106,7 @@ class FloorZone(Frozen):
     friction: float = Field(ge=0.0)
 
 
-class HallWorld(Frozen):
+class HallWorld(WorldParams):
     """An indoor hall: walls, pillars, a ceiling, floor zones and a closed TUMFTM track."""
 
     kind: Literal["hall"] = "hall"
@@ -92,13 +122,12 @@ class HallWorld(Frozen):
     obstacles: tuple[Box, ...] = ()
 
 
-World = Annotated[LineLabWorld | HallWorld, Field(discriminator="kind")]
 
 
 # --- robots, sensors, controllers ----------------------------------------------------------
 
 
-class LineTrackerModel(Frozen):
+class LineTrackerModel(RobotParams):
     """Differential-drive line tracker of seed 001 (annex model.sdf, Sec. 5.4)."""
 
     kind: Literal["line_tracker"] = "line_tracker"
@@ -132,7 +161,7 @@ class SonarSpec(Frozen):
     rays: int = Field(9, ge=1, le=64)
 
 
-class LinePidController(Frozen):
+class LinePidController(ControllerParams):
     """P / PI tracking controller of the seed's TestSensor.cc (Eq. 6.13, wheel-speed law)."""
 
     type: Literal["line_pid"] = "line_pid"
@@ -146,7 +175,7 @@ class LinePidController(Frozen):
     half_track_m: float = Field(0.06, description="lever in the annex wheel-speed law")
 
 
-class GokartModel(Frozen):
+class GokartModel(RobotParams):
     """The ETH go-kart (seed 000, Tables 3.1, 3.2, 3.4); limits from REFERENCE.md."""
 
     kind: Literal["gokart"] = "gokart"
@@ -206,7 +235,7 @@ class LogSource(Frozen):
     time_offset_s: float = Field(0.0, description="sim time of the log's first message")
 
 
-class ManualController(Frozen):
+class ManualController(ControllerParams):
     """The manual agent (seed Sec. 5.1.2): Joy axes/buttons mapped to kart commands."""
 
     type: Literal["manual"] = "manual"
@@ -215,7 +244,7 @@ class ManualController(Frozen):
     period_s: float = 0.02
 
 
-class CommandsController(Frozen):
+class CommandsController(ControllerParams):
     """Replays a command stream: AckermannDriveStamped, Twist or TwistStamped."""
 
     type: Literal["commands"] = "commands"
@@ -231,7 +260,7 @@ class ScriptStep(Frozen):
     brake_mps2: float = 0.0
 
 
-class ScriptController(Frozen):
+class ScriptController(ControllerParams):
     """A fixed command timeline (for tests and crash scenarios)."""
 
     type: Literal["script"] = "script"
@@ -239,7 +268,7 @@ class ScriptController(Frozen):
     period_s: float = 0.02
 
 
-class JoyDriverController(Frozen):
+class JoyDriverController(ControllerParams):
     """A scripted human: pure pursuit on the centreline, expressed as joystick messages
     through a mapping, so that the manual agent drives. Used to record joystick logs."""
 
@@ -286,7 +315,7 @@ class MpccWeights(Frozen):
     slack: float = Field(100.0, description="per m and per m^2 of bound violation")
 
 
-class MpccController(Frozen):
+class MpccController(ControllerParams):
     """Model predictive contouring control (Liniger et al., REFERENCE.md) solved with CasADi.
     Obstacles and other karts narrow the track bounds along the predicted path."""
 
@@ -317,10 +346,6 @@ class MpccController(Frozen):
     weights: MpccWeights = MpccWeights()
 
 
-Controller = Annotated[LinePidController | ManualController | CommandsController
-                       | ScriptController | JoyDriverController | MpccController,
-                       Field(discriminator="type")]
-Model = Annotated[LineTrackerModel | GokartModel, Field(discriminator="kind")]
 
 
 class Pose2D(Frozen):
@@ -332,8 +357,10 @@ class Pose2D(Frozen):
 
 
 class AgentSpec(Frozen):
-    model: Model
-    controller: Controller
+    """One robot in the scenario: its model, its controller, where it starts, its sensors."""
+
+    model: SerializeAsAny[RobotParams]
+    controller: SerializeAsAny[ControllerParams]
     start: Pose2D = Pose2D()
     line_sensor: LineSensorSpec = LineSensorSpec()
     sonar: SonarSpec = SonarSpec()
@@ -350,7 +377,9 @@ class PhysicsSpec(Frozen):
     odom_rate_hz: float = Field(50.0, gt=0.0)
 
 
-class MetricsSpec(Frozen):
+class LineMetricsParams(MetricParams):
+    """Parameters of the line tracker's tracking metrics."""
+
     transient_s: float = Field(5.0, ge=0.0, description="start-up transient excluded from errors")
     lost_threshold_m: float = Field(0.021, gt=0.0, description="sensor range; beyond it = lost")
     settle_band_m: float = Field(0.002, gt=0.0)
@@ -367,14 +396,24 @@ class Criterion(Frozen):
 class Scenario(Frozen):
     name: str = Field(pattern=r"^[a-z0-9_]+$")
     description: str
-    world: World
+    world: SerializeAsAny[WorldParams]
     agents: dict[str, AgentSpec] = Field(min_length=1)
     duration_s: float = Field(gt=0.0, le=3600.0)
     seed: int = Field(0, ge=0)
     physics: PhysicsSpec = PhysicsSpec()
-    metrics: MetricsSpec = MetricsSpec()
+    metrics: dict[str, SerializeAsAny[MetricParams]] = Field(
+        {}, description="metric sets to compute besides the robots' own, and parameters of "
+        "any set: {NAME: {...}}")
     criteria: dict[str, Criterion] = {}
     tags: tuple[str, ...] = ()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _registered_types(cls, data: Any) -> Any:
+        """Step one of validation: registered type names pick each part's parameter model."""
+        from kartci.spec.dispatch import dispatch
+
+        return dispatch(data)
 
     @model_validator(mode="after")
     def _rates_are_multiples_of_the_physics_step(self) -> Scenario:

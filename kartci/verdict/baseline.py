@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci.errors import BaselineError
-from kartci.metrics.base import DEFS, Direction, MetricDef
+from kartci.metrics.base import Direction, MetricDef
 from kartci.spec.models import Criterion
 
 
@@ -71,7 +71,9 @@ def _num(x: Any) -> float | None:
 
 
 def definition(name: str) -> MetricDef | None:
-    return DEFS.get(name.rsplit(".", 1)[-1])
+    from kartci.metrics import definition as registered
+
+    return registered(name)
 
 
 def _no_constants(name: str) -> float:

@@ -1,0 +1,29 @@
+"""kartci's own controllers, registered through entry points like any team's. Factories are
+imported on first use, so a line-tracker run never imports CasADi."""
+
+from __future__ import annotations
+
+from kartci.plugins import Controller, lazy
+from kartci.spec.models import (
+    CommandsController,
+    JoyDriverController,
+    LinePidController,
+    ManualController,
+    MpccController,
+    ScriptController,
+)
+
+KART = ("gokart",)
+
+LINE_PID = Controller("line_pid", LinePidController, lazy("kartci.agents.line_pid:LinePid"),
+                      ("line_tracker",), "the seed's P / PI line-tracking controller")
+MANUAL = Controller("manual", ManualController, lazy("kartci.agents.kart:ManualAgent"), KART,
+                    "a recorded joystick (sensor_msgs/Joy) through a mapping")
+COMMANDS = Controller("commands", CommandsController, lazy("kartci.agents.kart:CommandsAgent"),
+                      KART, "a recorded AckermannDriveStamped, Twist or TwistStamped stream")
+SCRIPT = Controller("script", ScriptController, lazy("kartci.agents.kart:ScriptAgent"), KART,
+                    "a fixed command timeline")
+JOY_DRIVER = Controller("joy_driver", JoyDriverController, lazy("kartci.agents.kart:JoyDriver"),
+                        KART, "a scripted human: pure pursuit expressed as joystick messages")
+MPCC = Controller("mpcc", MpccController, lazy("kartci.agents.mpcc:MpccAgent"), KART,
+                  "model predictive contouring control (CasADi / Ipopt)")

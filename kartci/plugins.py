@@ -1,0 +1,193 @@
+"""Registries: every controller, robot kind, world kind and metric set, by name.
+
+A team adds its own the same way kartci's built-ins are added: an entry point in the groups
+`kartci.controllers`, `kartci.robots`, `kartci.worlds` and `kartci.metrics` whose object is a
+`Controller`, `RobotKind`, `WorldKind` or `MetricSet`, or a module named in the project's
+`plugins` list that calls `register(...)`. Scenarios name them (`controller: {type: NAME}`,
+`model: {kind: NAME}`, `world: {kind: NAME}`, `metrics: {NAME: {...}}`); each validates its own
+parameters with its own pydantic model.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+from kartci.errors import SpecError
+from kartci.project import Project, did_you_mean
+
+if TYPE_CHECKING:
+    from kartci.agents.base import Agent
+    from kartci.metrics.base import Metric, MetricDef
+    from kartci.spec.models import ControllerParams, MetricParams, RobotParams, WorldParams
+
+
+@dataclass(frozen=True)
+class AgentContext:
+    """What a controller is told when it is built: who it is and which robot it drives.
+    Everything else it learns from messages."""
+
+    name: str
+    model: RobotParams
+    others: tuple[str, ...] = ()  # the other agents of the scenario (their topics: /<name>/...)
+
+
+@dataclass(frozen=True)
+class Controller:
+    """A controller type: its parameter model and a factory `(params, context) -> Agent`."""
+
+    name: str
+    params: type[ControllerParams]
+    factory: Callable[[Any, AgentContext], Agent]
+    robots: tuple[str, ...] = ()  # robot kinds it can drive; empty: any
+    description: str = ""
+
+    def build(self, params: ControllerParams, ctx: AgentContext) -> Agent:
+        if self.robots and ctx.model.kind not in self.robots:
+            raise SpecError(f"agent {ctx.name}: controller {self.name} drives "
+                            f"{' or '.join(self.robots)} robots, not {ctx.model.kind}")
+        return self.factory(params, ctx)
+
+
+@dataclass(frozen=True)
+class RobotKind:
+    """A robot kind: its parameter model, the simulated robot, its metric sets and plots."""
+
+    name: str
+    params: type[RobotParams]
+    factory: Callable[..., Any]  # (RobotContext) -> sim Robot; see kartci.sim.robot
+    metrics: tuple[str, ...] = ()  # metric sets computed for every agent of this kind
+    plots: Callable[..., Any] | None = None  # (PlotContext) -> results.Plots
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class WorldKind:
+    """A world kind: its parameter model and the simulated world built from it."""
+
+    name: str
+    params: type[WorldParams]
+    factory: Callable[..., Any]  # (params, dt_s) -> sim World; see kartci.sim.world
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class MetricSet:
+    """Named metrics computed from a run log for one agent: `compute(context, params)`."""
+
+    name: str
+    defs: Mapping[str, MetricDef]
+    compute: Callable[..., list[Metric]]  # (ScoreContext, params) -> metrics
+    params: type[MetricParams] | None = None  # None: the set takes no parameters
+    robots: tuple[str, ...] = ()  # robot kinds it applies to; empty: any
+    description: str = ""
+
+
+def lazy(target: str) -> Callable[..., Any]:
+    """`module:attr`, imported on first call: a plugin's heavy imports (CasADi, PyBullet) wait
+    until a scenario uses it."""
+    module, _, attr = target.partition(":")
+
+    def call(*args: Any, **kwargs: Any) -> Any:
+        obj: Any = importlib.import_module(module)
+        for part in attr.split("."):
+            obj = getattr(obj, part)
+        return obj(*args, **kwargs)
+
+    call.__qualname__ = target
+    return call
+
+
+T = TypeVar("T", Controller, RobotKind, WorldKind, MetricSet)
+
+
+@dataclass
+class Registry(Generic[T]):
+    """Plugins of one kind by name; filled from entry points and project plugins on first use."""
+
+    group: str  # entry-point group
+    what: str  # for messages: "controller", "robot kind", ...
+    kind: type[T]
+    items: dict[str, T] = field(default_factory=dict)
+
+    def register(self, item: T, replace: bool = False) -> T:
+        if not isinstance(item, self.kind):
+            raise SpecError(f"{self.group}: {item!r} is not a kartci.plugins."
+                            f"{self.kind.__name__}")
+        old = self.items.get(item.name)
+        if old is not None and old != item and not replace:
+            raise SpecError(f"two different {self.what}s are registered as '{item.name}'")
+        self.items[item.name] = item
+        return item
+
+    def get(self, name: str) -> T:
+        load()
+        item = self.items.get(name)
+        if item is None:
+            raise SpecError(f"unknown {self.what} '{name}'{did_you_mean(name, self.items)}")
+        return item
+
+    def names(self) -> list[str]:
+        load()
+        return sorted(self.items)
+
+    def all(self) -> list[T]:
+        load()
+        return [self.items[n] for n in sorted(self.items)]
+
+
+CONTROLLERS: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
+ROBOTS: Registry[RobotKind] = Registry("kartci.robots", "robot kind", RobotKind)
+WORLDS: Registry[WorldKind] = Registry("kartci.worlds", "world kind", WorldKind)
+METRICS: Registry[MetricSet] = Registry("kartci.metrics", "metric set", MetricSet)
+REGISTRIES: tuple[Registry[Any], ...] = (CONTROLLERS, ROBOTS, WORLDS, METRICS)
+
+
+def register(item: Controller | RobotKind | WorldKind | MetricSet) -> None:
+    """Register a plugin from Python (a project plugin module, a test)."""
+    for reg in REGISTRIES:
+        if isinstance(item, reg.kind):
+            reg.register(item)
+            return
+    raise SpecError(f"cannot register {item!r}: not a Controller, RobotKind, WorldKind or "
+                    "MetricSet")
+
+
+_LOADED: set[str] = set()  # "entry points" and the roots whose project plugins are imported
+
+
+def load(project: Project | None = None) -> None:
+    """Import every installed plugin (entry points) and the project's plugin modules, once.
+    Worker processes call this with their parent's project before running anything."""
+    if "entry points" not in _LOADED:
+        _LOADED.add("entry points")
+        for reg in REGISTRIES:
+            for ep in sorted(entry_points(group=reg.group), key=lambda e: e.name):
+                try:
+                    item = ep.load()
+                except Exception as err:  # a broken plugin names itself, not a traceback
+                    raise SpecError(f"plugin {ep.name} ({ep.value}, group {reg.group}) "
+                                    f"failed to import: {type(err).__name__}: {err}") from err
+                if getattr(item, "name", None) != ep.name:
+                    raise SpecError(f"plugin {ep.value}: entry point '{ep.name}' must name an "
+                                    f"object whose name is '{ep.name}'")
+                reg.register(item)
+    from kartci import project as project_mod
+
+    proj = project or project_mod.current()
+    key = str(proj.root)
+    if key in _LOADED or not proj.plugins:
+        return
+    _LOADED.add(key)
+    if str(proj.root) not in sys.path:  # plugin modules kept in the project folder
+        sys.path.insert(0, str(proj.root))
+    for module in proj.plugins:
+        try:
+            importlib.import_module(module)
+        except ImportError as err:
+            raise SpecError(f"{proj.config_file}: plugin module '{module}' cannot be imported "
+                            f"({err})") from err

@@ -1,0 +1,145 @@
+"""Registries: every registered plugin keeps the contract (HighwayEnv's pattern: one test
+parametrised over everything registered), and every shipped scenario still scores exactly as
+its committed baseline."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from pydantic import BaseModel
+
+from kartci import plugins
+from kartci.errors import SpecError
+from kartci.metrics import compute, definitions
+from kartci.metrics.base import MetricDef
+from kartci.plugins import Controller, MetricSet
+from kartci.project import BUILTIN
+from kartci.sim import simulate
+from kartci.spec import load_scenario
+from kartci.spec.models import ControllerParams
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("name", plugins.CONTROLLERS.names())
+def test_every_controller_has_typed_parameters_with_a_schema(name: str) -> None:
+    ctl = plugins.CONTROLLERS.get(name)
+    assert ctl.name == name
+    assert issubclass(ctl.params, ControllerParams)
+    schema = ctl.params.model_json_schema()
+    assert schema["properties"]["type"].get("const", name) == name
+    assert ctl.params.model_fields["period_s"].default > 0
+    assert all(r in plugins.ROBOTS.names() for r in ctl.robots)
+
+
+@pytest.mark.parametrize("name", plugins.ROBOTS.names())
+def test_every_robot_kind_names_registered_metric_sets(name: str) -> None:
+    kind = plugins.ROBOTS.get(name)
+    assert issubclass(kind.params, BaseModel)
+    for mset in kind.metrics:
+        assert name in (plugins.METRICS.get(mset).robots or (name,))
+
+
+@pytest.mark.parametrize("name", plugins.METRICS.names())
+def test_every_metric_set_defines_units_and_directions(name: str) -> None:
+    mset = plugins.METRICS.get(name)
+    assert mset.defs
+    for metric, d in mset.defs.items():
+        assert isinstance(d, MetricDef) and d.unit and d.description, metric
+        assert definitions()[metric] == d  # one meaning per metric name across sets
+
+
+@pytest.mark.parametrize("name", plugins.WORLDS.names())
+def test_every_world_kind_validates_its_own_parameters(name: str) -> None:
+    kind = plugins.WORLDS.get(name)
+    assert kind.params.model_json_schema()["properties"]["kind"].get("const", name) == name
+
+
+def test_unknown_and_misspelt_names_get_one_line_with_a_suggestion(tmp_path: Path) -> None:
+    with pytest.raises(SpecError, match=r"controller.type \(from --set\): unknown controller "
+                                        r"'mpc' \(did you mean 'mpcc'\?\)"):
+        load_scenario("mpcc_lap", ["agents.kart0.controller.type=mpc"])
+    with pytest.raises(SpecError, match=r"unknown scenario 'mpcc_lapp' \(did you mean"):
+        load_scenario("mpcc_lapp")
+    with pytest.raises(SpecError, match=r"agents.kart0.controller.max_speed_mps \(from --set\)"):
+        load_scenario("mpcc_lap", ["agents.kart0.controller.max_speed_mps=-1"])
+    with pytest.raises(SpecError, match=r"max_speedmps \(from --set\): unknown key \(did you "
+                                        r"mean 'max_speed_mps'\?\)"):
+        load_scenario("mpcc_lap", ["agents.kart0.controller.max_speedmps=1"])
+    with pytest.raises(SpecError, match=r"duraton_s \(from --set\): unknown key \(did you "
+                                        r"mean 'duration_s'\?\)"):
+        load_scenario("mpcc_lap", ["duraton_s=1"])
+
+
+def test_a_controller_registered_from_python_drives_a_kart(tmp_path: Path) -> None:
+    """A team's controller, registered at run time, runs in the loop with no kartci change."""
+    from typing import Any, Literal
+
+    from kartci.agents.joy import kart_command
+    from kartci.plugins import AgentContext
+    from kartci.vehicle import KartInput
+
+    class Params(ControllerParams):
+        type: Literal["test_throttle"] = "test_throttle"
+        accel_mps2: float = 1.0
+
+    class Throttle:
+        inputs: tuple[str, ...] = ()
+
+        def __init__(self, params: Params, ctx: AgentContext) -> None:
+            self.period_s, self.accel = params.period_s, params.accel_mps2
+
+        def on_message(self, topic: str, message: Any) -> None:
+            pass
+
+        def step(self, t_ns: int) -> list[tuple[str, Any]]:
+            return [("cmd", kart_command(KartInput(0.0, self.accel, 0.0), t_ns, "base_link"))]
+
+    plugins.register(Controller("test_throttle", Params, Throttle, ("gokart",)))
+    try:
+        spec = load_scenario("kart_wall", ["agents.kart0.controller={type: test_throttle, "
+                                           "accel_mps2: 2.0}", "duration_s=2"])
+        simulate(spec, tmp_path / "run.mcap")
+        m = compute(tmp_path / "run.mcap")[1]
+        assert m["max_speed_mps"].value == pytest.approx(4.0, abs=0.4)  # 2 m/s^2 for 2 s
+    finally:
+        plugins.CONTROLLERS.items.pop("test_throttle")
+    with pytest.raises(SpecError, match="unknown controller 'test_throttle'"):
+        load_scenario("kart_wall", ["agents.kart0.controller={type: test_throttle}"])
+
+
+def test_a_metric_set_registered_from_python_is_computed(tmp_path: Path) -> None:
+    from kartci.metrics import Metric, ScoreContext
+    from kartci.metrics.base import Direction
+
+    def top_x(ctx: ScoreContext, params: Any) -> list[Metric]:
+        return [Metric("max_x_m", float(ctx.odom["x"].max()), "m")]
+
+    from typing import Any
+
+    plugins.register(MetricSet("test_extent", {"max_x_m": MetricDef(
+        "m", Direction.EQUAL, 0.01, 0.0, "largest x reached")}, top_x))
+    try:
+        spec = load_scenario("line_straight", ["duration_s=3", "metrics.test_extent={}"])
+        simulate(spec, tmp_path / "run.mcap")
+        m = compute(tmp_path / "run.mcap")[1]
+        odom_x = m["max_x_m"].value
+        assert 0.2 < odom_x < 0.5 and "line_lost" in m  # the robot's own sets still run
+    finally:
+        plugins.METRICS.items.pop("test_extent")
+
+
+SHIPPED = sorted(p.stem for p in (BUILTIN / "scenarios").glob("*.yaml")
+                 if (ROOT / "baselines" / f"{p.stem}.json").exists())
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_scenario_scores_exactly_its_baseline(name: str, tmp_path: Path) -> None:
+    """Refactors keep metrics byte-identical: every value equals the committed baseline's."""
+    simulate(load_scenario(name), tmp_path / "run.mcap")
+    got = {k: m.to_json()["value"] for k, m in compute(tmp_path / "run.mcap")[1].items()
+           if not (d := definitions().get(k.rsplit(".", 1)[-1])) or not d.timing}
+    base = json.loads((ROOT / "baselines" / f"{name}.json").read_text())["metrics"]
+    assert got == {k: v["value"] for k, v in base.items()}
