@@ -56,6 +56,20 @@ def column_for_wheel_angle(model: GokartModel, delta: float) -> float:
     return (lo + hi) / 2
 
 
+def speed_to_pedals(v_cmd: float, v: float, gain_per_s: float) -> tuple[float, float, bool]:
+    """Throttle and brake (m/s^2) and reverse from a proportional loop on speed (m/s)."""
+    reverse = v_cmd < 0
+    a = gain_per_s * (abs(v_cmd) - abs(v))
+    return max(a, 0.0), max(-a, 0.0), reverse
+
+
+def steer_for_turn_rate(model: GokartModel, v_mps: float, yaw_rate_radps: float) -> float:
+    """Mean front-wheel angle (rad) of the bicycle relation delta = atan(L w / v); below
+    0.5 m/s the speed is held at 0.5 m/s so a turn at standstill stays bounded."""
+    v_eff = v_mps if abs(v_mps) >= 0.5 else math.copysign(0.5, v_mps)
+    return math.atan(axle_distance_m(model) * yaw_rate_radps / v_eff)
+
+
 def axle_distance_m(model: GokartModel) -> float:
     """Distance between the rear and front axles (Table 3.2), m."""
     return model.wheel_xy_m[2][0] - model.wheel_xy_m[0][0]

@@ -143,3 +143,46 @@ def test_every_shipped_scenario_scores_exactly_its_baseline(name: str, tmp_path:
            if not (d := definitions().get(k.rsplit(".", 1)[-1])) or not d.timing}
     base = json.loads((ROOT / "baselines" / f"{name}.json").read_text())["metrics"]
     assert got == {k: v["value"] for k, v in base.items()}
+
+
+@pytest.mark.parametrize("topic", ["ackermann_cmd", "cmd_vel"])
+def test_karts_take_standard_ackermann_and_twist_commands(topic: str, tmp_path: Path) -> None:
+    """A team's controller need not speak kartci_msgs: 3 m/s straight ahead, either way."""
+    from typing import Any, Literal
+
+    from kartci.logs import header, msg
+    from kartci.plugins import AgentContext
+
+    class Params(ControllerParams):
+        type: Literal["test_standard"] = "test_standard"
+
+    class Cruise:
+        inputs: tuple[str, ...] = ()
+
+        def __init__(self, params: Params, ctx: AgentContext) -> None:
+            self.period_s = params.period_s
+
+        def on_message(self, topic: str, message: Any) -> None:
+            pass
+
+        def step(self, t_ns: int) -> list[tuple[str, Any]]:
+            if topic == "ackermann_cmd":
+                return [(topic, msg("ackermann_msgs/msg/AckermannDriveStamped",
+                                    header=header(t_ns, "kart0/base_link"),
+                                    drive=msg("ackermann_msgs/msg/AckermannDrive",
+                                              steering_angle=0.0, steering_angle_velocity=0.0,
+                                              speed=3.0, acceleration=0.0, jerk=0.0)))]
+            v3 = "geometry_msgs/msg/Vector3"
+            return [(topic, msg("geometry_msgs/msg/Twist", linear=msg(v3, x=3.0, y=0.0, z=0.0),
+                                angular=msg(v3, x=0.0, y=0.0, z=0.0)))]
+
+    plugins.register(Controller("test_standard", Params, Cruise, ("gokart",)))
+    try:
+        spec = load_scenario("kart_wall", ["agents.kart0.controller={type: test_standard}",
+                                           "duration_s=5"])
+        simulate(spec, tmp_path / "run.mcap")
+        m = compute(tmp_path / "run.mcap")[1]
+    finally:
+        plugins.CONTROLLERS.items.pop("test_standard")
+    assert m["max_speed_mps"].value == pytest.approx(3.0, abs=0.15)
+    assert m["collisions"].value == 0

@@ -4,6 +4,7 @@ and a scripted driver that produces joystick messages (pure pursuit on the centr
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -21,7 +22,7 @@ from kartci.spec.models import (
     ScriptController,
 )
 from kartci.track import TRACK_TOPIC, Track, track_from_text
-from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle
+from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
 
 JOY = ("sensor_msgs/msg/Joy",)
 COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",
@@ -64,42 +65,29 @@ class ManualAgent:
                                            "base_link"))]
 
 
-def _speed_to_pedals(v_cmd: float, v: float, gain: float) -> tuple[float, float, bool]:
-    reverse = v_cmd < 0
-    a = gain * (abs(v_cmd) - abs(v))
-    return max(a, 0.0), max(-a, 0.0), reverse
-
-
 class CommandsAgent:
-    """AckermannDriveStamped, Twist or TwistStamped from a log, as kart commands: the speed
-    through a proportional speed loop on the measured speed, the steering through the kart's
-    steering map (Ackermann) or the bicycle relation delta = atan(L w / v) (Twist)."""
+    """A recorded AckermannDriveStamped, Twist or TwistStamped stream, republished (stamped with
+    sim time) on the robot's standard command topic: `ackermann_cmd` or `cmd_vel`. The robot's
+    drive-by-wire turns it into steering and pedals, as it would for a team's controller."""
 
-    inputs: tuple[str, ...] = ("odom",)
+    inputs: tuple[str, ...] = ()
 
     def __init__(self, spec: CommandsController, ctx: AgentContext) -> None:
-        self.spec, self.model, self.period_s = spec, _kart(ctx), spec.period_s
+        self.period_s = spec.period_s
         self.source = Recorded(spec.source, COMMANDS)
-        self._v = 0.0
+        self.topic = "ackermann_cmd" if self.source.msgtype.startswith("ackermann") else (
+            "cmd_vel")
 
     def on_message(self, topic: str, message: Any) -> None:
-        if topic == "odom":
-            self._v = float(message.twist.twist.linear.x)
+        pass
 
     def step(self, t_ns: int) -> Outbox:
         m = self.source.at(t_ns)
         if m is None:
-            return [("cmd", kart_command(KartInput(), t_ns, "base_link"))]
-        if self.source.msgtype.startswith("ackermann"):
-            v_cmd, delta = float(m.drive.speed), float(m.drive.steering_angle)
-        else:
-            tw = m.twist if self.source.msgtype.endswith("Stamped") else m
-            v_cmd, w = float(tw.linear.x), float(tw.angular.z)
-            v_eff = v_cmd if abs(v_cmd) >= 0.5 else math.copysign(0.5, v_cmd)
-            delta = math.atan(axle_distance_m(self.model) * w / v_eff)
-        accel, brake, reverse = _speed_to_pedals(v_cmd, self._v, self.spec.speed_gain_per_s)
-        cmd = KartInput(column_for_wheel_angle(self.model, delta), accel, brake, reverse)
-        return [("cmd", kart_command(cmd, t_ns, "base_link"))]
+            return []
+        if hasattr(m, "header"):
+            m = replace(m, header=header(t_ns, "base_link"))
+        return [(self.topic, m)]
 
 
 class ScriptAgent:
@@ -155,7 +143,7 @@ class JoyDriver:
         ahead = (self.track.s - s[0]) % self.track.length_m < max(8.0, 2 * v)
         kappa = float(np.abs(self.track.curvature[ahead]).max(initial=1e-3))
         v_target = min(sp.target_speed_mps, math.sqrt(sp.max_lateral_accel_mps2 / kappa))
-        accel, brake, _ = _speed_to_pedals(v_target, v, 2.0)
+        accel, brake, _ = speed_to_pedals(v_target, v, 2.0)
         wish = KartInput(column_for_wheel_angle(self.model, delta), accel, brake)
         joy = to_joy(self.mapping, self.model, wish, t_ns, "joy")
         cmd = to_command(self.mapping, self.model, joy)

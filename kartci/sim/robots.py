@@ -30,7 +30,13 @@ from kartci.sim.robot import Put, RobotContext
 from kartci.sim.sensors import LineCamera, Sonar
 from kartci.sim.urdf import urdf_path
 from kartci.spec.models import AgentSpec, GokartModel
-from kartci.vehicle import FOOTPRINT_M, KartInput
+from kartci.vehicle import (
+    FOOTPRINT_M,
+    KartInput,
+    column_for_wheel_angle,
+    speed_to_pedals,
+    steer_for_turn_rate,
+)
 
 
 def every(period_s: float, dt_s: float) -> int:
@@ -166,6 +172,7 @@ class KartRobot(RobotBase):
         self._imu_prev: np.ndarray | None = None
         self._scans = 0
         self.contacts: dict[str, _Contact] = {}
+        self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
 
     def static_transforms(self) -> list[Any]:
         return self.static_tf(self.STATIC)
@@ -186,6 +193,7 @@ class KartRobot(RobotBase):
                 t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
                 [*steer, *spin, self.body.column], [0.0, 0.0, *speeds, 0.0]), t_ns)
             self._zone_friction(st)
+            self._pedals(st)
             put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
         if self.spec.camera.enabled and k % self.camera_every == 0:
             self._camera(st, t_ns, put)
@@ -321,9 +329,32 @@ class KartRobot(RobotBase):
                                           y=c.position[1], z=c.position[2])), c.start_ns)
 
     def apply(self, topic: str, m: Any) -> None:
+        """Commands the kart understands: `cmd` (kartci_msgs/KartCommand, the seed's format),
+        `ackermann_cmd` (ackermann_msgs/AckermannDriveStamped) and `cmd_vel`
+        (geometry_msgs/Twist or TwistStamped). The standard ones go through a drive-by-wire:
+        the steering map for the wheel angle, a speed loop for the pedals."""
         if topic == "cmd":
+            self._target = None
             self.body.command(KartInput(m.steering_wheel_angle_rad, m.acceleration_mps2,
                                         m.brake_mps2, m.reverse, m.emergency_stop))
+        elif topic == "ackermann_cmd":
+            self._drive(float(m.drive.speed), float(m.drive.steering_angle))
+        elif topic == "cmd_vel":
+            tw = m.twist if hasattr(m, "twist") else m
+            v = float(tw.linear.x)
+            self._drive(v, steer_for_turn_rate(self.model, v, float(tw.angular.z)))
+
+    def _drive(self, v_mps: float, wheel_angle_rad: float) -> None:
+        self._target = (v_mps, column_for_wheel_angle(self.model, wheel_angle_rad))
+        self._pedals(self.body.state())
+
+    def _pedals(self, st: BodyState) -> None:
+        """Re-evaluate the speed loop on the measured speed (at every odometry tick)."""
+        if self._target is not None:
+            v_cmd, column = self._target
+            accel, brake, reverse = speed_to_pedals(v_cmd, st.v_body[0],
+                                                    self.model.speed_gain_per_s)
+            self.body.command(KartInput(column, accel, brake, reverse))
 
     def pre_step(self, k: int) -> None:
         self.body.pre_step()

@@ -32,14 +32,14 @@ def _validate(model: type[BaseModel], value: Any, loc: tuple[str | int, ...]) ->
 
 def with_allowed_keys(model: type[BaseModel], err: ValidationError) -> list[dict[str, Any]]:
     """The errors, each unknown key with the keys its model has (for a "did you mean")."""
-    out = []
-    for e in err.errors():
-        e = dict(e)
+    out: list[dict[str, Any]] = []
+    for error in err.errors():
+        e: dict[str, Any] = dict(error)
         if e["type"] == "extra_forbidden":
             owner: Any = model
             for part in e["loc"][:-1]:
-                field = owner.model_fields.get(part) if isinstance(owner, type) and issubclass(
-                    owner, BaseModel) else None
+                field = owner.model_fields.get(str(part)) if isinstance(owner, type) and (
+                    issubclass(owner, BaseModel)) else None
                 owner = field.annotation if field is not None else None
             if isinstance(owner, type) and issubclass(owner, BaseModel):
                 e["ctx"] = {"allowed": list(owner.model_fields)}

@@ -194,6 +194,8 @@ class GokartModel(RobotParams):
     wheelbase_m: float = Field(1.27, description="l of Eq. 3.1/3.2 (Ackermann option)")
     track_m: float = Field(0.94, description="w of Eq. 3.1/3.2 (Ackermann option)")
     tire_friction: float = 1.0
+    speed_gain_per_s: float = Field(2.0, gt=0.0, description="drive-by-wire speed loop for "
+                                    "ackermann_cmd and cmd_vel: accel = gain * (v_cmd - v)")
     wheel_xy_m: tuple[tuple[float, float], ...] = Field(
         ((-0.077, 0.5625), (-0.077, -0.5625), (1.129, 0.47), (1.129, -0.47)),
         description="rl, rr, fl, fr wheel centres in base_link (Table 3.2)")
@@ -245,12 +247,12 @@ class ManualController(ControllerParams):
 
 
 class CommandsController(ControllerParams):
-    """Replays a command stream: AckermannDriveStamped, Twist or TwistStamped."""
+    """Replays a command stream (AckermannDriveStamped, Twist or TwistStamped) onto the
+    robot's standard command topics (`ackermann_cmd`, `cmd_vel`)."""
 
     type: Literal["commands"] = "commands"
     source: LogSource
     period_s: float = 0.02
-    speed_gain_per_s: float = Field(2.0, description="accel = gain * (v_cmd - v)")
 
 
 class ScriptStep(Frozen):
