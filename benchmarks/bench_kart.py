@@ -60,7 +60,8 @@ def main() -> None:
               f"{ref:.1f} ms (median)")
     with tempfile.TemporaryDirectory() as tmp:
         for label, sets in (("kart_manual, no lidar", []),
-                            ("kart_manual, VLP-16 10 Hz", ["agents.kart0.lidar.enabled=true"])):
+                            ("kart_manual, VLP-16 10 Hz",
+                             ["agents.kart0.sensors.lidar.enabled=true"])):
             samples = [rtf(sets, Path(tmp)) for _ in range(args.repeats)]
             print(f"{label:28s} median RTF {statistics.median(samples):5.1f}x  ("
                   + ", ".join(f"{s:.1f}" for s in samples) + ")")

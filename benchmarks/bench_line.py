@@ -17,7 +17,7 @@ from kartci.spec import load_scenario
 
 
 def rtf(name: str, mode: str, out: Path) -> float:
-    spec = load_scenario(name, [f"agents.lt0.line_sensor.mode={mode}"])
+    spec = load_scenario(name, [f"agents.lt0.sensors.line_sensor.mode={mode}"])
     t0 = time.perf_counter()
     info = simulate(spec, out / f"{name}-{mode}.mcap")
     return info.sim_time_s / (time.perf_counter() - t0)

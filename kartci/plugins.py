@@ -23,7 +23,7 @@ from kartci.project import Project, did_you_mean
 if TYPE_CHECKING:
     from kartci.agents.base import Agent
     from kartci.metrics.base import Metric, MetricDef
-    from kartci.spec.models import ControllerParams, MetricParams, RobotParams, WorldParams
+    from kartci.spec.models import ControllerParams, Frozen, MetricParams, RobotParams, WorldParams
 
 
 @dataclass(frozen=True)
@@ -63,6 +63,7 @@ class RobotKind:
     metrics: tuple[str, ...] = ()  # metric sets computed for every agent of this kind
     plots: Callable[..., Any] | None = None  # (PlotContext) -> results.Plots
     description: str = ""
+    sensors: type[Frozen] | None = None  # the robot's sensor specs (agents.<name>.sensors)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from kartci.spec.models import GokartModel
+from kartci.robots.gokart.params import GokartModel
 
 
 @dataclass(frozen=True)

@@ -10,12 +10,13 @@ import pytest
 
 from kartci._bullet import pb
 from kartci.metrics import compute
+from kartci.robots.gokart.body import Gokart
+from kartci.robots.gokart.params import GokartModel
 from kartci.sim import lidar, simulate
-from kartci.sim.gokart import Gokart
 from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
 from kartci.spec import load_scenario, project_root
-from kartci.spec.models import GokartModel, HallWorld
+from kartci.spec.models import HallWorld
 from kartci.vehicle import KartInput, wheel_angles
 
 MODELS = project_root() / "kartci" / "data" / "models" / "gokart"
@@ -194,7 +195,7 @@ def test_imu_reads_gravity_at_rest(tmp_path: Path) -> None:
 
     log = tmp_path / "rest.mcap"
     simulate(load_scenario("kart_replay", ["duration_s=2",
-                                           "agents.kart0.imu.accel_noise_std_mps2=0"]), log)
+                                           "agents.kart0.sensors.imu.accel_noise_std_mps2=0"]), log)
     imu = tables(log, ["/kart0/imu"])["/kart0/imu"]
     assert len(imu) == 201  # 100 Hz over 2 s, both ends
     settled = imu[imu["t"] > 1.0]
@@ -214,8 +215,8 @@ def test_camera_and_moving_frames(tmp_path: Path) -> None:
     from kartci.logs import messages
 
     log = tmp_path / "cam.mcap"
-    simulate(load_scenario("kart_replay", ["duration_s=1", "agents.kart0.camera.enabled=true"]),
-             log)
+    simulate(load_scenario("kart_replay", ["duration_s=1",
+                                           "agents.kart0.sensors.camera.enabled=true"]), log)
     images = [m for _, _, m in messages(log, ["/kart0/camera/image_raw"])]
     assert len(images) == 6  # 5 Hz over 1 s, both ends
     img = np.asarray(images[-1].data).reshape(60, 80, 3)

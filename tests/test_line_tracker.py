@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from kartci.metrics import compute
+from kartci.robots.line_tracker.body import LineTracker
 from kartci.sim import simulate
 from kartci.sim.line_lab import LineLab as World
-from kartci.sim.line_tracker import LineTracker
 from kartci.spec import load_scenario, project_root
 
 DT = 0.002

@@ -12,10 +12,10 @@ from kartci.logs import tables
 from kartci.metrics import Metric, compute, race
 from kartci.metrics.kart import kart_track
 from kartci.mpcc.cache import get_solver, solver_key
+from kartci.mpcc.params import MpccController, MpccWeights
 from kartci.project import BUILTIN
 from kartci.sim import simulate
 from kartci.spec import load_scenario
-from kartci.spec.models import MpccController, MpccWeights
 from kartci.track import load_track
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kartci.sim.characterise import Sweep, sweep
+from kartci.robots.line_tracker.characterise import Sweep, sweep
 from kartci.spec import load_scenario
 
 OFFSETS = np.round(np.arange(-0.025, 0.02501, 0.0005), 6)

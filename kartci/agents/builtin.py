@@ -3,15 +3,15 @@ imported on first use, so a line-tracker run never imports CasADi."""
 
 from __future__ import annotations
 
-from kartci.plugins import Controller, lazy
-from kartci.spec.models import (
-    CommandsController,
-    JoyDriverController,
-    LinePidController,
-    ManualController,
-    MpccController,
-    ScriptController,
+from kartci.agents.params import (
+                      CommandsController,
+                      JoyDriverController,
+                      LinePidController,
+                      ManualController,
+                      ScriptController,
 )
+from kartci.mpcc.params import MpccController
+from kartci.plugins import Controller, lazy
 
 KART = ("gokart",)
 

@@ -15,7 +15,7 @@ from kartci import project
 from kartci.errors import SpecError
 from kartci.logs.types import header, msg
 from kartci.project import did_you_mean
-from kartci.spec.models import GokartModel
+from kartci.robots.gokart.params import GokartModel
 from kartci.vehicle import KartInput
 
 

@@ -11,16 +11,16 @@ import numpy as np
 
 from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command, load_mapping, to_command, to_joy
-from kartci.agents.source import Recorded
-from kartci.logs.types import header, msg, yaw_of
-from kartci.plugins import AgentContext
-from kartci.spec.models import (
+from kartci.agents.params import (
     CommandsController,
-    GokartModel,
     JoyDriverController,
     ManualController,
     ScriptController,
 )
+from kartci.agents.source import Recorded
+from kartci.logs.types import header, msg, yaw_of
+from kartci.plugins import AgentContext
+from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, Track, track_from_text
 from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
 

@@ -8,9 +8,10 @@ from typing import Any
 import numpy as np
 
 from kartci.agents.base import Outbox
+from kartci.agents.params import LinePidController
 from kartci.logs.types import header, msg
 from kartci.plugins import AgentContext
-from kartci.spec.models import LinePidController, LineTrackerModel
+from kartci.robots.line_tracker.params import LineTrackerModel
 
 
 class LinePid:

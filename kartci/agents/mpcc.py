@@ -14,8 +14,9 @@ from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command
 from kartci.logs.types import header, msg, yaw_of
 from kartci.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
+from kartci.mpcc.params import MpccController
 from kartci.plugins import AgentContext
-from kartci.spec.models import GokartModel, MpccController
+from kartci.robots.gokart.params import GokartModel
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
 from kartci.vehicle import KartInput, column_for_wheel_angle, wheel_angles
 

@@ -25,7 +25,7 @@ def characterise(
     """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
     6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
     from kartci.report.plots import sensor_sweep
-    from kartci.sim.characterise import sweep
+    from kartci.robots.line_tracker.characterise import sweep
     from kartci.spec import load_scenario
 
     out = out_dir(out, "characterisation")

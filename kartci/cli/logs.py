@@ -40,10 +40,11 @@ def replay(
     joystick mapping (the manual agent), or AckermannDriveStamped / Twist / TwistStamped
     commands. Log time is re-based so the first message is at sim time 0."""
     from kartci.agents.kart import COMMANDS, JOY
+    from kartci.agents.params import CommandsController, ManualController
     from kartci.logs import topics
     from kartci.runner import Job, run_jobs
     from kartci.spec import load_scenario
-    from kartci.spec.models import CommandsController, LogSource, ManualController
+    from kartci.spec.models import LogSource
 
     out = out_dir(out, "replay")
     spec = load_scenario(scenario, set_ or [])

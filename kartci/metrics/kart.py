@@ -8,7 +8,8 @@ import numpy as np
 import pandas as pd
 
 from kartci.metrics.base import DEFS, Metric
-from kartci.spec.models import GokartModel, Scenario
+from kartci.robots.gokart.params import GokartModel
+from kartci.spec.models import Scenario
 from kartci.track import Track
 
 

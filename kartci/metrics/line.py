@@ -9,7 +9,8 @@ import pandas as pd
 
 from kartci import geometry
 from kartci.metrics.base import DEFS, Metric
-from kartci.spec.models import LineMetricsParams, Scenario, StraightCourse, line_parts
+from kartci.robots.line_tracker.params import line_parts
+from kartci.spec.models import LineMetricsParams, Scenario, StraightCourse
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:

@@ -21,7 +21,7 @@ import casadi as ca
 
 from kartci.errors import RunError
 from kartci.mpcc.ocp import Layout, build
-from kartci.spec.models import MpccController
+from kartci.mpcc.params import MpccController
 
 SOURCES = ("model.py", "ocp.py", "cache.py")
 

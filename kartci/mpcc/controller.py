@@ -13,8 +13,9 @@ import numpy as np
 from kartci.mpcc.cache import Built, get_solver
 from kartci.mpcc.model import ACC, DELTA, SLACK, VS, VX, S
 from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
+from kartci.mpcc.params import MpccController
 from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
-from kartci.spec.models import GokartModel, MpccController
+from kartci.robots.gokart.params import GokartModel
 from kartci.track import Track
 from kartci.vehicle import STEERING_RATIO, wheel_angles
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from kartci.spec.models import MpccVehicle
+from kartci.mpcc.params import MpccVehicle
 
 NX, NU = 9, 4
 X, Y, PSI, VX, VY, R, S, DELTA, ACC = range(NX)

@@ -31,7 +31,7 @@ from kartci.mpcc.model import (
     Y,
     discrete,
 )
-from kartci.spec.models import MpccController, MpccWeights
+from kartci.mpcc.params import MpccController, MpccWeights
 
 STAGE_PARAMS = 8  # x_ref, y_ref, cos(heading), sin(heading), s_ref, lateral lo/hi, s_max
 N_WEIGHTS = 6

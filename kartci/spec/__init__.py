@@ -1,5 +1,7 @@
 """Scenario specs: typed models, loading, `--set` overrides, JSON Schema."""
 
+from kartci.agents.params import LinePidController
+from kartci.robots.line_tracker.params import LineSensorSpec, LineTrackerModel
 from kartci.spec.load import (
     json_schema,
     load_scenario,
@@ -12,9 +14,6 @@ from kartci.spec.models import (
     CircleCourse,
     Criterion,
     LineLabWorld,
-    LinePidController,
-    LineSensorSpec,
-    LineTrackerModel,
     Scenario,
     StraightCourse,
 )

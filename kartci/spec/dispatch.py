@@ -117,6 +117,13 @@ def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
         if tag is not None:
             kind = _named(plugins.ROBOTS, tag, (*loc, "model", "kind"))
             agent["model"] = _validate(kind.params, model, (*loc, "model"))
+            sensors = agent.get("sensors") or {}
+            if kind.sensors is not None:
+                agent["sensors"] = _validate(kind.sensors, sensors, (*loc, "sensors"))
+            elif sensors:
+                raise ParamsError((*loc, "sensors"), [{"loc": (), "msg": f"robot kind {tag} "
+                                                       "has no sensors to set",
+                                                       "type": "extra_forbidden"}])
     if "controller" in agent:
         tag = _tag(controller, "type", (*loc, "controller"), "controller")
         if tag is not None:

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from kartci._bullet import pb, quiet_c_output
+from kartci.robots.gokart.params import GokartModel
 from kartci.sim.body import Base, BodyState
 from kartci.sim.urdf import fixed_frames, physics_urdf
-from kartci.spec.models import GokartModel
 from kartci.vehicle import KartInput, wheel_angles
 
 ROLLING_DECEL_MPS2 = 0.15  # coasting: rolling resistance and drivetrain drag

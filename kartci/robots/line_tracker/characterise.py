@@ -11,12 +11,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from kartci._bullet import pb
+from kartci.robots.line_tracker.body import LineTracker
+from kartci.robots.line_tracker.params import LineTrackerSensors, line_parts
+from kartci.robots.line_tracker.sensors import LineCamera
 from kartci.sim.line_lab import LineLab
-from kartci.sim.line_tracker import LineTracker
-from kartci.sim.sensors import LineCamera
 from kartci.sim.urdf import urdf_path
 from kartci.spec import Scenario
-from kartci.spec.models import line_parts
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,9 @@ def sweep(scenario: Scenario, agent: str, offsets_m: np.ndarray, fov_rad: float 
     """Camera outputs with the sensor midpoint at each lateral offset (left of the line +)."""
     spec = scenario.agents[agent]
     lab, _ = line_parts(scenario, agent)
-    sensor = spec.line_sensor.model_copy(update={
+    sensors = spec.sensors
+    assert isinstance(sensors, LineTrackerSensors)  # validated by the robot kind
+    sensor = sensors.line_sensor.model_copy(update={
         k: v for k, v in (("fov_rad", fov_rad), ("mode", mode)) if v is not None})
     world = LineLab(lab, scenario.physics.dt_s)
     try:

@@ -9,8 +9,9 @@ from numpy.typing import NDArray
 
 from kartci import geometry
 from kartci._bullet import pb
+from kartci.robots.line_tracker.params import LineSensorSpec, SonarSpec
 from kartci.sim.world import SENSED_GROUPS
-from kartci.spec.models import LineLabWorld, LineSensorSpec, SonarSpec
+from kartci.spec.models import LineLabWorld
 
 # Eq. 5.1 of the line-tracker seed (ITU-R BT.709 luma weights).
 LUMA = np.array([0.2126, 0.7152, 0.0722])

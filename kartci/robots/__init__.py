@@ -1,0 +1,2 @@
+"""kartci's own robot kinds, each a package like a team's would be: parameters and sensors
+(`params`), the simulated robot (`robot`, `body`), and what its reports draw (`plots`)."""

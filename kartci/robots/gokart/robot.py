@@ -1,0 +1,281 @@
+"""The go-kart in the loop: body, IMU, lidar, camera, wheel odometry, collisions."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from kartci.errors import SpecError
+from kartci.logs import header, msg
+from kartci.robots.gokart.body import Gokart
+from kartci.robots.gokart.params import GokartModel, KartSensors
+from kartci.sim import lidar as lidar_mod
+from kartci.sim.body import BodyState
+from kartci.sim.hall import Block, Hall
+from kartci.sim.messages import WORLD_FRAME, joint_state, tf_message, transform
+from kartci.sim.robot import Put, RobotContext
+from kartci.sim.robots import RobotBase, every
+from kartci.sim.urdf import urdf_path
+from kartci.vehicle import (
+    FOOTPRINT_M,
+    KartInput,
+    column_for_wheel_angle,
+    speed_to_pedals,
+    steer_for_turn_rate,
+)
+
+
+@dataclass
+class _Contact:
+    start_ns: int
+    last_ns: int
+    impulse: float
+    position: tuple[float, float, float]
+
+
+class KartRobot(RobotBase):
+    STATIC = ("cog_link", "imu_link", "velodyne_link", "camera_link")
+    JOINTS = ("front_left_wheel_steer_joint", "front_right_wheel_steer_joint",
+              "rear_left_wheel_joint", "rear_right_wheel_joint", "front_left_wheel_joint",
+              "front_right_wheel_joint")
+    CONTACT_GAP_NS = 100_000_000  # contacts closer than 0.1 s apart are one collision
+
+    def __init__(self, ctx: RobotContext) -> None:
+        world, spec, dt_s, name = ctx.world, ctx.spec, ctx.dt_s, ctx.name
+        if not isinstance(world, Hall):
+            raise SpecError(f"agent {name}: a go-kart needs a hall world, not {world.spec.kind}")
+        self.world = world
+        self.spec, self.world_spec, self.rng, self.dt = spec, world.spec, ctx.rng, dt_s
+        model = spec.model
+        assert isinstance(model, GokartModel)  # the robot registry chose this class by kind
+        self.model = model
+        sensors = spec.sensors
+        assert isinstance(sensors, KartSensors)  # validated by the robot kind
+        self.sensors = sensors
+        self.body = Gokart(world.client, model, urdf_path(model).parent,
+                           world.start_pose(spec.start), dt_s)
+        super().__init__(name, ctx.agent, every(ctx.agent.period_s, dt_s), self.body.frames)
+        self.client, self.odom_every, self.names, self.floor = (world.client, ctx.odom_every,
+                                                                world.names, world.floor)
+        world.names[self.body.body] = name
+        self.imu_every = every(1.0 / sensors.imu.rate_hz, dt_s)
+        self.lidar_every = every(1.0 / sensors.lidar.rate_hz, dt_s)
+        self.camera_every = every(1.0 / sensors.camera.rate_hz, dt_s)
+        self.lidar = lidar_mod.MODELS[sensors.lidar.model]
+        self.azimuths = self.lidar.azimuths(sensors.lidar.rate_hz)
+        self.blocks = world.blocks
+        self._imu_prev: np.ndarray | None = None
+        self._scans = 0
+        self.contacts: dict[str, _Contact] = {}
+        self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
+
+    def static_transforms(self) -> list[Any]:
+        return self.static_tf(self.STATIC)
+
+    def footprint(self) -> Block:
+        st = self.body.state()
+        ahead, length, width = FOOTPRINT_M
+        c = (st.xyz[0] + ahead * math.cos(st.yaw), st.xyz[1] + ahead * math.sin(st.yaw))
+        return Block(self.name, c, (length, width, 0.45), st.yaw)
+
+    def sense(self, k: int, t_ns: int, put: Put) -> None:
+        st = self.body.state()
+        ns = self.name
+        if k % self.odom_every == 0:
+            self.publish_pose(st, t_ns, put)
+            steer, spin, speeds = self.body.wheel_states()
+            put("joint_states", joint_state(
+                t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
+                [*steer, *spin, self.body.column], [0.0, 0.0, *speeds, 0.0]), t_ns)
+            self._zone_friction(st)
+            self._pedals(st)
+            put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
+        if self.sensors.camera.enabled and k % self.camera_every == 0:
+            self._camera(st, t_ns, put)
+        if self.sensors.imu.enabled and k % self.imu_every == 0:
+            self._imu(st, t_ns, put)
+        if self.sensors.lidar.enabled and k % self.lidar_every == 0:
+            self._lidar(st, t_ns, put)
+
+    def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
+        """tf of the moving frames: steer links (about z) and wheel links (about y)."""
+        ns, (x_r, y_r), (x_f, y_f) = self.name, self.model.wheel_xy_m[0], (
+            self.model.wheel_xy_m[2])
+        out = []
+        for side, sign, angle in (("left", 1, steer[0]), ("right", -1, steer[1])):
+            out.append(transform(t_ns, f"{ns}/base_link", f"{ns}/front_{side}_wheel_steer_link",
+                                 (x_f, sign * y_f, -0.015), _axis_quat(2, angle)))
+        for i, (name, parent, xyz) in enumerate((
+                ("rear_left", "base_link", (x_r, y_r, 0.0)),
+                ("rear_right", "base_link", (x_r, -y_r, 0.0)),
+                ("front_left", "front_left_wheel_steer_link", (0.0, 0.0, 0.0)),
+                ("front_right", "front_right_wheel_steer_link", (0.0, 0.0, 0.0)))):
+            out.append(transform(t_ns, f"{ns}/{parent}", f"{ns}/{name}_wheel_link", xyz,
+                                 _axis_quat(1, spin[i])))
+        return out
+
+    def _camera(self, st: BodyState, t_ns: int, put: Put) -> None:
+        """A low-resolution RGB image from camera_link (optical frame: z forward, y down)."""
+        from kartci._bullet import pb
+
+        cam = self.sensors.camera
+        pos, rot = self.body.frame_pose("camera_link", st)
+        view = pb.computeViewMatrix(pos.tolist(), (pos + rot[:, 2]).tolist(),
+                                    (-rot[:, 1]).tolist())
+        proj = pb.computeProjectionMatrixFOV(math.degrees(cam.fov_rad) * cam.height_px
+                                             / cam.width_px, cam.width_px / cam.height_px,
+                                             0.05, 60.0)
+        img = pb.getCameraImage(cam.width_px, cam.height_px, view, proj,
+                                renderer=pb.ER_TINY_RENDERER, flags=pb.ER_NO_SEGMENTATION_MASK,
+                                physicsClientId=self.client)
+        rgb = np.asarray(img[2], dtype=np.uint8).reshape(cam.height_px, cam.width_px, 4)[..., :3]
+        put("camera/image_raw", msg("sensor_msgs/msg/Image",
+                                    header=header(t_ns, f"{self.name}/camera_link"),
+                                    height=cam.height_px, width=cam.width_px, encoding="rgb8",
+                                    is_bigendian=0, step=3 * cam.width_px,
+                                    data=np.ascontiguousarray(rgb).ravel()), t_ns)
+
+    def _imu(self, st: BodyState, t_ns: int, put: Put) -> None:
+        """Specific force (gravity included) and angular rate in imu_link, from the finite
+        difference of the IMU point's velocity over one IMU period."""
+        rot = st.rotation
+        rel, rel_rot = self.frames["imu_link"]
+        w_world = rot @ np.asarray(st.w_body)
+        v_world = rot @ np.asarray(st.v_body) + np.cross(w_world, rot @ rel)
+        period = self.imu_every * self.dt
+        acc = np.zeros(3) if self._imu_prev is None else (v_world - self._imu_prev) / period
+        self._imu_prev = v_world
+        to_imu = (rot @ rel_rot).T
+        f = to_imu @ (acc + np.array([0.0, 0.0, 9.81]))
+        g = to_imu @ w_world
+        acc_std, gyro_std = _imu_noise(self.model, self.sensors)
+        f = f + acc_std * self.rng.standard_normal(3)
+        g = g + gyro_std * self.rng.standard_normal(3)
+        cov_a, cov_g = np.diag([acc_std**2] * 3).ravel(), np.diag([gyro_std**2] * 3).ravel()
+        no_orientation = np.zeros(9)
+        no_orientation[0] = -1.0  # REP 145: this IMU gives no orientation estimate
+        put("imu", msg("sensor_msgs/msg/Imu", header=header(t_ns, f"{self.name}/imu_link"),
+                       orientation=msg("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0,
+                                       w=1.0),
+                       orientation_covariance=no_orientation,
+                       angular_velocity=msg("geometry_msgs/msg/Vector3", x=g[0], y=g[1], z=g[2]),
+                       angular_velocity_covariance=cov_g,
+                       linear_acceleration=msg("geometry_msgs/msg/Vector3", x=f[0], y=f[1],
+                                               z=f[2]),
+                       linear_acceleration_covariance=cov_a), t_ns)
+
+    def _lidar(self, st: BodyState, t_ns: int, put: Put) -> None:
+        pos, _ = self.body.frame_pose("velodyne_link", st)
+        yaw = st.yaw
+        extra = [o.footprint() for o in self.world.robots
+                 if o is not self and isinstance(o, KartRobot)]
+        ranges = lidar_mod.scan_fast(self.lidar, self.azimuths, pos, yaw, self.blocks + extra,
+                                     self.world_spec.wall_height_m, self.sensors.lidar.range_m)
+        std = self.sensors.lidar.range_noise_std_m
+        std = self.lidar.range_accuracy_m if std is None else std
+        ranges = ranges + std * self.rng.standard_normal(ranges.shape)
+        self._scans += 1
+        if (self._scans - 1) % self.sensors.lidar.record_every:
+            return
+        pts = lidar_mod.to_points(self.lidar, self.azimuths, ranges)
+        fields = [msg("sensor_msgs/msg/PointField", name=n, offset=o, datatype=d, count=1)
+                  for n, o, d in (("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 12, 7),
+                                  ("ring", 16, 4))]
+        put("velodyne_points", msg(
+            "sensor_msgs/msg/PointCloud2", header=header(t_ns, f"{self.name}/velodyne_link"),
+            height=1, width=len(pts), fields=fields, is_bigendian=False,
+            point_step=pts.dtype.itemsize, row_step=pts.dtype.itemsize * len(pts),
+            data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns)
+
+    def _zone_friction(self, st: BodyState) -> None:
+        self.body.set_wheel_friction([self.world.friction_at(float(x), float(y))
+                                      for x, y in self.body.wheel_contacts_xy(st)])
+
+    def post_step(self, t_ns: int, put: Put) -> None:
+        """Contacts with anything but the floor, grouped into collisions (episodes)."""
+        from kartci._bullet import pb
+
+        seen: set[str] = set()
+        for c in pb.getContactPoints(bodyA=self.body.body, physicsClientId=self.client):
+            if c[2] == self.floor or c[2] == self.body.body:
+                continue
+            other = self.names.get(c[2], f"body_{c[2]}")
+            seen.add(other)
+            cur = self.contacts.get(other)
+            impulse = c[9] * self.dt
+            if cur is None:
+                self.contacts[other] = _Contact(t_ns, t_ns, impulse, tuple(c[5]))
+            else:
+                cur.last_ns, cur.impulse = t_ns, cur.impulse + impulse
+        for other in [o for o in self.contacts if o not in seen]:
+            if t_ns - self.contacts[other].last_ns > self.CONTACT_GAP_NS:
+                self._report(other, put)
+
+    def finish(self, put: Put) -> None:
+        for other in list(self.contacts):
+            self._report(other, put)
+
+    def _report(self, other: str, put: Put) -> None:
+        c = self.contacts.pop(other)
+        put("collision", msg("kartci_msgs/msg/Collision", header=header(c.start_ns, WORLD_FRAME),
+                             other=other, impulse_ns=c.impulse,
+                             duration_s=(c.last_ns - c.start_ns) * 1e-9,
+                             position=msg("geometry_msgs/msg/Point", x=c.position[0],
+                                          y=c.position[1], z=c.position[2])), c.start_ns)
+
+    def apply(self, topic: str, m: Any) -> None:
+        """Commands the kart understands: `cmd` (kartci_msgs/KartCommand, the seed's format),
+        `ackermann_cmd` (ackermann_msgs/AckermannDriveStamped) and `cmd_vel`
+        (geometry_msgs/Twist or TwistStamped). The standard ones go through a drive-by-wire:
+        the steering map for the wheel angle, a speed loop for the pedals."""
+        if topic == "cmd":
+            self._target = None
+            self.body.command(KartInput(m.steering_wheel_angle_rad, m.acceleration_mps2,
+                                        m.brake_mps2, m.reverse, m.emergency_stop))
+        elif topic == "ackermann_cmd":
+            self._drive(float(m.drive.speed), float(m.drive.steering_angle))
+        elif topic == "cmd_vel":
+            tw = m.twist if hasattr(m, "twist") else m
+            v = float(tw.linear.x)
+            self._drive(v, steer_for_turn_rate(self.model, v, float(tw.angular.z)))
+
+    def _drive(self, v_mps: float, wheel_angle_rad: float) -> None:
+        self._target = (v_mps, column_for_wheel_angle(self.model, wheel_angle_rad))
+        self._pedals(self.body.state())
+
+    def _pedals(self, st: BodyState) -> None:
+        """Re-evaluate the speed loop on the measured speed (at every odometry tick)."""
+        if self._target is not None:
+            v_cmd, column = self._target
+            accel, brake, reverse = speed_to_pedals(v_cmd, st.v_body[0],
+                                                    self.model.speed_gain_per_s)
+            self.body.command(KartInput(column, accel, brake, reverse))
+
+    def pre_step(self, k: int) -> None:
+        self.body.pre_step()
+
+    def done(self, k: int) -> bool:
+        return False
+
+
+def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
+    q = [0.0, 0.0, 0.0, math.cos(angle / 2)]
+    q[axis] = math.sin(angle / 2)
+    return q[0], q[1], q[2], q[3]
+
+
+# Table 3.6, read as 1-sigma white noise: accuracy x default full scale.
+IMU_NOISE = {"bumblebee": (0.01 * 8 * 9.81, 0.015 * math.radians(245)),  # IRIMU-V2
+             "herbie": (0.0002 * 8 * 9.81, 0.0002 * math.radians(300))}  # 3DM-GX5-AHRS
+
+
+def _imu_noise(model: GokartModel, sensors: KartSensors) -> tuple[float, float]:
+    acc, gyro = IMU_NOISE[model.variant]
+    if sensors.imu.accel_noise_std_mps2 is not None:
+        acc = sensors.imu.accel_noise_std_mps2
+    if sensors.imu.gyro_noise_std_radps is not None:
+        gyro = sensors.imu.gyro_noise_std_radps
+    return acc, gyro

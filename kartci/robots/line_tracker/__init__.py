@@ -1,0 +1,9 @@
+"""The line tracker (seed 001) as a robot kind: registered as `line_tracker` (entry point)."""
+
+from kartci.plugins import RobotKind, lazy
+from kartci.robots.line_tracker.params import LineTrackerModel, LineTrackerSensors
+
+ROBOT = RobotKind("line_tracker", LineTrackerModel,
+                  lazy("kartci.robots.line_tracker.robot:LineTrackerRobot"), ("line_tracking",),
+                  lazy("kartci.robots.line_tracker.plots:line_plots"),
+                  "the differential-drive line tracker of seed 001", LineTrackerSensors)

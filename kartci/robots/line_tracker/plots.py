@@ -1,0 +1,30 @@
+"""What a report draws for a line-tracker run: the sensor point against the line, its distance
+from the line over time, wheel speeds measured and commanded."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from kartci import geometry
+from kartci.metrics.line import sensor_track
+from kartci.report.data import PlotContext, wheel_series
+from kartci.results import Plots
+from kartci.robots.line_tracker.params import line_parts
+from kartci.spec.models import LineMetricsParams
+
+
+def line_plots(ctx: PlotContext) -> Plots:
+    scenario = ctx.scenario
+    tracks = {}
+    for agent in scenario.agents:
+        odom = ctx.tables.get(f"/{agent}/odom")
+        if odom is not None and not odom.empty:
+            tr = sensor_track(scenario, agent, odom)
+            tracks[agent] = tr.assign(speed=tr["vx"])
+    wheels, commands, collisions = wheel_series(ctx, ("left_wheel_hinge", "right_wheel_hinge"))
+    world, _ = line_parts(scenario, next(iter(scenario.agents)))
+    params = scenario.metrics.get("line_tracking")
+    transient = (params if isinstance(params, LineMetricsParams)
+                 else LineMetricsParams()).transient_s
+    return Plots("line", np.asarray(geometry.polyline(world.course, 400)), [], tracks, wheels,
+                 commands, collisions, transient)

@@ -1,0 +1,87 @@
+"""The line tracker in the loop: its body, line cameras and sonar, publishing under its name."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from kartci import geometry
+from kartci.errors import SpecError
+from kartci.logs import header, msg
+from kartci.robots.line_tracker.body import LineTracker
+from kartci.robots.line_tracker.params import LineTrackerSensors
+from kartci.robots.line_tracker.sensors import LineCamera, Sonar
+from kartci.sim.line_lab import LineLab
+from kartci.sim.messages import joint_state
+from kartci.sim.robot import Put, RobotContext
+from kartci.sim.robots import RobotBase, every
+from kartci.sim.urdf import urdf_path
+
+
+class LineTrackerRobot(RobotBase):
+    STATIC = ("line_sensor", "line_camera_left", "line_camera_right", "sonar")
+
+    def __init__(self, ctx: RobotContext) -> None:
+        world, spec, dt_s = ctx.world, ctx.spec, ctx.dt_s
+        if not isinstance(world, LineLab):
+            raise SpecError(f"agent {ctx.name}: a line tracker needs a line_lab world, not "
+                            f"{world.spec.kind}")
+        self.world = world
+        self.body = LineTracker(world.client, spec, world.spec, urdf_path(spec.model).parent,
+                                dt_s)
+        super().__init__(ctx.name, ctx.agent, every(ctx.agent.period_s, dt_s), self.body.frames)
+        sensors = spec.sensors
+        assert isinstance(sensors, LineTrackerSensors)  # validated by the robot kind
+        self.camera = LineCamera(world.client, sensors.line_sensor, world.spec)
+        self.sonar = Sonar(world.client, sensors.sonar) if sensors.sonar.enabled else None
+        self.noise_std, self.odom_every, self.rng = (sensors.line_sensor.noise_std,
+                                                     ctx.odom_every, ctx.rng)
+        self.end_m = world.end_m()
+
+    def static_transforms(self) -> list[Any]:
+        return self.static_tf(self.STATIC)
+
+    def sense(self, k: int, t_ns: int, put: Put) -> None:
+        st = self.body.state()
+        if k % self.odom_every == 0:
+            self.publish_pose(st, t_ns, put)
+            wl, wr = self.body.wheel_speeds()
+            put("joint_states", joint_state(t_ns, f"{self.name}/base_link",
+                                            ["left_wheel_hinge", "right_wheel_hinge"], [],
+                                            [wl, wr]), t_ns)
+        if k % self.ctrl_every:
+            return  # the line cameras and the sonar run with the controller (seed Sec. 6.6)
+        poses = [self.body.frame_pose(f"line_camera_{s}", st) for s in ("left", "right")]
+        lum = [v + self.noise_std * float(self.rng.standard_normal())
+               for v in self.camera.luminances(poses)]
+        put("line_sensor", msg("kartci_msgs/msg/LineSensor",
+                               header=header(t_ns, f"{self.name}/line_sensor"),
+                               left=lum[0], right=lum[1]), t_ns)
+        if self.sonar is not None:
+            s = self.sonar.spec
+            put("sonar", msg("sensor_msgs/msg/Range", header=header(t_ns, f"{self.name}/sonar"),
+                             radiation_type=0,
+                             field_of_view=2 * math.atan2(s.cone_radius_m, s.max_range_m),
+                             min_range=s.min_range_m, max_range=s.max_range_m,
+                             range=self.sonar.range(*self.body.frame_pose("sonar", st))), t_ns)
+
+    def apply(self, topic: str, m: Any) -> None:
+        if topic == "wheel_cmd":
+            self.body.command(float(m.velocity[0]), float(m.velocity[1]))
+
+    def pre_step(self, k: int) -> None:
+        self.body.pre_step()
+
+    def post_step(self, t_ns: int, put: Put) -> None:
+        pass
+
+    def finish(self, put: Put) -> None:
+        pass
+
+    def done(self, k: int) -> bool:
+        """Past the end of a straight course (checked at the odometry rate)."""
+        if self.end_m is None or k % self.odom_every:
+            return False
+        pt = self.body.frame_pose("line_sensor")[0][:2]
+        return bool(geometry.progress_m(self.world.spec.course, pt[None, :])[0]
+                    > self.end_m + 0.02)
