@@ -19,6 +19,7 @@ from kartci.project import BUILTIN
 from kartci.sim import simulate
 from kartci.spec import load_scenario
 from kartci.spec.models import ControllerParams
+from kartci.verdict import check_criteria
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -137,12 +138,16 @@ SHIPPED = sorted(p.stem for p in (BUILTIN / "scenarios").glob("*.yaml")
 
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_scenario_scores_exactly_its_baseline(name: str, tmp_path: Path) -> None:
-    """Refactors keep metrics byte-identical: every value equals the committed baseline's."""
-    simulate(load_scenario(name), tmp_path / "run.mcap")
-    got = {k: m.to_json()["value"] for k, m in compute(tmp_path / "run.mcap")[1].items()
+    """Refactors keep metrics byte-identical: every value equals the committed baseline's,
+    and every shipped scenario meets its own criteria."""
+    spec = load_scenario(name)
+    simulate(spec, tmp_path / "run.mcap")
+    got = {k: m.to_json() for k, m in compute(tmp_path / "run.mcap")[1].items()
            if not (d := definitions().get(k.rsplit(".", 1)[-1])) or not d.timing}
     base = json.loads((ROOT / "baselines" / f"{name}.json").read_text())["metrics"]
-    assert got == {k: v["value"] for k, v in base.items()}
+    assert {k: v["value"] for k, v in got.items()} == {k: v["value"] for k, v in base.items()}
+    failed = [c for c in check_criteria(got, spec.criteria) if not c.ok]
+    assert not failed
 
 
 @pytest.mark.parametrize("topic", ["ackermann_cmd", "cmd_vel"])

@@ -1,30 +1,17 @@
-"""Hall geometry as boxes: walls, pillars and obstacles, shared by PyBullet and the fast lidar."""
+"""The indoor hall: walls, pillars and obstacles as boxes (shared by PyBullet and the fast
+lidar), a ceiling, floor zones, and a closed track inside."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
+import math
 
 import numpy as np
 
 from kartci._bullet import pb
-from kartci.logs import msg
-from kartci.sim.line_lab import COURSE_TOPIC, path_message
-from kartci.sim.messages import WORLD_FRAME, pose
-from kartci.sim.world import World
-from kartci.spec.models import HallWorld, Pose2D, WorldParams
-from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, load_track
-
-
-@dataclass(frozen=True)
-class Block:
-    """A vertical box standing on the floor: centre (m), size (m), yaw (rad)."""
-
-    name: str
-    center: tuple[float, float]
-    size: tuple[float, float, float]
-    yaw: float = 0.0
+from kartci.errors import SpecError
+from kartci.sim.blocks import Block
+from kartci.sim.track_world import TrackWorld
+from kartci.spec.models import HallWorld, WorldParams
 
 
 def blocks(spec: HallWorld) -> list[Block]:
@@ -43,17 +30,20 @@ def blocks(spec: HallWorld) -> list[Block]:
     return out
 
 
-class Hall(World):
-    """An indoor hall: floor, walls, pillars, obstacles, a ceiling, and a closed track."""
+class Hall(TrackWorld):
+    """An indoor hall: floor, walls, pillars, obstacles, a ceiling, and a closed track that
+    must stay clear of the walls and pillars."""
 
     spec: HallWorld
 
     def __init__(self, spec: WorldParams, dt_s: float) -> None:
         assert isinstance(spec, HallWorld)
-        self.track_file = Path(spec.track)
-        self.track = load_track(self.track_file)
-        self.blocks = blocks(spec)
-        super().__init__(spec, dt_s)
+        super().__init__(spec, dt_s, blocks(spec), spec.wall_height_m)
+        try:
+            self._refuse_track_through(self.blocks[:4 + len(spec.pillars_m)])
+        except SpecError:
+            self.close()
+            raise
 
     def build(self) -> int:
         spec = self.spec
@@ -67,52 +57,15 @@ class Hall(World):
         self.names[ceiling] = "ceiling"
         return floor
 
-    def start_pose(self, start: Pose2D) -> tuple[float, float, float]:
-        x, y, yaw = self.track.pose_at(start.along_m, start.lateral_m)
-        return x, y, yaw + start.heading_rad
-
-    def static_messages(self) -> list[tuple[str, Any]]:
-        """The course, the track itself (the log is self-contained) and the obstacles."""
-        xy = self.track.xy[:: max(1, len(self.track.xy) // 400)]
-        return [(COURSE_TOPIC, path_message(xy)),
-                (TRACK_TOPIC, msg("std_msgs/msg/String",
-                                  data=self.track_file.read_text(encoding="utf-8"))),
-                (OBSTACLES_TOPIC, obstacle_markers(self.spec))]
-
-    def friction_at(self, x: float, y: float) -> float:
-        """Floor friction under a point: the zone it is in, else the hall's floor."""
-        f = self.spec.floor_friction
-        for z in self.spec.zones:
-            if z.min_m[0] <= x <= z.max_m[0] and z.min_m[1] <= y <= z.max_m[1]:
-                f = z.friction
-        return f
-
-
-def obstacle_markers(spec: HallWorld) -> Any:
-    """The static obstacles as CUBE markers (ground truth; Foxglove draws them too)."""
-    import math
-
-    markers = []
-    for i, b in enumerate(spec.obstacles):
-        q = (0.0, 0.0, math.sin(b.yaw_rad / 2), math.cos(b.yaw_rad / 2))
-        markers.append(msg(
-            "visualization_msgs/msg/Marker",
-            header=msg("std_msgs/msg/Header",
-                       stamp=msg("builtin_interfaces/msg/Time", sec=0, nanosec=0),
-                       frame_id=WORLD_FRAME),
-            ns="obstacles", id=i, type=1, action=0,
-            pose=pose((b.center_m[0], b.center_m[1], b.size_m[2] / 2), q),
-            scale=msg("geometry_msgs/msg/Vector3", x=b.size_m[0], y=b.size_m[1],
-                      z=b.size_m[2]),
-            color=msg("std_msgs/msg/ColorRGBA", r=0.8, g=0.3, b=0.1, a=1.0),
-            lifetime=msg("builtin_interfaces/msg/Duration", sec=0, nanosec=0),
-            frame_locked=False, points=[], colors=[], texture_resource="",
-            texture=msg("sensor_msgs/msg/CompressedImage", header=msg(
-                "std_msgs/msg/Header", stamp=msg("builtin_interfaces/msg/Time", sec=0,
-                                                 nanosec=0), frame_id=""),
-                format="", data=np.zeros(0, np.uint8)),
-            uv_coordinates=[], text="", mesh_resource="",
-            mesh_file=msg("visualization_msgs/msg/MeshFile", filename="",
-                          data=np.zeros(0, np.uint8)),
-            mesh_use_embedded_materials=False))
-    return msg("visualization_msgs/msg/MarkerArray", markers=markers)
+    def _refuse_track_through(self, solid: list[Block]) -> None:
+        """A track whose edges run through a wall or pillar cannot be driven: say so, once."""
+        edges = np.vstack([self.track.xy, *self.track.bounds()])
+        for blk in solid:
+            c, s = math.cos(-blk.yaw), math.sin(-blk.yaw)
+            rel = (edges - np.asarray(blk.center)) @ np.array([[c, s], [-s, c]])
+            inside = np.all(np.abs(rel) < np.asarray(blk.size[:2]) / 2, axis=1)
+            if inside.any():
+                x, y = edges[int(np.argmax(inside))]
+                raise SpecError(f"track {self.track_file.name} runs through {blk.name} at "
+                                f"({x:.1f}, {y:.1f}) m; for a circuit without the hall use "
+                                f"`world: {{kind: circuit, track: ...}}`")

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from kartci._bullet import pb
-from kartci.sim.hall import Block
+from kartci.sim.blocks import Block
 
 Array = NDArray[np.float64]
 

@@ -120,6 +120,26 @@ class HallWorld(WorldParams):
     obstacles: tuple[Box, ...] = ()
 
 
+class CircuitWorld(WorldParams):
+    """An outdoor race circuit from a TUMFTM track alone: ground sized to the track, optional
+    barriers along both edges, no hall."""
+
+    kind: Literal["circuit"] = "circuit"
+    description: str = ""
+    track: str = Field(description="TUMFTM CSV on the project's world path (or absolute)")
+    margin_m: float = Field(10.0, ge=1.0, description="ground beyond the track's extent, m")
+    floor_friction: float = Field(0.9, ge=0.0, description="tyre on asphalt or concrete")
+    zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
+    barriers: bool = Field(True, description="walls along both track edges")
+    barrier_offset_m: float = Field(1.0, ge=0.0, description="gap from the track edge to the "
+                                    "barrier's inner face, m")
+    barrier_height_m: float = Field(0.8, gt=0.0, description="barrier height, m")
+    barrier_thickness_m: float = Field(0.3, gt=0.0, description="barrier thickness, m")
+    barrier_segment_m: float = Field(3.0, gt=0.2, description="length of one barrier box "
+                                     "along the edge, m (shorter follows curves closer)")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on or beside the track")
+
+
 # --- agents -----------------------------------------------------------------------------------
 
 

@@ -13,11 +13,12 @@ from kartci.logs import header, msg
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel, KartSensors
 from kartci.sim import lidar as lidar_mod
+from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
-from kartci.sim.hall import Block, Hall
 from kartci.sim.messages import WORLD_FRAME, joint_state, tf_message, transform
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
+from kartci.sim.track_world import TrackWorld
 from kartci.sim.urdf import urdf_path
 from kartci.vehicle import (
     FOOTPRINT_M,
@@ -45,10 +46,11 @@ class KartRobot(RobotBase):
 
     def __init__(self, ctx: RobotContext) -> None:
         world, spec, dt_s, name = ctx.world, ctx.spec, ctx.dt_s, ctx.name
-        if not isinstance(world, Hall):
-            raise SpecError(f"agent {name}: a go-kart needs a hall world, not {world.spec.kind}")
+        if not isinstance(world, TrackWorld):
+            raise SpecError(f"agent {name}: a go-kart needs a world with a track (hall, "
+                            f"circuit), not {world.spec.kind}")
         self.world = world
-        self.spec, self.world_spec, self.rng, self.dt = spec, world.spec, ctx.rng, dt_s
+        self.spec, self.rng, self.dt = spec, ctx.rng, dt_s
         model = spec.model
         assert isinstance(model, GokartModel)  # the robot registry chose this class by kind
         self.model = model
@@ -173,7 +175,7 @@ class KartRobot(RobotBase):
         extra = [o.footprint() for o in self.world.robots
                  if o is not self and isinstance(o, KartRobot)]
         ranges = lidar_mod.scan_fast(self.lidar, self.azimuths, pos, yaw, self.blocks + extra,
-                                     self.world_spec.wall_height_m, self.sensors.lidar.range_m)
+                                     self.world.ceiling_m, self.sensors.lidar.range_m)
         std = self.sensors.lidar.range_noise_std_m
         std = self.lidar.range_accuracy_m if std is None else std
         ranges = ranges + std * self.rng.standard_normal(ranges.shape)
