@@ -1,6 +1,87 @@
-"""kartci: record-and-replay CI harness for racing-kart and mobile-robot controllers."""
+"""kartci: record-and-replay CI harness for racing-kart and mobile-robot controllers.
 
-from kartci.errors import KartciError
+The Python API, for a team's own scripts and tests:
 
-__all__ = ["KartciError"]
+- `run(scenario, overrides=..., agents=...)`: simulate, record, score and judge one scenario;
+  returns a `RunResult` (metrics with units, verdicts against the baseline, criteria, log).
+- `load_scenario(name_or_path, overrides)`: a validated `Scenario`.
+- `Session(scenario, log_path, agents)`: a run you step yourself (`reset()`, `step()`).
+- `Agent`: the protocol a controller satisfies (messages in, messages out).
+- `plugins`: `Controller`, `MetricSet`, `register` and the other registries' types.
+- `KartciError` and its subclasses: every problem kartci reports.
+
+`import kartci` is cheap: the simulator, solvers and tables load when first used.
+"""
+
+from __future__ import annotations
+
+from kartci.errors import BaselineError, KartciError, LogError, RunError, SpecError
+
+TYPE_CHECKING = False  # not `from typing import ...`: importing typing costs more than kartci
+if TYPE_CHECKING:
+    from typing import Any
+
+    from kartci import plugins
+    from kartci.agents.base import Agent
+    from kartci.api import RunResult, load_scenario, run
+    from kartci.metrics.base import Direction, Metric
+    from kartci.sim.session import RunInfo, Session, StepResult
+    from kartci.spec.models import Scenario
+    from kartci.verdict import CriterionResult, MetricVerdict, Status
+
+# public name -> the module it lives in, imported on first access
+_LAZY = {
+    "Agent": "kartci.agents.base",
+    "CriterionResult": "kartci.verdict",
+    "Direction": "kartci.metrics.base",
+    "Metric": "kartci.metrics.base",
+    "MetricVerdict": "kartci.verdict",
+    "RunInfo": "kartci.sim.session",
+    "RunResult": "kartci.api",
+    "Scenario": "kartci.spec.models",
+    "Session": "kartci.sim.session",
+    "Status": "kartci.verdict",
+    "StepResult": "kartci.sim.session",
+    "load_scenario": "kartci.api",
+    "run": "kartci.api",
+}
+
+__all__ = [
+    "Agent",
+    "BaselineError",
+    "CriterionResult",
+    "Direction",
+    "KartciError",
+    "LogError",
+    "Metric",
+    "MetricVerdict",
+    "RunError",
+    "RunInfo",
+    "RunResult",
+    "Scenario",
+    "Session",
+    "SpecError",
+    "Status",
+    "StepResult",
+    "load_scenario",
+    "plugins",
+    "run",
+]
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name's module on first access (keeps `import kartci` cheap)."""
+    if name == "plugins":
+        return __import__("kartci.plugins", fromlist=["plugins"])
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'kartci' has no attribute '{name}'")
+    value = getattr(__import__(module, fromlist=[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """Public names, including those not imported yet."""
+    return sorted({*globals(), *__all__})

@@ -17,13 +17,42 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
+from kartci.agents.base import Agent
 from kartci.errors import SpecError
+from kartci.metrics.base import Direction, Metric, MetricDef
 from kartci.project import Project, did_you_mean
+from kartci.spec.models import (
+    ControllerParams,
+    Frozen,
+    MetricParams,
+    RobotParams,
+    WorldParams,
+)
 
 if TYPE_CHECKING:
-    from kartci.agents.base import Agent
-    from kartci.metrics.base import Metric, MetricDef
-    from kartci.spec.models import ControllerParams, Frozen, MetricParams, RobotParams, WorldParams
+    from kartci.metrics import ScoreContext
+
+__all__ = [
+    "REGISTRIES",
+    "Agent",
+    "AgentContext",
+    "Controller",
+    "ControllerParams",
+    "Direction",
+    "Metric",
+    "MetricDef",
+    "MetricParams",
+    "MetricSet",
+    "Registry",
+    "RobotKind",
+    "RobotParams",
+    "ScoreContext",
+    "WorldKind",
+    "WorldParams",
+    "lazy",
+    "load",
+    "register",
+]
 
 
 @dataclass(frozen=True)
@@ -47,6 +76,7 @@ class Controller:
     description: str = ""
 
     def build(self, params: ControllerParams, ctx: AgentContext) -> Agent:
+        """The agent for one robot; a SpecError when the controller cannot drive its kind."""
         if self.robots and ctx.model.kind not in self.robots:
             raise SpecError(f"agent {ctx.name}: controller {self.name} drives "
                             f"{' or '.join(self.robots)} robots, not {ctx.model.kind}")
@@ -116,6 +146,7 @@ class Registry(Generic[T]):
     items: dict[str, T] = field(default_factory=dict)
 
     def register(self, item: T, replace: bool = False) -> T:
+        """Add one plugin; the same name twice is an error unless `replace`."""
         if not isinstance(item, self.kind):
             raise SpecError(f"{self.group}: {item!r} is not a kartci.plugins."
                             f"{self.kind.__name__}")
@@ -126,6 +157,7 @@ class Registry(Generic[T]):
         return item
 
     def get(self, name: str) -> T:
+        """The plugin of that name; a SpecError naming the known ones otherwise."""
         load()
         item = self.items.get(name)
         if item is None:
@@ -133,10 +165,12 @@ class Registry(Generic[T]):
         return item
 
     def names(self) -> list[str]:
+        """Every registered name, sorted."""
         load()
         return sorted(self.items)
 
     def all(self) -> list[T]:
+        """Every registered plugin, by name."""
         load()
         return [self.items[n] for n in sorted(self.items)]
 
@@ -192,3 +226,12 @@ def load(project: Project | None = None) -> None:
         except ImportError as err:
             raise SpecError(f"{proj.config_file}: plugin module '{module}' cannot be imported "
                             f"({err})") from err
+
+
+def __getattr__(name: str) -> Any:
+    """`ScoreContext` (what a metric set's `compute` is given) without importing pandas here."""
+    if name == "ScoreContext":
+        from kartci.metrics import ScoreContext
+
+        return ScoreContext
+    raise AttributeError(f"module 'kartci.plugins' has no attribute '{name}'")

@@ -123,7 +123,8 @@ def test_a_metric_set_registered_from_python_is_computed(tmp_path: Path) -> None
     plugins.register(MetricSet("test_extent", {"max_x_m": MetricDef(
         "m", Direction.EQUAL, 0.01, 0.0, "largest x reached")}, top_x))
     try:
-        spec = load_scenario("line_straight", ["duration_s=3", "metrics.test_extent={}"])
+        spec = load_scenario("line_straight", ["duration_s=3", "metrics.test_extent={}",
+                                               "metrics.line_tracking.transient_s=1"])
         simulate(spec, tmp_path / "run.mcap")
         m = compute(tmp_path / "run.mcap")[1]
         odom_x = m["max_x_m"].value

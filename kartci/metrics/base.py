@@ -9,6 +9,8 @@ from typing import Any
 
 
 class Direction(StrEnum):
+    """Which way a metric is better, for judging it against its baseline."""
+
     LOWER = "lower"  # lower is better
     HIGHER = "higher"  # higher is better
     EQUAL = "equal"  # must equal the baseline (within tolerance)
@@ -16,6 +18,8 @@ class Direction(StrEnum):
 
 @dataclass(frozen=True)
 class MetricDef:
+    """A metric's definition: unit, better direction, default tolerance, meaning."""
+
     unit: str
     direction: Direction
     abs_tol: float  # default tolerance in the metric's unit...
@@ -24,12 +28,15 @@ class MetricDef:
     timing: bool = False  # wall-clock: machine-dependent, kept out of the deterministic metrics
 
     def default_tolerance(self, value: float) -> float:
+        """The tolerance a new baseline entry gets for this value."""
         return max(self.abs_tol, self.rel_tol * abs(value)) if math.isfinite(value) else (
             self.abs_tol)
 
 
 @dataclass(frozen=True)
 class Metric:
+    """One named number of a run, with its unit (`extra`: details such as every lap's time)."""
+
     name: str
     value: float
     unit: str

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 
 from kartci import geometry
+from kartci.errors import SpecError
 from kartci.metrics.base import DEFS, Metric
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import LineMetricsParams, Scenario, StraightCourse
@@ -33,8 +34,20 @@ def sensor_track(scenario: Scenario, agent: str, odom: pd.DataFrame) -> pd.DataF
 
 def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame,
                  spec: LineMetricsParams) -> list[Metric]:
+    """Tracking error, line lost, completion, speed and settling of one line tracker. A run
+    that ends before its start-up transient is over has nothing to score: a SpecError naming
+    both times, not NaN errors."""
     if odom.empty:
         return []
+    t_end = float(odom["t"].iloc[-1])
+    if t_end < spec.transient_s:
+        ended = (f"the run ends at {t_end:g} s" if t_end < scenario.duration_s - 1e-6 else
+                 f"the run lasts {t_end:g} s")
+        raise SpecError(
+            f"scenario {scenario.name}, agent {agent}: metrics.line_tracking.transient_s is "
+            f"{spec.transient_s:g} s but {ended} (duration_s {scenario.duration_s:g} s), so "
+            "no sample is left to score after the transient; lower "
+            "metrics.line_tracking.transient_s or raise duration_s")
     tr = sensor_track(scenario, agent, odom)
     course = line_parts(scenario, agent)[0].course
     length = geometry.length_m(course)

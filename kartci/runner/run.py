@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +23,7 @@ from kartci.project import did_you_mean
 from kartci.report.data import PlotContext
 from kartci.results import Plots, ScenarioResult
 from kartci.sim import simulate
+from kartci.sim.session import describe
 from kartci.spec import Scenario
 from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
 
@@ -37,23 +38,28 @@ def default_baselines() -> Path:
 
 def run_one(scenario: Scenario, out: Path,
             on_progress: Callable[[float], None] | None = None,
-            folder: Path | None = None) -> dict[str, Any]:
+            folder: Path | None = None,
+            agents: Mapping[str, object] | None = None) -> dict[str, Any]:
     """Simulate one scenario into `folder` (default OUT/<scenario>) and score its log; returns
-    the run facts (raises KartciError)."""
+    the run facts (raises KartciError). `agents`: objects replacing those agents' controllers
+    (recorded in the log and in run.json as `replaced_agents`)."""
     folder = folder or out / scenario.name
     t0 = time.perf_counter()
     try:
-        info = simulate(scenario, folder / LOG_NAME, on_progress)
+        info = simulate(scenario, folder / LOG_NAME, on_progress, agents)
     except Exception as err:
         write_json_atomic(folder / ERROR_NAME, {"scenario": scenario.name, "error": str(err)})
         raise
     (folder / ERROR_NAME).unlink(missing_ok=True)
     wall = time.perf_counter() - t0
     score(folder)
-    run = {"sim_time_s": round(info.sim_time_s, 6), "wall_s": round(wall, 3),
-           "real_time_factor": round(info.sim_time_s / wall, 2) if wall > 0 else None,
-           "messages": info.messages, "finished_course": info.finished_course,
-           "log": str(folder / LOG_NAME)}
+    run: dict[str, Any] = {
+        "sim_time_s": round(info.sim_time_s, 6), "wall_s": round(wall, 3),
+        "real_time_factor": round(info.sim_time_s / wall, 2) if wall > 0 else None,
+        "messages": info.messages, "finished_course": info.finished_course,
+        "log": str(folder / LOG_NAME)}
+    if agents:
+        run["replaced_agents"] = {name: describe(a) for name, a in sorted(agents.items())}
     write_json_atomic(folder / "run.json", run)
     return run
 

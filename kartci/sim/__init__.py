@@ -1,5 +1,6 @@
-"""Simulation: the PyBullet world, robots, sensors and the fixed-step loop."""
+"""Simulation: the PyBullet world, robots, sensors, the stepping `Session` and the loop."""
 
-from kartci.sim.loop import RunInfo, build_world, make_world, simulate
+from kartci.sim.loop import simulate
+from kartci.sim.session import RunInfo, Session, StepResult, build_world, make_world
 
-__all__ = ["RunInfo", "build_world", "make_world", "simulate"]
+__all__ = ["RunInfo", "Session", "StepResult", "build_world", "make_world", "simulate"]

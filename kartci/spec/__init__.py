@@ -8,6 +8,7 @@ from kartci.spec.load import (
     project_root,
     scenario_from_json,
     scenario_names,
+    with_overrides,
 )
 from kartci.spec.models import (
     AgentSpec,
@@ -33,4 +34,5 @@ __all__ = [
     "project_root",
     "scenario_from_json",
     "scenario_names",
+    "with_overrides",
 ]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -48,9 +49,9 @@ def _read_yaml(path: Path) -> dict[str, Any]:
     return data
 
 
-def scenario_path(name: str) -> Path:
+def scenario_path(name: str | Path) -> Path:
     """A scenario by name (on the project's scenario path) or by path to a YAML file."""
-    if name.endswith((".yaml", ".yml")) or "/" in name:
+    if isinstance(name, Path) or name.endswith((".yaml", ".yml")) or "/" in name:
         return Path(name)
     return project.current().find_scenario(name)
 
@@ -165,12 +166,30 @@ def _did_you_mean_key(error: dict[str, Any]) -> str:
     return did_you_mean(str(error["loc"][-1]), allowed)
 
 
-def load_scenario(name: str, overrides: list[str] | None = None) -> Scenario:
-    """Load and validate a scenario; every problem becomes one SpecError line."""
-    overrides = overrides or []
+def load_scenario(name: str | Path, overrides: Sequence[str] | None = None) -> Scenario:
+    """Load and validate a scenario; every problem becomes one SpecError line.
+
+    Args:
+        name: A scenario name on the project's scenario path (`line_straight`), or the path of
+            a YAML file (a `Path`, or a string ending in `.yaml` / `.yml` or holding a `/`).
+        overrides: `dotted.key=value` assignments applied before validation, as `--set`.
+    """
     path = scenario_path(name)
     data = _read_yaml(path)
     data.setdefault("name", path.stem)
+    return _validated(data, path, list(overrides or ()))
+
+
+def with_overrides(scenario: Scenario, overrides: Sequence[str]) -> Scenario:
+    """A validated scenario with `dotted.key=value` overrides applied (validated again);
+    a relative log path in an override is relative to the working directory."""
+    if not overrides:
+        return scenario
+    data = json.loads(scenario.model_dump_json())
+    return _validated(data, Path(f"scenario {scenario.name}"), list(overrides))
+
+
+def _validated(data: dict[str, Any], path: Path, overrides: list[str]) -> Scenario:
     _resolve_refs(data, path)
     for assignment in overrides:
         apply_override(data, assignment)

@@ -194,6 +194,8 @@ class Criterion(Frozen):
 
 
 class Scenario(Frozen):
+    """A validated scenario: world, agents, duration, seed, metrics and pass criteria."""
+
     name: str = Field(pattern=r"^[a-z0-9_]+$")
     description: str
     world: SerializeAsAny[WorldParams]

@@ -20,6 +20,8 @@ from kartci.spec.models import Criterion
 
 
 class Status(StrEnum):
+    """The verdict on one metric, or on a scenario (the worst of its metrics')."""
+
     PASS = "pass"
     IMPROVED = "improved"
     REGRESSED = "regressed"
@@ -30,6 +32,7 @@ class Status(StrEnum):
 
     @property
     def bad(self) -> bool:
+        """True for a status that fails a run (exit code 1 or 2)."""
         return self in (Status.REGRESSED, Status.FAILED, Status.MISSING, Status.ERROR)
 
 
@@ -38,11 +41,14 @@ SEVERITY = [Status.ERROR, Status.FAILED, Status.REGRESSED, Status.MISSING, Statu
 
 
 def worst(statuses: list[Status]) -> Status:
+    """The most severe status (PASS for none)."""
     return min(statuses, key=SEVERITY.index, default=Status.PASS)
 
 
 @dataclass(frozen=True)
 class MetricVerdict:
+    """One metric of a run judged against its baseline value and tolerance."""
+
     name: str
     value: float | None
     unit: str
@@ -53,6 +59,7 @@ class MetricVerdict:
 
     @property
     def delta(self) -> float | None:
+        """value - baseline, or None when either is missing."""
         if self.value is None or self.baseline is None:
             return None
         return self.value - self.baseline
@@ -60,6 +67,8 @@ class MetricVerdict:
 
 @dataclass(frozen=True)
 class CriterionResult:
+    """One pass criterion of a scenario, checked: the value, the bound and whether it holds."""
+
     name: str
     value: float | None
     bound: str
@@ -71,6 +80,7 @@ def _num(x: Any) -> float | None:
 
 
 def definition(name: str) -> MetricDef | None:
+    """A registered metric's definition, or None."""
     from kartci.metrics import definition as registered
 
     return registered(name)
@@ -132,6 +142,7 @@ def read_metrics(path: Path) -> dict[str, dict[str, Any]]:
 
 def judge(value: float | None, unit: str, name: str,
           entry: dict[str, Any] | None) -> MetricVerdict:
+    """One metric's value against its baseline entry (None: no baseline, NEW)."""
     d = definition(name)
     direction = Direction(entry["direction"]) if entry else (d.direction if d else
                                                              Direction.EQUAL)
@@ -215,6 +226,8 @@ def write_json_atomic(path: Path, data: Any) -> None:
 
 @dataclass(frozen=True)
 class Change:
+    """What a baseline update did to one metric."""
+
     metric: str
     old: float | None
     new: float | None

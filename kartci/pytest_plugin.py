@@ -1,0 +1,206 @@
+"""kartci's pytest plugin (entry point `pytest11: kartci`): scenarios as tests, and a fixture.
+
+- `pytest scenarios/` collects every kartci scenario file there as one test item, named after
+  the file (`-k line_straight`), marked `kartci` and with the scenario's `tags:` as markers
+  (`-m "not slow"`). The item runs the scenario into a temporary folder, judges it against the
+  project's baselines and fails with the verdict table when a metric regressed or a criterion
+  failed, as `kartci run` would exit 1. Scenario files are collected only under paths given on
+  the command line and in the project's own scenario folders (`[tool.kartci] scenarios`), and
+  only YAML with top-level `world:` and `agents:`: other YAML in a repository is left alone.
+- The `kartci_run` fixture runs a scenario with overrides (and agent objects) for a test of
+  your own: `result = kartci_run("line_straight", "duration_s=3")` returns a
+  `kartci.RunResult`.
+
+Options: `--kartci-out DIR` keeps the scenario items' runs in DIR/<scenario>/ (default: pytest's
+temporary folders), `--kartci-baselines DIR` judges them against DIR (default: the project's
+baselines). Works with pytest-xdist (`-n 2`): every run has its own folder.
+"""
+
+from __future__ import annotations
+
+import re
+import tempfile
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
+
+import pytest
+
+from kartci.errors import KartciError
+
+if TYPE_CHECKING:
+    from _pytest._code.code import TerminalRepr
+
+    from kartci.api import RunResult
+
+SCENARIO_KEYS = re.compile(r"^(world|agents)\s*:", re.MULTILINE)
+_ROOTS = pytest.StashKey[tuple[Path, ...]]()
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    """`--kartci-out` and `--kartci-baselines`."""
+    group = parser.getgroup("kartci", "kartci scenarios")
+    group.addoption("--kartci-out", metavar="DIR", default=None,
+                    help="keep the scenario items' runs in DIR/<scenario>/ (default: pytest's "
+                         "temporary folders)")
+    group.addoption("--kartci-baselines", metavar="DIR", default=None,
+                    help="judge scenario items against the baselines in DIR (default: the "
+                         "project's baselines folder)")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Register the `kartci` marker every scenario item carries."""
+    config.addinivalue_line("markers", "kartci: a kartci scenario file run as a test")
+
+
+def _roots(config: pytest.Config) -> tuple[Path, ...]:
+    """Where scenario files are collected: the paths given on the command line, and the
+    project's own scenario folders (the same in every xdist worker)."""
+    roots = config.stash.get(_ROOTS, None)
+    if roots is not None:
+        return roots
+    found: list[Path] = []
+    if config.args_source is pytest.Config.ArgsSource.ARGS:
+        here = config.invocation_params.dir
+        for arg in config.args:
+            found.append((here / arg.split("::", 1)[0]).resolve())
+    try:
+        from kartci import project
+
+        found += [p.resolve() for p in project.current().scenarios]
+    except KartciError:
+        pass  # a broken [tool.kartci] table: only explicit paths (the items will say why)
+    config.stash[_ROOTS] = roots = tuple(found)
+    return roots
+
+
+def _is_scenario(path: Path) -> bool:
+    """A YAML file with `world:` and `agents:` at its top level."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    return {m.group(1) for m in SCENARIO_KEYS.finditer(text)} == {"world", "agents"}
+
+
+def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> ScenarioFile | None:
+    """A kartci scenario file under a collected root becomes a `ScenarioFile`."""
+    if file_path.suffix not in (".yaml", ".yml"):
+        return None
+    path = file_path.resolve()
+    if not any(path == r or r in path.parents for r in _roots(parent.config)):
+        return None
+    if not _is_scenario(path):
+        return None
+    node: ScenarioFile = ScenarioFile.from_parent(parent, path=file_path)
+    return node
+
+
+def _tags(path: Path) -> list[str]:
+    """The scenario's `tags:` as marker names (anything but letters, digits and _ becomes _);
+    a file that does not parse has none (its item reports the problem when it runs)."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return []
+    tags = data.get("tags") if isinstance(data, dict) else None
+    if not isinstance(tags, list | tuple):
+        return []
+    out = []
+    for tag in tags:
+        name = re.sub(r"\W", "_", str(tag))
+        out.append(f"_{name}" if name[:1].isdigit() else name)
+    return [t for t in dict.fromkeys(out) if t]
+
+
+class ScenarioFile(pytest.File):
+    """One scenario file: one test item, named after the file."""
+
+    def collect(self) -> Iterator[ScenarioItem]:
+        """The file's one item, marked `kartci` and with the scenario's tags."""
+        item: ScenarioItem = ScenarioItem.from_parent(self, name=self.path.stem)
+        item.add_marker("kartci")
+        for tag in _tags(self.path):
+            self.config.addinivalue_line("markers", f"{tag}: kartci scenario tag")
+            item.add_marker(tag)
+        yield item
+
+
+class ScenarioFailedError(Exception):
+    """A scenario ran but regressed or failed a criterion; carries its result."""
+
+    def __init__(self, result: RunResult) -> None:
+        """Fail with `result`'s verdict table."""
+        super().__init__(result.table())
+        self.result = result
+
+
+class ScenarioItem(pytest.Item):
+    """Run one scenario, judge it against the project's baselines, fail on a bad verdict."""
+
+    def _out(self) -> Path:
+        kept = self.config.getoption("kartci_out")
+        if kept:
+            return Path(kept).resolve()
+        factory = getattr(self.config, "_tmp_path_factory", None)  # pytest's tmp_path base
+        if factory is not None:
+            path: Path = factory.mktemp(f"kartci-{self.name}", numbered=True)
+            return path
+        return Path(tempfile.mkdtemp(prefix=f"kartci-{self.name}-"))
+
+    def runtest(self) -> None:
+        """Run the scenario; raise `ScenarioFailedError` when it does not pass."""
+        from kartci import api, project
+
+        given = self.config.getoption("kartci_baselines")
+        baselines = Path(given) if given else project.current().baselines
+        result = api.run(self.path, out=self._out(), baselines=baselines)
+        self.user_properties.append(("kartci_log", str(result.log)))
+        if not result.passed:
+            raise ScenarioFailedError(result)  # the table is the failure text
+        self.add_report_section("call", "kartci", result.table())  # shown with -rP
+
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException],
+                     style: Any = None) -> str | TerminalRepr:
+        """The verdict table for a bad verdict, one line for a kartci error (bad input, a
+        failed run), a traceback for anything else (a crashing controller)."""
+        if isinstance(excinfo.value, ScenarioFailedError):
+            return str(excinfo.value)
+        if isinstance(excinfo.value, KartciError):
+            return f"{self.path}: {type(excinfo.value).__name__}: {excinfo.value}"
+        return super().repr_failure(excinfo, style=style)
+
+    def reportinfo(self) -> tuple[Path, int | None, str]:
+        """Where the item comes from, for pytest's reports."""
+        return self.path, None, f"kartci scenario {self.name}"
+
+
+class KartciRun(Protocol):
+    """The `kartci_run` fixture's type: annotate a test's argument with it for mypy."""
+
+    def __call__(self, scenario: str | Path, *overrides: str,
+                 agents: Mapping[str, object] | None = None,
+                 baselines: str | Path | None = None) -> RunResult:
+        """Run `scenario` with `dotted.key=value` overrides; see `kartci.run`."""
+        ...
+
+
+@pytest.fixture
+def kartci_run(tmp_path: Path) -> KartciRun:
+    """Run a scenario for your own asserts: `kartci_run("line_straight", "duration_s=3",
+    agents={"lt0": MyController()})` returns a `kartci.RunResult`. Each call runs into its own
+    folder under the test's `tmp_path`; baselines default to the project's."""
+    from kartci import api
+
+    calls = 0
+
+    def run(scenario: str | Path, *overrides: str, agents: Mapping[str, object] | None = None,
+            baselines: str | Path | None = None) -> RunResult:
+        nonlocal calls
+        calls += 1
+        return api.run(scenario, overrides=overrides, out=tmp_path / f"kartci-{calls}",
+                       agents=agents, baselines=baselines)
+
+    return run
