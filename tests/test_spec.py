@@ -4,8 +4,9 @@ from pathlib import Path
 
 import pytest
 
+from kartci.agents.params import LinePidController
 from kartci.errors import SpecError
-from kartci.spec import LinePidController, json_schema, load_scenario, scenario_names
+from kartci.spec import json_schema, load_scenario, scenario_names
 
 
 @pytest.mark.parametrize("name", scenario_names())

@@ -1,7 +1,5 @@
 """Scenario specs: typed models, loading, `--set` overrides, JSON Schema."""
 
-from kartci.agents.params import LinePidController
-from kartci.robots.line_tracker.params import LineSensorSpec, LineTrackerModel
 from kartci.spec.load import (
     json_schema,
     load_scenario,
@@ -24,9 +22,6 @@ __all__ = [
     "CircleCourse",
     "Criterion",
     "LineLabWorld",
-    "LinePidController",
-    "LineSensorSpec",
-    "LineTrackerModel",
     "Scenario",
     "StraightCourse",
     "json_schema",
