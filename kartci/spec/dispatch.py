@@ -32,9 +32,9 @@ def _validate(model: type[BaseModel], value: Any, loc: tuple[str | int, ...]) ->
 
 def with_allowed_keys(model: type[BaseModel], err: ValidationError) -> list[dict[str, Any]]:
     """The errors, each unknown key with the keys its model has (for a "did you mean")."""
-    out = []
-    for e in err.errors():
-        e = dict(e)
+    out: list[dict[str, Any]] = []
+    for error in err.errors():
+        e: dict[str, Any] = dict(error)
         if e["type"] == "extra_forbidden":
             owner: Any = model
             for part in e["loc"][:-1]:
