@@ -144,8 +144,9 @@ class Registry(Generic[T]):
     what: str  # for messages: "controller", "robot kind", ...
     kind: type[T]
     items: dict[str, T] = field(default_factory=dict)
+    sources: dict[str, str] = field(default_factory=dict)  # name -> where it was registered
 
-    def register(self, item: T, replace: bool = False) -> T:
+    def register(self, item: T, replace: bool = False, source: str = "") -> T:
         """Add one plugin; the same name twice is an error unless `replace`."""
         if not isinstance(item, self.kind):
             raise SpecError(f"{self.group}: {item!r} is not a kartci.plugins."
@@ -154,6 +155,8 @@ class Registry(Generic[T]):
         if old is not None and old != item and not replace:
             raise SpecError(f"two different {self.what}s are registered as '{item.name}'")
         self.items[item.name] = item
+        if source or item.name not in self.sources:
+            self.sources[item.name] = source or _caller_module()
         return item
 
     def get(self, name: str) -> T:
@@ -186,10 +189,41 @@ def register(item: Controller | RobotKind | WorldKind | MetricSet) -> None:
     """Register a plugin from Python (a project plugin module, a test)."""
     for reg in REGISTRIES:
         if isinstance(item, reg.kind):
-            reg.register(item)
+            reg.register(item, source=_caller_module())
             return
     raise SpecError(f"cannot register {item!r}: not a Controller, RobotKind, WorldKind or "
                     "MetricSet")
+
+
+def _caller_module() -> str:
+    """The module that called into this one (for `kartci plugins`: where a plugin came from)."""
+    frame = sys._getframe(1)
+    while frame is not None and frame.f_globals.get("__name__") == __name__:
+        frame = frame.f_back  # type: ignore[assignment]
+    return str(frame.f_globals.get("__name__", "?")) if frame is not None else "?"
+
+
+def _entry_point_source(ep: Any) -> str:
+    dist = getattr(ep, "dist", None)
+    where = f" (entry point of {dist.name} {dist.version})" if dist is not None else ""
+    return f"{ep.module}{where}"
+
+
+@dataclass(frozen=True)
+class PluginInfo:
+    """One registered plugin, as `kartci plugins` lists it."""
+
+    kind: str  # "controller", "robot kind", "world kind", "metric set"
+    name: str
+    description: str
+    source: str  # the module that registered it (and the distribution, for entry points)
+
+
+def catalogue(project: Project | None = None) -> list[PluginInfo]:
+    """Every registered plugin of every kind, installed ones and the project's own."""
+    load(project)
+    return [PluginInfo(reg.what, name, item.description, reg.sources.get(name, "?"))
+            for reg in REGISTRIES for name, item in sorted(reg.items.items())]
 
 
 _LOADED: set[str] = set()  # "entry points" and the roots whose project plugins are imported
@@ -210,7 +244,7 @@ def load(project: Project | None = None) -> None:
                 if getattr(item, "name", None) != ep.name:
                     raise SpecError(f"plugin {ep.value}: entry point '{ep.name}' must name an "
                                     f"object whose name is '{ep.name}'")
-                reg.register(item)
+                reg.register(item, source=_entry_point_source(ep))
     from kartci import project as project_mod
 
     proj = project or project_mod.current()

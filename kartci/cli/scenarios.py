@@ -1,4 +1,5 @@
-"""`kartci list`, `show` and `schema`: what scenarios there are and what they resolve to."""
+"""`kartci list`, `show`, `schema` and `plugins`: what scenarios there are, what they resolve
+to, and what they can name."""
 
 from __future__ import annotations
 
@@ -8,23 +9,42 @@ from typing import Annotated
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
-from kartci.cli.common import SetOpt, app, out_console
+from kartci.cli.common import SetOpt, app, complete_scenario, out_console
+from kartci.errors import SpecError
 
 
 @app.command("list")
 def list_cmd() -> None:
-    """List the scenarios with a one-line description."""
-    from kartci.spec import load_scenario, scenario_names
+    """List the scenarios, where each comes from and what it does.
 
-    table = Table("scenario", "description", box=None)
-    for name in scenario_names():
-        table.add_row(name, load_scenario(name).description)
+    Every scenario reachable by name: the project's own, then kartci's built-ins, each with its
+    one-line description. A file that cannot be loaded is listed with its error (exit 2); the
+    others are listed all the same."""
+    from kartci import project
+    from kartci.spec import scenario_catalogue
+
+    entries = scenario_catalogue()
+    if not entries:
+        where = ", ".join(str(p) for p in project.current().scenario_path)
+        raise SpecError(f"no scenarios found (searched {where}); `kartci init` creates a project "
+                        "with one")
+    table = Table("scenario", "from", "description", box=None)
+    for e in entries:
+        table.add_row(Text(e.name), Text(e.origin.value),
+                      Text(f"error: {e.error}", style="red") if e.error else Text(e.description))
     out_console.print(table)
+    bad = [e.name for e in entries if e.error]
+    if bad:
+        raise SpecError(f"{len(bad)} of {len(entries)} scenario files cannot be loaded: "
+                        f"{', '.join(bad)} (errors listed above)")
 
 
 @app.command()
-def show(name: str, set_: SetOpt = None) -> None:
+def show(name: Annotated[str, typer.Argument(help="A scenario name or YAML path.",
+                                             autocompletion=complete_scenario)],
+         set_: SetOpt = None) -> None:
     """Print a scenario fully resolved (world and model files included, overrides applied)."""
     from kartci.spec import load_scenario
 
@@ -42,3 +62,18 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
         typer.echo(text)
     else:
         out.write_text(text + "\n", encoding="utf-8")
+
+
+@app.command()
+def plugins() -> None:
+    """List the registered controllers, robots, worlds and metrics.
+
+    Controllers, robot kinds, world kinds and metric sets (what a scenario can name), each with
+    its one-line description and the module it comes from."""
+    from kartci.plugins import catalogue
+
+    table = Table("kind", "name", "description", "from", box=None)
+    for info in catalogue():
+        table.add_row(Text(info.kind), Text(info.name), Text(info.description),
+                      Text(info.source))
+    out_console.print(table)

@@ -1,9 +1,11 @@
 """Scenario specs: typed models, loading, `--set` overrides, JSON Schema."""
 
 from kartci.spec.load import (
+    ScenarioEntry,
     json_schema,
     load_scenario,
     project_root,
+    scenario_catalogue,
     scenario_from_json,
     scenario_names,
     with_overrides,
@@ -23,10 +25,12 @@ __all__ = [
     "Criterion",
     "LineLabWorld",
     "Scenario",
+    "ScenarioEntry",
     "StraightCourse",
     "json_schema",
     "load_scenario",
     "project_root",
+    "scenario_catalogue",
     "scenario_from_json",
     "scenario_names",
     "with_overrides",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import json
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -12,8 +13,8 @@ import yaml
 from pydantic import ValidationError
 
 from kartci import project
-from kartci.errors import SpecError
-from kartci.project import did_you_mean
+from kartci.errors import KartciError, SpecError
+from kartci.project import Origin, did_you_mean
 from kartci.spec.dispatch import ParamsError, with_allowed_keys
 from kartci.spec.models import Scenario
 
@@ -26,6 +27,41 @@ def project_root() -> Path:
 def scenario_names() -> list[str]:
     """Every scenario reachable by name: the project's own, then the built-in ones."""
     return list(project.current().all_scenarios())
+
+
+@dataclass(frozen=True)
+class ScenarioEntry:
+    """One scenario reachable by name: its file, where it comes from, and its description or
+    the one-line reason it cannot be loaded."""
+
+    name: str
+    path: Path
+    origin: Origin
+    description: str = ""
+    error: str | None = None
+
+
+def scenario_catalogue() -> list[ScenarioEntry]:
+    """Every scenario reachable by name, each loaded and validated; a bad file is an entry
+    with its error, not an exception, so one broken file hides no other."""
+    proj = project.current()
+    out = []
+    for name, path in proj.all_scenarios().items():
+        origin = proj.origin_of(path)
+        if path.is_symlink() and not path.exists():
+            out.append(ScenarioEntry(name, path, origin,
+                                     error=f"{path}: broken link (to {path.readlink()})"))
+            continue
+        try:
+            spec = load_scenario(name)
+        except KartciError as err:
+            out.append(ScenarioEntry(name, path, origin, error=str(err)))
+        except Exception as err:  # a kartci bug: still one line, and the others are listed
+            out.append(ScenarioEntry(name, path, origin, error=f"{path}: {type(err).__name__}: "
+                                     f"{err} (a bug in kartci or a plugin)"))
+        else:
+            out.append(ScenarioEntry(name, path, origin, spec.description))
+    return out
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:

@@ -1,0 +1,157 @@
+"""`kartci init`: a team's repository becomes a kartci project, and kartci installed from its
+wheel runs it (the issue's done-when, step by step, in a fresh venv)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import tomllib
+from importlib import metadata
+from pathlib import Path
+
+import pytest
+from test_cli import kartci
+from venvs import offline_env
+
+from kartci import __version__
+from kartci.project import ProjectConfig, find_project
+from kartci.scaffold import SCENARIO, dependency_pins, init_project, workflow_text
+
+FILES = ["kartci.toml", f"scenarios/{SCENARIO}.yaml", "baselines/README.md",
+         ".github/workflows/kartci.yml", "constraints.txt", "README.md", ".gitignore"]
+
+
+def _tree(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): p.read_text() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def test_init_then_run_then_baseline_update_from_the_installed_wheel(
+        fresh_venv: Path, tmp_path: Path) -> None:
+    """In a new empty folder, with kartci installed from its wheel: `kartci init && kartci run`
+    runs and passes, and `kartci baseline update` writes into the project's baselines/."""
+    repo = tmp_path / "robot-repo"
+    repo.mkdir()
+    env = offline_env(fresh_venv)
+
+    def k(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([str(fresh_venv / "kartci"), *args], cwd=repo, env=env,
+                              capture_output=True, text=True, timeout=300)
+
+    where = subprocess.run([str(fresh_venv / "python"), "-c",
+                            "import kartci; print(kartci.__file__)"],
+                           cwd=repo, env=env, capture_output=True, text=True, check=True)
+    assert where.stdout.startswith(str(fresh_venv.parent)), where.stdout  # the wheel's kartci
+    assert k("--version").stdout.strip() == f"kartci {__version__}"
+
+    init = k("init")
+    assert init.returncode == 0, init.stderr
+    assert sorted(_tree(repo)) == sorted(FILES)
+    assert (repo / ".github/workflows/kartci.yml").read_text() == workflow_text()
+    assert f"kartci=={__version__}" in (repo / ".github/workflows/kartci.yml").read_text()
+
+    run = k("run")
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    summary = json.loads((repo / "reports/latest/summary.json").read_text())
+    assert list(summary["scenarios"]) == [SCENARIO] and summary["exit_code"] == 0
+    assert sorted(p.name for p in (repo / "baselines").iterdir()) == ["README.md"]
+
+    update = k("baseline", "update", "reports/latest")
+    assert update.returncode == 0, update.stderr
+    stored = json.loads((repo / "baselines" / f"{SCENARIO}.json").read_text())
+    assert stored["scenario"] == SCENARIO and "cross_track_rms_m" in stored["metrics"]
+
+    again = k("run")  # now judged against the baseline just written
+    assert again.returncode == 0, again.stdout[-2000:]
+    summary = json.loads((repo / "reports/latest/summary.json").read_text())
+    statuses = {m["status"] for m in summary["scenarios"][SCENARIO]["metrics"].values()}
+    assert statuses == {"pass"}
+
+
+def test_init_refuses_to_overwrite_and_force_does(tmp_path: Path) -> None:
+    first = kartci("init", tmp_path)
+    assert first.returncode == 0, first.stderr
+    (tmp_path / "scenarios" / f"{SCENARIO}.yaml").write_text("edited: by the team\n")
+    before = _tree(tmp_path)
+
+    again = kartci("init", tmp_path)
+    assert again.returncode == 2 and "Traceback" not in again.stderr
+    (line,) = again.stderr.strip().splitlines()
+    assert "kartci.toml already exists (and 4 more)" in line and "--force" in line
+    assert _tree(tmp_path) == before  # nothing written
+
+    forced = kartci("init", tmp_path, "--force")
+    assert forced.returncode == 0, forced.stderr
+    after = _tree(tmp_path)
+    assert after[f"scenarios/{SCENARIO}.yaml"] != "edited: by the team\n"
+    assert after["README.md"] == before["README.md"]  # the section is not added twice
+    assert after[".gitignore"].count("reports/") == 1
+
+
+def test_init_adds_a_table_to_an_existing_pyproject_and_keeps_the_rest(tmp_path: Path) -> None:
+    pyproject = ("[project]\nname = \"team-stack\"\nversion = \"1.2.3\"\n\n"
+                 "[tool.ruff]\nline-length = 99\n")
+    (tmp_path / "pyproject.toml").write_text(pyproject)
+    (tmp_path / "README.md").write_text("# team-stack\n\nOur controllers.\n")
+    (tmp_path / ".gitignore").write_text("*.pyc\n/reports\n")
+    steps = init_project(tmp_path)
+    assert {str(s.path): s.action.value for s in steps}["pyproject.toml"] == "appended to"
+    assert not (tmp_path / "kartci.toml").exists()
+    text = (tmp_path / "pyproject.toml").read_text()
+    assert text.startswith(pyproject)
+    data = tomllib.loads(text)
+    assert data["project"]["name"] == "team-stack" and data["tool"]["ruff"]["line-length"] == 99
+    ProjectConfig.model_validate(data["tool"]["kartci"])
+    proj = find_project(tmp_path / "scenarios")  # found from a subfolder, like pytest's rootdir
+    assert proj.root == tmp_path and proj.config_file == tmp_path / "pyproject.toml"
+    assert [p.stem for p in proj.own_scenarios()] == [SCENARIO]
+    readme = (tmp_path / "README.md").read_text()
+    assert readme.startswith("# team-stack\n\nOur controllers.\n\n<!-- kartci -->")
+    assert (tmp_path / ".gitignore").read_text() == "*.pyc\n/reports\n"  # already ignored
+
+    (tmp_path / "kartci.toml").unlink(missing_ok=True)
+    refused = kartci("init", tmp_path)  # the table is there now: the team's file is never rewritten
+    assert refused.returncode == 2
+    assert "pyproject.toml already has [tool.kartci]" in refused.stderr
+
+
+def test_a_new_kartci_toml_is_a_valid_project(tmp_path: Path) -> None:
+    init_project(tmp_path / "new")  # a missing folder is created
+    cfg = tomllib.loads((tmp_path / "new" / "kartci.toml").read_text())
+    ProjectConfig.model_validate(cfg)
+    proj = find_project(tmp_path / "new")
+    assert proj.config_file == tmp_path / "new" / "kartci.toml"
+    assert proj.baselines == tmp_path / "new" / "baselines"
+
+
+@pytest.mark.parametrize("bad", ["file", "pyproject", "scenarios", "readme", "binary"])
+def test_bad_init_targets_are_one_line_and_write_nothing(tmp_path: Path, bad: str) -> None:
+    target = tmp_path / "target"
+    if bad == "file":
+        target.write_text("not a folder")
+    else:
+        target.mkdir()
+        if bad == "pyproject":
+            (target / "pyproject.toml").write_text("[project\nname = 1\n")
+        elif bad == "scenarios":
+            (target / "scenarios").write_text("a file where the folder goes")
+        elif bad == "readme":
+            (target / "README.md").mkdir()
+        else:
+            (target / "README.md").write_bytes(b"\xff\xfe\x00")
+    before = sorted(p.name for p in target.iterdir()) if target.is_dir() else []
+    p = kartci("init", target, "--force")
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    (line,) = p.stderr.strip().splitlines()
+    assert str(target) in line
+    assert (sorted(p.name for p in target.iterdir()) if target.is_dir() else []) == before
+
+
+def test_constraints_pin_the_installed_numeric_dependencies(tmp_path: Path) -> None:
+    pins = dependency_pins()
+    for name in ("numpy", "scipy", "pybullet", "casadi"):
+        assert f"{name}=={metadata.version(name)}" in pins
+    assert not any(p.startswith("kartci==") for p in pins)
+    init_project(tmp_path)
+    lines = (tmp_path / "constraints.txt").read_text().splitlines()
+    assert [ln for ln in lines if not ln.startswith("#")] == pins
