@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import ValidationError
 
 from kartci.errors import SpecError
 from kartci.spec.models import Scenario
+from kartci.spec.yamlio import clip, parse_value, preview, read_yaml
 
 
 def project_root() -> Path:
@@ -29,24 +28,7 @@ def scenario_names() -> list[str]:
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpecError(f"{path}: file not found") from None
-    except OSError as err:
-        raise SpecError(f"{path}: cannot read ({err.strerror})") from err
-    except UnicodeDecodeError:
-        raise SpecError(f"{path}: not a UTF-8 text file") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(err, "problem", None) or "invalid YAML"
-        raise SpecError(f"{path}:{where}: {problem}") from None
-    if not isinstance(data, dict):
-        raise SpecError(f"{path}: expected a mapping of keys at the top level")
-    return data
+    return read_yaml(path)
 
 
 def scenario_path(name: str) -> Path:
@@ -80,34 +62,32 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
     """Apply one `dotted.key=value`; the value is parsed as YAML (numbers, booleans, lists)."""
     key, sep, raw = assignment.partition("=")
     if not sep or not key.strip():
-        raise SpecError(f"--set {assignment!r}: expected dotted.key=value")
+        raise SpecError(f"--set {clip(repr(assignment), 80)}: expected dotted.key=value")
     parts = key.strip().split(".")
+    key = clip(key, 80)  # for messages
     node: Any = data
     for i, part in enumerate(parts[:-1]):
         if not isinstance(node, dict):
-            raise SpecError(f"--set {key}: '{'.'.join(parts[:i])}' is not a mapping")
+            raise SpecError(f"--set {key}: '{clip('.'.join(parts[:i]), 80)}' is not a mapping")
         node = node.setdefault(part, {})
     if not isinstance(node, dict):
-        raise SpecError(f"--set {key}: '{'.'.join(parts[:-1])}' is not a mapping")
-    try:
-        node[parts[-1]] = yaml.safe_load(raw)
-    except yaml.YAMLError:
-        node[parts[-1]] = raw
+        raise SpecError(f"--set {key}: '{clip('.'.join(parts[:-1]), 80)}' is not a mapping")
+    node[parts[-1]] = parse_value(raw, f"--set {key}")
 
 
 def _one_line(err: ValidationError, path: Path, overrides: list[str]) -> str:
     first = err.errors()[0]
     loc = ".".join(str(p) for p in first["loc"] if not str(p).startswith(("function-", "tagged")))
-    loc = ".".join(p for p in loc.split(".") if p not in ("straight", "circle", "line_pid"))
+    loc = clip(".".join(p for p in loc.split(".") if p not in ("straight", "circle", "line_pid")))
     source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
-    msg = first["msg"]
+    msg = clip(first["msg"])
     if first["type"] == "extra_forbidden":
         msg = "unknown key"
     elif first["type"] == "missing":
         msg = "required key is missing"
     got = first.get("input")
     shown = "" if first["type"] in ("missing", "extra_forbidden") or isinstance(got, dict) else (
-        f" (got {json.dumps(got, default=str)[:60]})"
+        f" (got {preview(got, 60)})"
     )
     n = len(err.errors())
     more = f" [+{n - 1} more]" if n > 1 else ""
@@ -128,6 +108,8 @@ def load_scenario(name: str, overrides: list[str] | None = None) -> Scenario:
         return Scenario.model_validate(data)
     except ValidationError as err:
         raise SpecError(_one_line(err, path, overrides)) from None
+    except (ArithmeticError, RecursionError) as err:  # a validator's arithmetic on odd values
+        raise SpecError(f"{path}: a value is out of range ({clip(str(err))})") from err
 
 
 def scenario_from_json(text: str) -> Scenario:
