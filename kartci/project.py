@@ -96,34 +96,39 @@ class Project:
         known = self.all_scenarios()
         if name in known:
             return known[name]
-        raise SpecError(f"unknown scenario '{name}'{did_you_mean(name, known)}; "
+        shown = name if len(name) <= 80 else name[:77] + "..."
+        raise SpecError(f"unknown scenario '{shown}'{did_you_mean(name, known)}; "
                         "see `kartci list`")
 
     def find_world(self, name: str) -> Path:
         """`winti/hall` -> the first `<world folder>/winti/hall.yaml` on the search path."""
-        return self._find(self.world_path, f"{name}.yaml", f"world '{name}'")
+        return self._find(self.world_path, f"{name}.yaml", f"world {name!r}")
 
     def find_model(self, name: str) -> Path:
         """`gokart` -> the first `<model folder>/gokart/params.yaml` on the search path."""
-        return self._find(self.model_path, f"{name}/params.yaml", f"robot model '{name}'")
+        return self._find(self.model_path, f"{name}/params.yaml", f"robot model {name!r}")
 
     def world_file(self, rel: str) -> Path:
         """A data file named relative to the world folders (a track CSV, a mesh)."""
-        return self._find(self.world_path, rel, f"world data file '{rel}'")
+        return self._find(self.world_path, rel, f"world data file {rel!r}")
 
     def model_file(self, rel: str) -> Path:
         """A data file named relative to the model folders (a URDF, a joystick mapping)."""
-        return self._find(self.model_path, rel, f"model data file '{rel}'")
+        return self._find(self.model_path, rel, f"model data file {rel!r}")
 
     @staticmethod
     def _find(path: tuple[Path, ...], rel: str, what: str) -> Path:
+        what = what if len(what) <= 120 else what[:117] + "..."  # never echo a huge name
         if Path(rel).is_absolute() or ".." in Path(rel).parts:
             raise SpecError(f"{what}: expected a name relative to the search path "
                             "(no absolute path, no '..')")
         for folder in path:
             candidate = folder / rel
-            if candidate.is_file():
-                return candidate
+            try:
+                if candidate.is_file():
+                    return candidate
+            except OSError as err:  # a name too long for the file system, say
+                raise SpecError(f"{what}: cannot be a file name ({err.strerror})") from err
         where = ", ".join(str(p) for p in path)
         raise SpecError(f"{what} not found (searched {where})")
 

@@ -18,6 +18,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from kartci.errors import SpecError
+from kartci.spec.yamlio import TRACK_MAX_BYTES, read_text_bounded
 
 Array = NDArray[np.float64]
 SAMPLE_M = 0.05  # spacing of the dense centreline samples
@@ -84,7 +85,7 @@ OBSTACLES_TOPIC = "/kartci/obstacles"  # visualization_msgs/MarkerArray: boxes, 
 
 @cache
 def load_track(path: Path) -> Track:
-    return track_from_rows(parse_csv(path), path)
+    return track_from_rows(parse_csv(path, read_text_bounded(path, TRACK_MAX_BYTES)), path)
 
 
 def track_from_text(text: str, name: str) -> Track:

@@ -9,7 +9,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import ValidationError
 
 from kartci import project
@@ -17,6 +16,7 @@ from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
 from kartci.spec.dispatch import ParamsError, with_allowed_keys
 from kartci.spec.models import Scenario
+from kartci.spec.yamlio import clip, parse_value, preview, read_yaml
 
 
 def project_root() -> Path:
@@ -65,24 +65,7 @@ def scenario_catalogue() -> list[ScenarioEntry]:
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpecError(f"{path}: file not found") from None
-    except OSError as err:
-        raise SpecError(f"{path}: cannot read ({err.strerror})") from err
-    except UnicodeDecodeError:
-        raise SpecError(f"{path}: not a UTF-8 text file") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(err, "problem", None) or "invalid YAML"
-        raise SpecError(f"{path}:{where}: {problem}") from None
-    if not isinstance(data, dict):
-        raise SpecError(f"{path}: expected a mapping of keys at the top level")
-    return data
+    return read_yaml(path)
 
 
 def scenario_path(name: str | Path) -> Path:
@@ -154,19 +137,17 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
     """Apply one `dotted.key=value`; the value is parsed as YAML (numbers, booleans, lists)."""
     key, sep, raw = assignment.partition("=")
     if not sep or not key.strip():
-        raise SpecError(f"--set {assignment!r}: expected dotted.key=value")
+        raise SpecError(f"--set {clip(repr(assignment), 80)}: expected dotted.key=value")
     parts = key.strip().split(".")
+    key = clip(key, 80)  # for messages
     node: Any = data
     for i, part in enumerate(parts[:-1]):
         if not isinstance(node, dict):
-            raise SpecError(f"--set {key}: '{'.'.join(parts[:i])}' is not a mapping")
+            raise SpecError(f"--set {key}: '{clip('.'.join(parts[:i]), 80)}' is not a mapping")
         node = node.setdefault(part, {})
     if not isinstance(node, dict):
-        raise SpecError(f"--set {key}: '{'.'.join(parts[:-1])}' is not a mapping")
-    try:
-        node[parts[-1]] = yaml.safe_load(raw)
-    except yaml.YAMLError:
-        node[parts[-1]] = raw
+        raise SpecError(f"--set {key}: '{clip('.'.join(parts[:-1]), 80)}' is not a mapping")
+    node[parts[-1]] = parse_value(raw, f"--set {key}")
 
 
 def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
@@ -175,17 +156,17 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
     first = errors[0]
     parts = [str(p) for p in (*prefix, *first.get("loc", ()))]
     # a discriminated union (a line course) puts its tag into the location: not a key
-    loc = ".".join(p for p in parts if not p.startswith(("function-", "tagged"))
-                   and p not in COURSE_TAGS)
+    loc = clip(".".join(p for p in parts if not p.startswith(("function-", "tagged"))
+                        and p not in COURSE_TAGS))
     source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
-    msg = first["msg"]
+    msg = clip(first["msg"])
     if first["type"] == "extra_forbidden":
         msg = "unknown key" + _did_you_mean_key(first)
     elif first["type"] == "missing" and msg == "Field required":
         msg = "required key is missing"
     got = first.get("input")
     shown = "" if first["type"] in ("missing", "extra_forbidden", "unknown_plugin") or isinstance(
-        got, dict) else f" (got {json.dumps(got, default=str)[:60]})"
+        got, dict) else f" (got {preview(got, 60)})"
     more = f" [+{len(errors) - 1} more]" if len(errors) > 1 else ""
     return f"{path}: {loc or '<top>'}{source}: {msg}{shown}{more}"
 
@@ -237,6 +218,8 @@ def _validated(data: dict[str, Any], path: Path, overrides: list[str]) -> Scenar
         raise SpecError(_one_line(err.errors, path, overrides, err.loc)) from err
     except ValidationError as err:
         raise SpecError(_one_line(with_allowed_keys(Scenario, err), path, overrides)) from err
+    except (ArithmeticError, RecursionError) as err:  # a validator's arithmetic on odd values
+        raise SpecError(f"{path}: a value is out of range ({clip(str(err))})") from err
 
 
 def scenario_from_json(text: str) -> Scenario:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, model_validator
@@ -10,7 +11,12 @@ from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, model_validat
 class Frozen(BaseModel):
     """Base for every spec: immutable, and unknown keys are errors, not silently ignored."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+
+# a coordinate in a world, bounded so that geometry on it (squares, lengths) cannot overflow
+Coordinate_m = Annotated[float, Field(ge=-1e6, le=1e6)]
+Point_m = tuple[Coordinate_m, Coordinate_m]
 
 
 # --- what plugins extend: each registered type validates its own parameters -----------------
@@ -50,8 +56,8 @@ class StraightCourse(Frozen):
     """A straight black line from `start_m` to `end_m`."""
 
     type: Literal["straight"] = "straight"
-    start_m: tuple[float, float] = (0.0, 0.0)
-    end_m: tuple[float, float] = (2.5, 0.0)
+    start_m: Point_m = (0.0, 0.0)
+    end_m: Point_m = (2.5, 0.0)
 
     @model_validator(mode="after")
     def _has_length(self) -> StraightCourse:
@@ -64,8 +70,8 @@ class CircleCourse(Frozen):
     """A closed circular black line, driven counter-clockwise from angle `start_rad`."""
 
     type: Literal["circle"] = "circle"
-    center_m: tuple[float, float] = (0.0, 0.0)
-    radius_m: float = Field(1.0, gt=0.05)
+    center_m: Point_m = (0.0, 0.0)
+    radius_m: float = Field(1.0, gt=0.05, le=1e6)
     start_rad: float = -1.5707963267948966
 
 
@@ -226,7 +232,7 @@ class Scenario(Frozen):
             periods[f"agents.{name}.controller.period_s"] = agent.controller.period_s
         for key, period in periods.items():
             ratio = period / dt
-            if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+            if not math.isfinite(ratio) or abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
                 raise ValueError(
                     f"{key}: period {period:g} s is not a whole multiple of physics.dt_s {dt:g} s"
                 )
