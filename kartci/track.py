@@ -69,7 +69,7 @@ def parse_csv(path: Path, text: str | None = None) -> Array:
                           comments="#", ndmin=2)
     except (OSError, ValueError) as err:
         raise SpecError(f"{path}: not a TUMFTM track CSV (x_m,y_m,w_tr_right_m,w_tr_left_m): "
-                        f"{err}") from None
+                        f"{err}") from err
     if rows.shape[1] != 4 or len(rows) < 4:
         raise SpecError(f"{path}: expected at least 4 rows of x_m,y_m,w_tr_right_m,w_tr_left_m")
     if np.allclose(rows[0, :2], rows[-1, :2]):

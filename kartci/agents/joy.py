@@ -68,7 +68,7 @@ def load_mapping(name: str) -> JoyMapping:
     try:
         return JoyMapping.model_validate(yaml.safe_load(path.read_text(encoding="utf-8")))
     except (ValidationError, yaml.YAMLError) as err:
-        raise SpecError(f"{path}: invalid joystick mapping ({str(err).splitlines()[0]})") from None
+        raise SpecError(f"{path}: invalid joystick mapping ({str(err).splitlines()[0]})") from err
 
 
 def _pedal(p: PedalAxis, axes: Any) -> float:

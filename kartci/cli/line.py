@@ -33,8 +33,8 @@ def characterise(
     agent = next(iter(spec.agents))
     try:
         fov_list = [float(f) for f in fovs.split(",") if f.strip()]
-    except ValueError:
-        raise SpecError(f"--fovs {fovs!r}: expected comma-separated numbers") from None
+    except ValueError as err:
+        raise SpecError(f"--fovs {fovs!r}: expected comma-separated numbers") from err
     if not fov_list or not all(0.05 < f < 3.0 for f in fov_list):
         raise SpecError(f"--fovs {fovs!r}: each field of view must be in (0.05, 3.0) rad")
     if not 0 < step_m <= 0.005:

@@ -38,7 +38,7 @@ def fixed_frames(path: Path, root: str = "base_link") -> dict[str, tuple[NDArray
     try:
         tree = ET.parse(path)
     except (OSError, ET.ParseError) as err:
-        raise SpecError(f"{path}: cannot read URDF ({err})") from None
+        raise SpecError(f"{path}: cannot read URDF ({err})") from err
     children: dict[str, list[tuple[str, NDArray[np.float64], NDArray[np.float64]]]] = {}
     for joint in tree.getroot().iter("joint"):
         if joint.get("type") != "fixed":
@@ -75,7 +75,7 @@ def physics_urdf(path: Path) -> Path:
     try:
         tree = ET.parse(path)
     except (OSError, ET.ParseError) as err:
-        raise SpecError(f"{path}: cannot read URDF ({err})") from None
+        raise SpecError(f"{path}: cannot read URDF ({err})") from err
     root = tree.getroot()
     links = {link.get("name"): link for link in root.findall("link")}
     for joint in root.findall("joint"):
