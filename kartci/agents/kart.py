@@ -18,7 +18,7 @@ from kartci.agents.params import (
     ScriptController,
 )
 from kartci.agents.source import Recorded
-from kartci.logs.types import header, msg, yaw_of
+from kartci.logs.types import base_link, header, msg, yaw_of
 from kartci.plugins import AgentContext
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, Track, track_from_text
@@ -42,6 +42,7 @@ class ManualAgent:
 
     def __init__(self, spec: ManualController, ctx: AgentContext) -> None:
         self.period_s, self.model = spec.period_s, _kart(ctx)
+        self.frame = base_link(ctx.name)
         self.mapping = load_mapping(spec.mapping)
         self.source = Recorded(spec.source, JOY)
         self._last = -1
@@ -52,7 +53,7 @@ class ManualAgent:
     def step(self, t_ns: int) -> Outbox:
         i = self.source.index(t_ns)
         if i < 0:
-            return [("cmd", kart_command(KartInput(), t_ns, "base_link"))]
+            return [("cmd", kart_command(KartInput(), t_ns, self.frame))]
         joy = self.source.msgs[i]
         out: Outbox = []
         for j in range(self._last + 1, i + 1):  # every message since the last step, re-stamped
@@ -62,7 +63,7 @@ class ManualAgent:
                                    axes=m.axes, buttons=m.buttons)))
         self._last = i
         return [*out, ("cmd", kart_command(to_command(self.mapping, self.model, joy), t_ns,
-                                           "base_link"))]
+                                           self.frame))]
 
 
 class CommandsAgent:
@@ -73,7 +74,7 @@ class CommandsAgent:
     inputs: tuple[str, ...] = ()
 
     def __init__(self, spec: CommandsController, ctx: AgentContext) -> None:
-        self.period_s = spec.period_s
+        self.period_s, self.frame = spec.period_s, base_link(ctx.name)
         self.source = Recorded(spec.source, COMMANDS)
         self.topic = "ackermann_cmd" if self.source.msgtype.startswith("ackermann") else (
             "cmd_vel")
@@ -86,7 +87,7 @@ class CommandsAgent:
         if m is None:
             return []
         if hasattr(m, "header"):
-            m = replace(m, header=header(t_ns, "base_link"))
+            m = replace(m, header=header(t_ns, self.frame))
         return [(self.topic, m)]
 
 
@@ -95,7 +96,7 @@ class ScriptAgent:
 
     def __init__(self, spec: ScriptController, ctx: AgentContext) -> None:
         self.steps = sorted(spec.steps, key=lambda s: s.t_s)
-        self.period_s = spec.period_s
+        self.period_s, self.frame = spec.period_s, base_link(ctx.name)
 
     def on_message(self, topic: str, message: Any) -> None:
         pass
@@ -106,7 +107,7 @@ class ScriptAgent:
             if s.t_s * 1e9 <= t_ns:
                 current = s
         cmd = KartInput(current.steering_rad, current.accel_mps2, current.brake_mps2)
-        return [("cmd", kart_command(cmd, t_ns, "base_link"))]
+        return [("cmd", kart_command(cmd, t_ns, self.frame))]
 
 
 class JoyDriver:
@@ -118,6 +119,7 @@ class JoyDriver:
 
     def __init__(self, spec: JoyDriverController, ctx: AgentContext) -> None:
         self.spec, self.model, self.period_s = spec, _kart(ctx), spec.period_s
+        self.frame = base_link(ctx.name)
         self.mapping = load_mapping(spec.mapping)
         self._pose: tuple[float, float, float, float] | None = None
         self.track: Track | None = None
@@ -147,4 +149,4 @@ class JoyDriver:
         wish = KartInput(column_for_wheel_angle(self.model, delta), accel, brake)
         joy = to_joy(self.mapping, self.model, wish, t_ns, "joy")
         cmd = to_command(self.mapping, self.model, joy)
-        return [("joy", joy), ("cmd", kart_command(cmd, t_ns, "base_link"))]
+        return [("joy", joy), ("cmd", kart_command(cmd, t_ns, self.frame))]

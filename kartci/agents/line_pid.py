@@ -9,7 +9,7 @@ import numpy as np
 
 from kartci.agents.base import Outbox
 from kartci.agents.params import LinePidController
-from kartci.logs.types import header, msg
+from kartci.logs.types import base_link, header, msg
 from kartci.plugins import AgentContext
 from kartci.robots.line_tracker.params import LineTrackerModel
 
@@ -27,6 +27,7 @@ class LinePid:
     def __init__(self, spec: LinePidController, ctx: AgentContext) -> None:
         assert isinstance(ctx.model, LineTrackerModel)  # Controller.build checked the kind
         self.spec, self.model = spec, ctx.model
+        self.frame = base_link(ctx.name)
         self.period_s = spec.period_s
         self._left = self._right = 0.0
         self._range = math.inf
@@ -50,9 +51,9 @@ class LinePid:
         r = self.model.wheel_radius_m
         w_left = (s.v1_mps - s.half_track_m * u2) * gate / r
         w_right = (s.v1_mps + s.half_track_m * u2) * gate / r
-        cmd = msg("sensor_msgs/msg/JointState", header=header(t_ns, "base_link"),
+        cmd = msg("sensor_msgs/msg/JointState", header=header(t_ns, self.frame),
                   name=["left_wheel_hinge", "right_wheel_hinge"], position=np.zeros(0),
                   velocity=np.array([w_left, w_right]), effort=np.zeros(0))
-        state = msg("kartci_msgs/msg/LineControllerState", header=header(t_ns, "base_link"),
+        state = msg("kartci_msgs/msg/LineControllerState", header=header(t_ns, self.frame),
                     distance_estimate_m=d, u2=u2, integral=self._integral, sonar_stop=stop)
         return [("wheel_cmd", cmd), ("controller/state", state)]

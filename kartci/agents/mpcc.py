@@ -12,15 +12,13 @@ import numpy as np
 
 from kartci.agents.base import Outbox
 from kartci.agents.joy import kart_command
-from kartci.logs.types import header, msg, yaw_of
+from kartci.logs.types import WORLD_FRAME, base_link, header, msg, yaw_of
 from kartci.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
 from kartci.mpcc.params import MpccController
 from kartci.plugins import AgentContext
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
 from kartci.vehicle import KartInput, column_for_wheel_angle, wheel_angles
-
-MAP_FRAME = "map"
 
 
 class MpccAgent:
@@ -30,6 +28,7 @@ class MpccAgent:
     def __init__(self, spec: MpccController, ctx: AgentContext) -> None:
         assert isinstance(ctx.model, GokartModel)  # Controller.build checked the robot kind
         self.spec, self.model, self.period_s = spec, ctx.model, spec.period_s
+        self.frame = base_link(ctx.name)
         self.track: Track | None = None
         self.mpcc: Mpcc | None = None
         self.static: list[Obstacle] = []
@@ -103,7 +102,7 @@ class MpccAgent:
         self._accel = plan.accel_mps2 if plan.success else 0.0
         cmd = KartInput(column_for_wheel_angle(self.model, plan.wheel_angle_rad),
                         max(plan.accel_mps2, 0.0), max(-plan.accel_mps2, 0.0))
-        return [("cmd", kart_command(cmd, t_ns, "base_link")),
+        return [("cmd", kart_command(cmd, t_ns, self.frame)),
                 ("mpcc/horizon", self._path(plan, t_ns)),
                 ("mpcc/stats", self._stats(plan, t_ns))]
 
@@ -111,17 +110,17 @@ class MpccAgent:
         poses = []
         for row in plan.states:
             half = row[2] / 2
-            poses.append(msg("geometry_msgs/msg/PoseStamped", header=header(t_ns, MAP_FRAME),
+            poses.append(msg("geometry_msgs/msg/PoseStamped", header=header(t_ns, WORLD_FRAME),
                              pose=msg("geometry_msgs/msg/Pose",
                                       position=msg("geometry_msgs/msg/Point", x=float(row[0]),
                                                    y=float(row[1]), z=0.0),
                                       orientation=msg("geometry_msgs/msg/Quaternion", x=0.0,
                                                       y=0.0, z=math.sin(half),
                                                       w=math.cos(half)))))
-        return msg("nav_msgs/msg/Path", header=header(t_ns, MAP_FRAME), poses=poses)
+        return msg("nav_msgs/msg/Path", header=header(t_ns, WORLD_FRAME), poses=poses)
 
     def _stats(self, plan: Plan, t_ns: int) -> Any:
-        return msg("kartci_msgs/msg/SolverStats", header=header(t_ns, MAP_FRAME),
+        return msg("kartci_msgs/msg/SolverStats", header=header(t_ns, WORLD_FRAME),
                    success=plan.success, status=plan.status, solve_ms=plan.solve_ms,
                    iterations=plan.iterations, cost=plan.cost,
                    failures=self.mpcc.failures if self.mpcc else 0,

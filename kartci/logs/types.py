@@ -26,6 +26,14 @@ def typestore() -> Typestore:
     return store
 
 
+WORLD_FRAME = "map"  # the fixed frame of every world (REP 105's map)
+
+
+def base_link(namespace: str) -> str:
+    """A robot's body frame, as its tf publishes it: `<namespace>/base_link`."""
+    return f"{namespace}/base_link"
+
+
 def msg(typename: str, **fields: Any) -> Any:
     """Build a message of a registered type by keyword fields."""
     return typestore().types[typename](**fields)

@@ -8,9 +8,8 @@ from typing import Any
 import numpy as np
 
 from kartci.logs import header, msg
+from kartci.logs.types import WORLD_FRAME as WORLD_FRAME  # re-exported for the sim
 from kartci.sim.body import BodyState
-
-WORLD_FRAME = "map"
 
 
 def vec(x: float, y: float, z: float) -> Any:
