@@ -220,9 +220,18 @@ def test_what_loading_rejects_the_schema_rejects(path: str, value: Any,
     assert not check.is_valid(doc), path
 
 
+def _schema_cli(out: Path, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "kartci.cli", "schema", "--out", str(out)],
+                          capture_output=True, text=True, cwd=cwd, timeout=120)
+
+
 def test_cli_writes_the_schema_into_a_new_folder(tmp_path: Path) -> None:
     out = tmp_path / ".kartci" / "scenario.schema.json"
-    p = subprocess.run([sys.executable, "-m", "kartci.cli", "schema", "--out", str(out)],
-                       capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    p = _schema_cli(out, tmp_path)
     assert p.returncode == 0, p.stderr
     assert json.loads(out.read_text(encoding="utf-8")) == scenario_schema()
+    blocked = tmp_path / "a_file"
+    blocked.write_text("x")
+    p = _schema_cli(blocked / "sub" / "scenario.schema.json", tmp_path)
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert "cannot write the schema" in p.stderr and len(p.stderr.strip().splitlines()) == 1

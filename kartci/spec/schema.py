@@ -12,6 +12,7 @@ The schema is a superset of what loading accepts where loading reads files: `wor
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
 import os
@@ -24,6 +25,7 @@ from pydantic.json_schema import models_json_schema
 
 import kartci
 from kartci import plugins
+from kartci.errors import SpecError
 from kartci.spec.models import Scenario
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -70,17 +72,24 @@ def scenario_schema() -> dict[str, Any]:
               "registered controllers, robot kinds, world kinds and metric sets; the $id's "
               "host is a placeholder (.invalid): nothing is fetched",
               **root, "$defs": defs}
-    schema["$defs"] = {k: v for k, v in defs.items() if k in _used(schema)}
+    used = _used(schema)
+    schema["$defs"] = {k: v for k, v in defs.items() if k in used}
     return schema
 
 
 def write_schema(path: Path) -> None:
     """Write the schema to `path` (folders made as needed; atomic: a temporary file, then
     rename)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(scenario_schema(), indent=2) + "\n"
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(scenario_schema(), indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as err:
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        raise SpecError(f"{path}: cannot write the schema ({err.strerror or err})") from err
 
 
 # --- the plugin-typed parts ----------------------------------------------------------------
