@@ -54,14 +54,15 @@ def show(name: Annotated[str, typer.Argument(help="A scenario name or YAML path.
 
 @app.command()
 def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")] = None) -> None:
-    """JSON Schema of scenario files, for editor completion and validation."""
-    from kartci.spec import json_schema
+    """JSON Schema of scenario files, for editor completion and validation: with every
+    registered plugin, the project's own included. Point a scenario at it with a first line
+    `# yaml-language-server: $schema=<path relative to the scenario file>`."""
+    from kartci.spec.schema import scenario_schema, write_schema
 
-    text = json.dumps(json_schema(), indent=2)
     if out is None:
-        typer.echo(text)
+        typer.echo(json.dumps(scenario_schema(), indent=2))
     else:
-        out.write_text(text + "\n", encoding="utf-8")
+        write_schema(out)
 
 
 @app.command()

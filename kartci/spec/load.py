@@ -232,14 +232,6 @@ def scenario_from_json(text: str) -> Scenario:
 
 def json_schema() -> dict[str, Any]:
     """JSON Schema of a scenario file; `world` and `model` may also name a file by string."""
-    schema = Scenario.model_json_schema()
-    props = schema["properties"]
-    props["world"] = {"anyOf": [{"type": "string",
-                                 "description": "a world on the project's world path"},
-                                props["world"]]}
-    agent = schema["$defs"]["AgentSpec"]["properties"]
-    agent["model"] = {"anyOf": [{"type": "string",
-                                 "description": "a robot model on the model path"},
-                                agent["model"]]}
-    schema["required"] = [r for r in schema.get("required", []) if r != "name"]
-    return schema
+    from kartci.spec.schema import scenario_schema
+
+    return scenario_schema()

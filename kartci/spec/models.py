@@ -42,7 +42,7 @@ class WorldParams(Frozen):
     """Parameters of a world kind (`world: {kind: NAME, ...}` or a world file)."""
 
     kind: str = Field(description="a registered world kind")
-    description: str = ""
+    description: str = Field("", description="one line about the world, shown in reports")
 
 
 class MetricParams(Frozen):
@@ -55,9 +55,11 @@ class MetricParams(Frozen):
 class StraightCourse(Frozen):
     """A straight black line from `start_m` to `end_m`."""
 
-    type: Literal["straight"] = "straight"
-    start_m: Point_m = (0.0, 0.0)
-    end_m: Point_m = (2.5, 0.0)
+    type: Literal["straight"] = Field("straight", description="course shape: a straight line")
+    start_m: Point_m = Field((0.0, 0.0), description="start of the line's axis, (x, y) in m, "
+                             "world frame; the robot drives from here")
+    end_m: Point_m = Field((2.5, 0.0), description="end of the line's axis, (x, y) in m, world "
+                           "frame (the seed's straight test line)")
 
     @model_validator(mode="after")
     def _has_length(self) -> StraightCourse:
@@ -69,10 +71,13 @@ class StraightCourse(Frozen):
 class CircleCourse(Frozen):
     """A closed circular black line, driven counter-clockwise from angle `start_rad`."""
 
-    type: Literal["circle"] = "circle"
-    center_m: Point_m = (0.0, 0.0)
-    radius_m: float = Field(1.0, gt=0.05, le=1e6)
-    start_rad: float = -1.5707963267948966
+    type: Literal["circle"] = Field("circle", description="course shape: a closed circle")
+    center_m: Point_m = Field((0.0, 0.0), description="centre of the circle, (x, y) in m, world "
+                              "frame")
+    radius_m: float = Field(1.0, gt=0.05, le=1e6, description="radius of the line's axis, m "
+                            "(seed 001 Sec. 7.2 does not give it; line_lab/circle uses 0.362 m)")
+    start_rad: float = Field(-1.5707963267948966, description="polar angle of the start point "
+                             "about the centre, rad (-pi/2: the bottom of the circle, heading +x)")
 
 
 Course = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]
@@ -81,60 +86,86 @@ Course = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]
 class Box(Frozen):
     """A static box obstacle standing on the floor."""
 
-    center_m: tuple[float, float]
-    size_m: tuple[float, float, float] = (0.1, 0.1, 0.1)
-    yaw_rad: float = 0.0
+    center_m: tuple[float, float] = Field(description="centre of the box's footprint, (x, y) "
+                                          "in m, world frame")
+    size_m: tuple[float, float, float] = Field((0.1, 0.1, 0.1), description="edge lengths "
+                                               "(x, y, z) in m, before the yaw rotation")
+    yaw_rad: float = Field(0.0, description="rotation about the vertical axis, rad, "
+                           "counter-clockwise")
 
 
 class LineLabWorld(WorldParams):
     """White floor with one black line (seed 001, Sec. 5.2.1), plus optional obstacles."""
 
-    kind: Literal["line_lab"] = "line_lab"
-    description: str = ""
-    line_width_m: float = Field(0.014, gt=0.0, lt=0.2)
+    kind: Literal["line_lab"] = Field("line_lab", description="world kind: the line lab")
+    description: str = Field("", description="one line about the world, shown in reports")
+    line_width_m: float = Field(0.014, gt=0.0, lt=0.2, description="width of the black line, "
+                                "m (14 mm: with the 14.5 mm camera height, the seed's Eq. 5.2 "
+                                "dead-zone field of view of 1.38 rad)")
     light_level: float = Field(
         0.571, gt=0.0, le=1.0,
-        description="luminance of the white floor as the line cameras see it (0-1)",
+        description="luminance of the white floor as the line cameras see it (0-1, Eq. 5.1); "
+        "calibrated so that the sensor sweep gives the seed's slope, Eq. 6.12 (39.4 per m)",
     )
-    floor_friction: float = Field(1.0, ge=0.0)
-    course: Course
-    obstacles: tuple[Box, ...] = ()
+    floor_friction: float = Field(1.0, ge=0.0, description="Coulomb friction coefficient of "
+                                  "the floor (dimensionless); seed 001 Sec. 5.6: no slip")
+    course: Course = Field(description="the black line: `{type: straight, ...}` or "
+                           "`{type: circle, ...}`")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (the sonar "
+                                       "sees them, seed 001 Sec. 5.3)")
 
 
 class FloorZone(Frozen):
     """A rectangle of floor with its own friction coefficient (mu = pull force / weight)."""
 
-    name: str
-    min_m: tuple[float, float]
-    max_m: tuple[float, float]
-    friction: float = Field(ge=0.0)
+    name: str = Field(description="name of the surface, e.g. `coated`")
+    min_m: tuple[float, float] = Field(description="lower-left corner (x, y), m, world frame")
+    max_m: tuple[float, float] = Field(description="upper-right corner (x, y), m, world frame")
+    friction: float = Field(ge=0.0, description="friction coefficient mu = pull force / "
+                            "weight (seed 000 Sec. 4.2; REFERENCE.md: about 0.6 for a coated "
+                            "floor)")
 
 
 class HallWorld(WorldParams):
     """An indoor hall: walls, pillars, a ceiling, floor zones and a closed TUMFTM track."""
 
-    kind: Literal["hall"] = "hall"
-    description: str = ""
-    size_m: tuple[float, float] = Field((32.0, 20.0), description="interior, from (0, 0)")
-    wall_height_m: float = Field(4.0, gt=0.5)
-    wall_thickness_m: float = 0.3
-    pillars_m: tuple[tuple[float, float], ...] = ()
-    pillar_size_m: float = 0.5
-    floor_friction: float = Field(0.9, ge=0.0, description="tire on concrete")
-    zones: tuple[FloorZone, ...] = ()
-    track: str = Field(description="TUMFTM CSV, relative to sims/ (or absolute)")
-    obstacles: tuple[Box, ...] = ()
+    kind: Literal["hall"] = Field("hall", description="world kind: an indoor hall")
+    description: str = Field("", description="one line about the world, shown in reports")
+    size_m: tuple[float, float] = Field((32.0, 20.0), description="interior (x, y) extent, m, "
+                                        "from (0, 0) (an approximation of the Winti lab, "
+                                        "REFERENCE.md)")
+    wall_height_m: float = Field(4.0, gt=0.5, description="height of walls and pillars, m")
+    wall_thickness_m: float = Field(0.3, description="thickness of the walls, m, outside the "
+                                    "interior")
+    pillars_m: tuple[tuple[float, float], ...] = Field((), description="centres (x, y) of "
+                                                       "square pillars, m")
+    pillar_size_m: float = Field(0.5, description="side of a square pillar, m")
+    floor_friction: float = Field(0.9, ge=0.0, description="friction coefficient of the floor "
+                                  "outside any zone (mu = pull force / weight, seed 000 Sec. "
+                                  "4.2); 0.9: tire on concrete (REFERENCE.md)")
+    zones: tuple[FloorZone, ...] = Field((), description="rectangles of floor with their own "
+                                         "friction (the seed's second, coated surface)")
+    track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
+                       "w_tr_left_m`: relative to a world folder on the project's search path "
+                       "(e.g. `winti/track.csv`), or absolute")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (seed 000 "
+                                       "Sec. 6.5)")
 
 
 class CircuitWorld(WorldParams):
     """An outdoor race circuit from a TUMFTM track alone: ground sized to the track, optional
     barriers along both edges, no hall."""
 
-    kind: Literal["circuit"] = "circuit"
-    description: str = ""
-    track: str = Field(description="TUMFTM CSV on the project's world path (or absolute)")
+    kind: Literal["circuit"] = Field("circuit", description="world kind: an outdoor race "
+                                     "circuit")
+    description: str = Field("", description="one line about the world, shown in reports")
+    track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
+                       "w_tr_left_m`: relative to a world folder on the project's search path, "
+                       "or absolute")
     margin_m: float = Field(10.0, ge=1.0, description="ground beyond the track's extent, m")
-    floor_friction: float = Field(0.9, ge=0.0, description="tyre on asphalt or concrete")
+    floor_friction: float = Field(0.9, ge=0.0, description="friction coefficient of the ground "
+                                  "(mu, dimensionless): tyre on asphalt or concrete, about 0.9 "
+                                  "(REFERENCE.md)")
     zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
     barriers: bool = Field(True, description="walls along both track edges")
     barrier_offset_m: float = Field(1.0, ge=0.0, description="gap from the track edge to the "
@@ -152,25 +183,35 @@ class CircuitWorld(WorldParams):
 class LogSource(Frozen):
     """Messages recorded in a log (ROS 1 bag, rosbag2 folder or MCAP), re-based to sim time."""
 
-    log: str = Field(description="path, relative to the project root or absolute")
-    topic: str | None = Field(None, description="default: the only topic of a suitable type")
-    time_offset_s: float = Field(0.0, description="sim time of the log's first message")
+    log: str = Field(description="path of the log (.bag, rosbag2 folder, .db3 or .mcap), "
+                     "relative to the scenario file, or absolute")
+    topic: str | None = Field(None, description="topic to replay; default: the only topic of a "
+                              "suitable message type")
+    time_offset_s: float = Field(0.0, description="sim time of the log's first message, s")
 
 
 class Pose2D(Frozen):
-    """Start pose of the line-sensor midpoint relative to the course start, course frame."""
+    """Start pose relative to the course start, in the course frame: of the line-sensor
+    midpoint for a line tracker, of base_link for a kart (along the track's centreline)."""
 
-    along_m: float = Field(0.0, ge=0.0, description="distance along the course from its start")
-    lateral_m: float = Field(0.0, description="left of the line is positive")
-    heading_rad: float = 0.0
+    along_m: float = Field(0.0, ge=0.0, description="distance along the course (line or track "
+                           "centreline) from its start, m")
+    lateral_m: float = Field(0.0, description="offset from the line or centreline, m; left of "
+                             "it is positive")
+    heading_rad: float = Field(0.0, description="heading relative to the course direction at "
+                               "that point, rad; counter-clockwise is positive")
 
 
 class AgentSpec(Frozen):
     """One robot in the scenario: its model, its controller, where it starts, its sensors."""
 
-    model: SerializeAsAny[RobotParams]
-    controller: SerializeAsAny[ControllerParams]
-    start: Pose2D = Pose2D()
+    model: SerializeAsAny[RobotParams] = Field(description="the robot: a model folder's name "
+                                               "(e.g. `gokart`) or `{kind: NAME, ...}` with its "
+                                               "parameters")
+    controller: SerializeAsAny[ControllerParams] = Field(description="what drives the robot: "
+                                                         "`{type: NAME, ...}`, a registered "
+                                                         "controller and its parameters")
+    start: Pose2D = Field(Pose2D(), description="start pose relative to the course start")
     sensors: SerializeAsAny[Frozen] = Field(
         default_factory=Frozen, description="the robot kind's sensors: {NAME: {...}}")
 
@@ -179,41 +220,64 @@ class AgentSpec(Frozen):
 
 
 class PhysicsSpec(Frozen):
-    dt_s: float = Field(0.002, ge=1e-5, le=0.01)
-    odom_rate_hz: float = Field(50.0, gt=0.0)
+    """The simulation's clock: a fixed physics step, sim time only."""
+
+    dt_s: float = Field(0.002, ge=1e-5, le=0.01, description="fixed physics step, s; every "
+                        "controller period and sensor rate is a whole multiple of it (seed 001 "
+                        "Sec. 7.2 ran its fastest control at 0.002 s)")
+    odom_rate_hz: float = Field(50.0, gt=0.0, description="rate of each robot's ground-truth "
+                                "odometry (`odom`, nav_msgs/Odometry), Hz")
 
 
 class LineMetricsParams(MetricParams):
     """Parameters of the line tracker's tracking metrics."""
 
-    transient_s: float = Field(5.0, ge=0.0, description="start-up transient excluded from errors")
-    lost_threshold_m: float = Field(0.021, gt=0.0, description="sensor range; beyond it = lost")
-    settle_band_m: float = Field(0.002, gt=0.0)
+    transient_s: float = Field(5.0, ge=0.0, description="start-up transient excluded from "
+                               "the cross-track errors, s")
+    lost_threshold_m: float = Field(0.021, gt=0.0, description="the sensor's range, m: farther "
+                                    "from the line axis counts as lost (seed 001 Eq. 6.15: "
+                                    "+-0.021 m)")
+    settle_band_m: float = Field(0.002, gt=0.0, description="the cross-track error band that "
+                                 "ends settling (settle_time_s), m")
 
 
 class Criterion(Frozen):
     """A pass criterion on one metric; any combination of bounds."""
 
-    max: float | None = None
-    min: float | None = None
-    equal: float | None = None
+    max: float | None = Field(None, description="the metric must be at most this, in the "
+                              "metric's unit")
+    min: float | None = Field(None, description="the metric must be at least this, in the "
+                              "metric's unit")
+    equal: float | None = Field(None, description="the metric must equal this, in the metric's "
+                                "unit")
 
 
 class Scenario(Frozen):
-    """A validated scenario: world, agents, duration, seed, metrics and pass criteria."""
+    """One scenario file: a world, its agents, how long, which metrics and pass criteria."""
 
-    name: str = Field(pattern=r"^[a-z0-9_]+$")
-    description: str
-    world: SerializeAsAny[WorldParams]
-    agents: dict[str, AgentSpec] = Field(min_length=1)
-    duration_s: float = Field(gt=0.0, le=3600.0)
-    seed: int = Field(0, ge=0)
-    physics: PhysicsSpec = PhysicsSpec()
+    name: str = Field(pattern=r"^[a-z0-9_]+$", description="the scenario's name: lower-case "
+                      "letters, digits and _; default: the file name without .yaml")
+    description: str = Field(description="one line saying what the scenario checks, shown by "
+                             "`kartci list` and in reports")
+    world: SerializeAsAny[WorldParams] = Field(description="the world: a world file's name on "
+                                               "the search path (e.g. `winti/hall`), "
+                                               "`{from: NAME, KEY: value}` to change some keys "
+                                               "of one, or `{kind: NAME, ...}` in full")
+    agents: dict[str, AgentSpec] = Field(min_length=1, description="the robots by name; the "
+                                         "name is their topic namespace (`/kart0/...`)")
+    duration_s: float = Field(gt=0.0, le=3600.0, description="simulated time to run, s")
+    seed: int = Field(0, ge=0, description="seed of the run's one random generator: the same "
+                      "scenario and seed give the same numbers on every run")
+    physics: PhysicsSpec = Field(PhysicsSpec(), description="physics step and odometry rate")
     metrics: dict[str, SerializeAsAny[MetricParams]] = Field(
         {}, description="metric sets to compute besides the robots' own, and parameters of "
         "any set: {NAME: {...}}")
-    criteria: dict[str, Criterion] = {}
-    tags: tuple[str, ...] = ()
+    criteria: dict[str, Criterion] = Field({}, description="pass criteria by metric name: "
+                                           "a bare name judges every agent's metric, "
+                                           "`agent.metric` one agent's; a failed criterion "
+                                           "fails the run (exit 1)")
+    tags: tuple[str, ...] = Field((), description="free labels; `tool` keeps a scenario out of "
+                                  "a plain `kartci run` (run it by name)")
 
     @model_validator(mode="before")
     @classmethod

@@ -12,60 +12,87 @@ from kartci.spec.models import Frozen, RobotParams
 class GokartModel(RobotParams):
     """The ETH go-kart (seed 000, Tables 3.1, 3.2, 3.4); limits from REFERENCE.md."""
 
-    kind: Literal["gokart"] = "gokart"
-    variant: Literal["bumblebee", "herbie"] = "bumblebee"
-    urdf: str = "bumblebee.urdf"
-    rear_wheel_radius_m: float = 0.127
-    front_wheel_radius_m: float = 0.117
-    wheel_torque_limit_nm: float = Field(95.0, description="per rear wheel")
-    max_speed_mps: float = 10.0
-    max_accel_mps2: float = 5.0
-    max_brake_mps2: float = 8.0
-    reverse_speed_mps: float = 2.0
-    steering: Literal["measured", "ackermann"] = "measured"
-    steering_limit_rad: tuple[float, float] = Field((-1.845, 1.732), description="column angle")
-    steering_rate_radps: float = Field(4.0, description="column angle slew rate")
-    wheelbase_m: float = Field(1.27, description="l of Eq. 3.1/3.2 (Ackermann option)")
-    track_m: float = Field(0.94, description="w of Eq. 3.1/3.2 (Ackermann option)")
-    tire_friction: float = 1.0
+    kind: Literal["gokart"] = Field("gokart", description="robot kind: the ETH go-kart")
+    variant: Literal["bumblebee", "herbie"] = Field("bumblebee", description="which of the two "
+                                                    "karts: sensor mounts (Table 3.4) and IMU "
+                                                    "(Table 3.6) differ")
+    urdf: str = Field("bumblebee.urdf", description="the kart's URDF: absolute, or relative to "
+                      "gokart/ on the project's model path")
+    rear_wheel_radius_m: float = Field(0.127, description="rear tyre radius, m (Table 3.1)")
+    front_wheel_radius_m: float = Field(0.117, description="front tyre radius, m (Table 3.1)")
+    wheel_torque_limit_nm: float = Field(95.0, description="torque limit per rear wheel, N m "
+                                         "(REFERENCE.md: two rear motors, 95 Nm per wheel)")
+    max_speed_mps: float = Field(10.0, description="top forward speed of the rear-wheel speed "
+                                 "reference, m/s (REFERENCE.md: ETH MPCC limit 10 m/s)")
+    max_accel_mps2: float = Field(5.0, description="largest motor acceleration command, m/s^2 "
+                                  "(REFERENCE.md: ETH longitudinal limit 5 m/s^2)")
+    max_brake_mps2: float = Field(8.0, description="largest brake deceleration command, m/s^2")
+    reverse_speed_mps: float = Field(2.0, description="top reverse speed, m/s")
+    steering: Literal["measured", "ackermann"] = Field("measured", description="front-wheel "
+                                                       "angles from the column angle: "
+                                                       "`measured` map (Eq. 3.4/3.5, Table "
+                                                       "3.3) or ideal `ackermann` (Eq. 3.1/3.2)")
+    steering_limit_rad: tuple[float, float] = Field((-1.845, 1.732), description="steering-"
+                                                    "column angle range (min, max), rad "
+                                                    "(measured in Table 3.3)")
+    steering_rate_radps: float = Field(4.0, description="column angle slew rate, rad/s")
+    wheelbase_m: float = Field(1.27, description="l of Eq. 3.1/3.2, m (Ackermann option)")
+    track_m: float = Field(0.94, description="w of Eq. 3.1/3.2, m (Ackermann option)")
+    tire_friction: float = Field(1.0, description="tyre friction factor (dimensionless), "
+                                 "multiplied by the floor's or zone's friction coefficient")
     speed_gain_per_s: float = Field(2.0, gt=0.0, description="drive-by-wire speed loop for "
-                                    "ackermann_cmd and cmd_vel: accel = gain * (v_cmd - v)")
+                                    "ackermann_cmd and cmd_vel, 1/s: accel = gain * (v_cmd - v)")
     wheel_xy_m: tuple[tuple[float, float], ...] = Field(
         ((-0.077, 0.5625), (-0.077, -0.5625), (1.129, 0.47), (1.129, -0.47)),
-        description="rl, rr, fl, fr wheel centres in base_link (Table 3.2)")
+        description="rl, rr, fl, fr wheel centres (x, y) in base_link, m (Table 3.2)")
 
 
 class LidarSpec(Frozen):
     """Velodyne VLP-16 or HDL-32E (Table 3.5) on velodyne_link."""
 
-    enabled: bool = False
-    model: Literal["vlp16", "hdl32e"] = "vlp16"
-    rate_hz: float = Field(10.0, gt=0.0)
-    range_m: float = 100.0
-    range_noise_std_m: float | None = Field(None, description="default: Table 3.5 accuracy")
+    enabled: bool = Field(False, description="simulate the lidar and record its point clouds "
+                          "(`velodyne_points`, sensor_msgs/PointCloud2)")
+    model: Literal["vlp16", "hdl32e"] = Field("vlp16", description="Velodyne model: channels, "
+                                              "vertical field of view and resolutions of "
+                                              "Table 3.5")
+    rate_hz: float = Field(10.0, gt=0.0, description="rotation rate, Hz (Table 3.5: 5-20 Hz)")
+    range_m: float = Field(100.0, description="measurement range, m (Table 3.5: 100 m)")
+    range_noise_std_m: float | None = Field(None, description="range noise, 1 sigma, m; "
+                                            "default: the Table 3.5 accuracy (3 cm VLP-16, 2 cm "
+                                            "HDL-32E)")
     record_every: int = Field(10, ge=1, description="write every Nth scan to the log")
 
 
 class ImuSpec(Frozen):
     """IMU on imu_link (Table 3.6): specific force including gravity, angular rate."""
 
-    enabled: bool = True
-    rate_hz: float = Field(100.0, gt=0.0)
-    accel_noise_std_mps2: float | None = Field(None, description="default: Table 3.6")
-    gyro_noise_std_radps: float | None = None
+    enabled: bool = Field(True, description="simulate the IMU (`imu`, sensor_msgs/Imu)")
+    rate_hz: float = Field(100.0, gt=0.0, description="output rate, Hz (Table 3.6: 1-1000 Hz "
+                           "IRIMU-V2, 10-480 Hz 3DM-GX5)")
+    accel_noise_std_mps2: float | None = Field(None, description="accelerometer noise, 1 sigma, "
+                                               "m/s^2; default: Table 3.6 accuracy x the "
+                                               "default 8 g full scale of the variant's IMU")
+    gyro_noise_std_radps: float | None = Field(None, description="gyroscope noise, 1 sigma, "
+                                               "rad/s; default: Table 3.6 accuracy x the "
+                                               "default full scale of the variant's IMU")
 
 
 class CameraSpec(Frozen):
-    enabled: bool = False
-    rate_hz: float = 5.0
-    width_px: int = 80
-    height_px: int = 60
-    fov_rad: float = 1.2
+    """An RGB camera on camera_link (Table 3.4); the seed's cameras are not calibrated
+    (Sec. 3.4.3), so these are small defaults for a cheap image."""
+
+    enabled: bool = Field(False, description="render images (`camera/image_raw`, "
+                          "sensor_msgs/Image)")
+    rate_hz: float = Field(5.0, description="frame rate, Hz")
+    width_px: int = Field(80, description="image width, pixels")
+    height_px: int = Field(60, description="image height, pixels")
+    fov_rad: float = Field(1.2, description="horizontal field of view, rad")
 
 
 class KartSensors(Frozen):
     """The kart's sensors, each at its Table 3.4 mount."""
 
-    lidar: LidarSpec = LidarSpec()
-    imu: ImuSpec = ImuSpec()
-    camera: CameraSpec = CameraSpec()
+    lidar: LidarSpec = Field(LidarSpec(), description="Velodyne lidar on velodyne_link "
+                             "(Tables 3.4, 3.5)")
+    imu: ImuSpec = Field(ImuSpec(), description="IMU on imu_link (Tables 3.4, 3.6)")
+    camera: CameraSpec = Field(CameraSpec(), description="camera on camera_link (Table 3.4)")

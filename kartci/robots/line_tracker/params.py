@@ -13,22 +13,34 @@ from kartci.spec.models import Frozen, LineLabWorld, RobotParams, Scenario
 class LineTrackerModel(RobotParams):
     """Differential-drive line tracker of seed 001 (annex model.sdf, Sec. 5.4)."""
 
-    kind: Literal["line_tracker"] = "line_tracker"
-    urdf: str = "line_tracker.urdf"
-    wheel_radius_m: float = 0.035
-    wheel_separation_m: float = 0.15
-    wheel_speed_limit_radps: float = 18.46
-    wheel_time_constant_s: float = Field(0.1, ge=0.0)
-    wheel_torque_limit_nm: float = Field(0.5, gt=0.0)
-    tire_friction: float = Field(1.0, ge=0.0)
-    sensor_point_x_m: float = Field(0.095, description="line-sensor midpoint ahead of base_link")
+    kind: Literal["line_tracker"] = Field("line_tracker", description="robot kind: the "
+                                          "line tracker")
+    urdf: str = Field("line_tracker.urdf", description="the robot's URDF: absolute, or "
+                      "relative to line_tracker/ on the project's model path")
+    wheel_radius_m: float = Field(0.035, description="drive wheel radius, m (annex model.sdf)")
+    wheel_separation_m: float = Field(0.15, description="distance between the drive wheels, m "
+                                      "(wheels at y = +-0.075 m, annex model.sdf)")
+    wheel_speed_limit_radps: float = Field(18.46, description="wheel speed limit, rad/s: the "
+                                           "DC motors' measured saturation (Sec. 5.4)")
+    wheel_time_constant_s: float = Field(0.1, ge=0.0, description="first-order wheel response "
+                                         "time constant, s (Sec. 5.4); 0: ideal wheels")
+    wheel_torque_limit_nm: float = Field(0.5, gt=0.0, description="torque limit per wheel "
+                                         "motor, N m")
+    tire_friction: float = Field(1.0, ge=0.0, description="tyre friction factor "
+                                 "(dimensionless), multiplied by the floor's friction")
+    sensor_point_x_m: float = Field(0.095, description="line-sensor midpoint ahead of "
+                                    "base_link, m (annex model.sdf camera pose)")
 
 
 class LineSensorSpec(Frozen):
     """Two downward cameras averaging luminance (Eq. 5.1) over their image."""
 
-    mode: Literal["geometric", "rendered"] = "geometric"
-    fov_rad: float = Field(1.2, gt=0.05, lt=3.0)
+    mode: Literal["geometric", "rendered"] = Field("geometric", description="`geometric`: "
+                                                   "the ink under each pixel computed from the "
+                                                   "floor geometry (fast, exact); `rendered`: "
+                                                   "images from PyBullet's renderer")
+    fov_rad: float = Field(1.2, gt=0.05, lt=3.0, description="each camera's field of view, rad "
+                           "(Sec. 5.2.2: 1.2 rad reproduces the real sensor's +-0.008 m range)")
     resolution_px: int = Field(24, ge=4, le=256, description="rendered image side, pixels")
     noise_std: float = Field(0.001, ge=0.0, description="luminance noise, 1 sigma (0-1 scale)")
 
@@ -36,19 +48,22 @@ class LineSensorSpec(Frozen):
 class SonarSpec(Frozen):
     """HC-SR04 ultrasonic range finder (seed 001, Sec. 5.3)."""
 
-    enabled: bool = True
-    min_range_m: float = 0.02
-    max_range_m: float = 4.0
-    cone_radius_m: float = Field(1.07, description="cone radius at max range")
-    resolution_m: float = 0.003
-    rays: int = Field(9, ge=1, le=64)
+    enabled: bool = Field(True, description="simulate the sonar (`sonar`, sensor_msgs/Range)")
+    min_range_m: float = Field(0.02, description="minimum range, m (Sec. 5.3)")
+    max_range_m: float = Field(4.0, description="maximum range, m (Sec. 5.3)")
+    cone_radius_m: float = Field(1.07, description="cone radius at max range, m (Sec. 5.3)")
+    resolution_m: float = Field(0.003, description="range resolution, m: readings are "
+                                "rounded to it (Sec. 5.3)")
+    rays: int = Field(9, ge=1, le=64, description="rays cast per reading: one on the axis and "
+                      "the rest on the cone's rim")
 
 
 class LineTrackerSensors(Frozen):
     """The two-camera line sensor and the sonar."""
 
-    line_sensor: LineSensorSpec = LineSensorSpec()
-    sonar: SonarSpec = SonarSpec()
+    line_sensor: LineSensorSpec = Field(LineSensorSpec(), description="the two downward "
+                                        "cameras (`line_sensor`: left and right luminance)")
+    sonar: SonarSpec = Field(SonarSpec(), description="the HC-SR04 ultrasonic range finder")
 
 
 def line_parts(scenario: Scenario, agent: str) -> tuple[LineLabWorld, LineTrackerModel]:
