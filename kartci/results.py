@@ -37,6 +37,9 @@ class ScenarioResult:
     error: str | None = None
     run: dict[str, Any] = field(default_factory=dict)  # sim_time_s, wall_s, rtf, log
     plots: Plots | None = None
+    # gate failures beyond metrics and criteria (strict mode: no baseline, a metric not in it)
+    problems: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()  # worth a reader's attention, not a failure
 
     @property
     def status(self) -> Status:
@@ -44,7 +47,14 @@ class ScenarioResult:
             return Status.ERROR
         statuses = [v.status for v in self.verdicts]
         statuses += [Status.FAILED for c in self.criteria if not c.ok]
+        statuses += [Status.FAILED for _ in self.problems]
         return worst(statuses)
+
+
+def one_line(text: str, limit: int = 500) -> str:
+    """User text for a one-line message: control characters and newlines become spaces."""
+    flat = " ".join("".join(c if c.isprintable() else " " for c in text).split())
+    return flat if len(flat) <= limit else flat[:limit - 1] + "…"
 
 
 def exit_code(results: list[ScenarioResult]) -> int:

@@ -4,12 +4,24 @@ kartci as a user installs it: its wheel (once per session) in a fresh venv."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = ROOT.parent / "shared" / "fixtures" / "bags"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _outside_ci() -> Iterator[None]:
+    """Every test runs as outside CI: with `CI` set, kartci is strict and fails scenarios that
+    have no baseline, which most tests run on purpose. Tests of strict mode set `CI` (or pass
+    --strict) themselves. Session-scoped, so module-scoped fixtures that run kartci see it too."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.delenv("CI", raising=False)
+        mp.delenv("GITHUB_ACTIONS", raising=False)
+        yield
 
 
 @pytest.fixture

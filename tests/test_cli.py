@@ -256,6 +256,11 @@ def test_corrupt_files_for_baseline_update(tmp_path: Path) -> None:
     (out / "b").mkdir(parents=True)
     (out / "a" / "metrics.json").write_text('{"metrics": {"x": {"value": 1.0}}}')
     (out / "b" / "metrics.json").write_text('{"metrics": {"x": {"value": "abc"}}}')
+    for name in ("a", "b"):
+        (out / name / "run.mcap").write_bytes(b"")  # complete, as far as update checks
+    line = _one_clean_line(kartci("baseline", "update", out, "--baselines", base))
+    assert "no manifest.json" in line  # not from `kartci run`: name the scenarios
+    (out / "manifest.json").write_text('{"command": "run", "scenarios": ["a", "b"]}')
     line = _one_clean_line(kartci("baseline", "update", out, "--baselines", base))
     assert "b/metrics.json" in line
     assert not base.exists() or not any(base.iterdir())  # nothing half-written

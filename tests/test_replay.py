@@ -14,6 +14,9 @@ from rosbags.rosbag2 import Writer as Ros2Writer
 from rosbags.typesys import Stores, get_typestore
 
 from kartci.logs import messages, tables
+from kartci.project import BUILTIN
+
+BUILTIN_JOY = BUILTIN / "models" / "gokart" / "joy"
 
 
 def kartci(*args: str | Path) -> subprocess.CompletedProcess[str]:
@@ -116,3 +119,76 @@ def test_a_named_topic_that_is_missing(tmp_path: Path) -> None:
     _ros1_joy_bag(bag)
     p = kartci("replay", bag, "--topic", "/nope", "--out", tmp_path / "o")
     assert p.returncode == 2 and "topic /nope" in p.stderr
+
+
+def _xbox_bag(path: Path, seconds: float = 6.0) -> None:
+    """An Xbox pad as joy_linux reports it (8 axes, 11 buttons), RT held, plus a String topic."""
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    t0 = 1_700_000_000_000_000_000
+    with Ros1Writer(path) as w:
+        conn = w.add_connection("/joy", "sensor_msgs/msg/Joy", typestore=ts)
+        chat = w.add_connection("/chatter", "std_msgs/msg/String", typestore=ts)
+        for k in range(int(seconds * 50)):
+            t = t0 + k * 20_000_000
+            axes = np.array([0, 0, 1, 0, 0, -1, 0, 0], dtype=np.float32)  # RT pressed
+            hdr = ts.types["std_msgs/msg/Header"](
+                seq=k, stamp=ts.types["builtin_interfaces/msg/Time"](sec=t // 10**9,
+                                                                     nanosec=t % 10**9),
+                frame_id="joy")
+            joy = ts.types["sensor_msgs/msg/Joy"](header=hdr, axes=axes,
+                                                  buttons=np.zeros(11, dtype=np.int32))
+            w.write(conn, t, ts.serialize_ros1(joy, "sensor_msgs/msg/Joy"))
+            w.write(chat, t, ts.serialize_ros1(ts.types["std_msgs/msg/String"](data="hi"),
+                                               "std_msgs/msg/String"))
+
+
+def test_an_xbox_pad_with_its_mapping_and_a_log_longer_than_the_scenario(tmp_path: Path) -> None:
+    bag = tmp_path / "xbox.bag"
+    _xbox_bag(bag)
+    out = tmp_path / "out"
+    p = kartci("replay", bag, "--topic", "/joy", "--mapping", "xbox", "--set", "duration_s=3",
+               "--out", out)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert _summary(out)["max_speed_mps"] > 1.0  # RT drives the kart
+    assert "warning" in p.stderr and "are not replayed" in p.stderr  # the log runs 6 s
+    warnings = json.loads((out / "summary.json").read_text())["scenarios"]["kart_replay"][
+        "warnings"]
+    assert "runs to 6.0 s but the scenario stops at 3 s" in warnings[0]
+
+
+def test_a_pad_that_does_not_fit_its_mapping_is_one_clear_line(tmp_path: Path) -> None:
+    bag = tmp_path / "xbox.bag"
+    _xbox_bag(bag, seconds=1.0)
+    p = kartci("replay", bag, "--topic", "/joy", "--mapping", "ps4", "--out", tmp_path / "o")
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert "8 axes and 11 buttons" in lines[0] and "expects 8 axes and 13 buttons" in lines[0]
+    assert "xbox" in lines[0]
+
+
+def test_a_topic_of_the_wrong_type_says_so(tmp_path: Path) -> None:
+    bag = tmp_path / "xbox.bag"
+    _xbox_bag(bag, seconds=1.0)
+    p = kartci("replay", bag, "--topic", "/chatter", "--out", tmp_path / "o")
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert "/chatter is std_msgs/msg/String, which cannot drive a kart" in p.stderr
+
+
+def test_a_projects_own_mapping_is_found_and_listed(tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    from kartci import project
+    from kartci.agents.joy import load_mapping
+    from kartci.errors import SpecError
+
+    joy = tmp_path / "models" / "gokart" / "joy"
+    joy.mkdir(parents=True)
+    text = (BUILTIN_JOY / "xbox.yaml").read_text().replace("Xbox controller", "our pad")
+    (joy / "our_pad.yml").write_text(text)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "kartci.toml").write_text("")
+    project.activate(None)
+    assert load_mapping("our_pad").name == "our pad"
+    assert load_mapping(str(joy / "our_pad.yml")).buttons == 11  # by path
+    with pytest.raises(SpecError, match=r"known: .*our_pad.*ps4.*xbox"):
+        load_mapping("qqqqqq")

@@ -3,6 +3,7 @@ steering, reverse and emergency stop. One YAML file per controller in models/gok
 
 from __future__ import annotations
 
+import os
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -49,26 +50,73 @@ class JoyMapping(_M):
     buttons: int = Field(ge=1)
 
 
+def known_mappings() -> dict[str, Path]:
+    """Mapping name -> file, from `gokart/joy/` on the project's model path (its own folders
+    first, then the built-in ones); `.yaml` and `.yml` alike."""
+    found: dict[str, Path] = {}
+    for folder in project.current().model_path:
+        for p in sorted((folder / "gokart" / "joy").glob("*.y*ml")):
+            if p.suffix in (".yaml", ".yml"):
+                found.setdefault(p.stem, p)
+    return dict(sorted(found.items()))
+
+
 @cache
 def load_mapping(name: str) -> JoyMapping:
-    """A mapping by name (`gokart/joy/<name>.yaml` on the project's model path) or by path to a
-    YAML file."""
-    if name.endswith((".yaml", ".yml")):
-        path = Path(name)
+    """A mapping by name (`gokart/joy/<name>.yaml` or `.yml` on the project's model path) or by
+    path to a YAML file (anything ending in .yaml / .yml or holding a path separator)."""
+    if name.endswith((".yaml", ".yml")) or "/" in name or os.sep in name:
+        path = Path(name).expanduser()
         if not path.is_file():
-            raise SpecError(f"joystick mapping {name}: file not found")
-    else:
-        proj = project.current()
-        known = sorted({p.stem for folder in proj.model_path
-                        for p in (folder / "gokart" / "joy").glob("*.yaml")})
-        if name not in known:
-            raise SpecError(f"unknown joystick mapping '{name}'{did_you_mean(name, known)}; "
-                            "or give a path to a mapping YAML file")
-        path = proj.model_file(f"gokart/joy/{name}.yaml")
+            raise SpecError(f"joystick mapping file {name}: not found")
+        return _parse(path)
+    known = known_mappings()
+    if name not in known:
+        raise SpecError(f"unknown joystick mapping '{name}'{did_you_mean(name, known)}; "
+                        "or give the path of a mapping YAML file")
+    return _parse(known[name])
+
+
+def _parse(path: Path) -> JoyMapping:
+    """The mapping in a file; a problem is named by its place (key, or line and column), never
+    by quoting the file, which may be anything a user pointed at."""
     try:
-        return JoyMapping.model_validate(yaml.safe_load(path.read_text(encoding="utf-8")))
-    except (ValidationError, yaml.YAMLError) as err:
-        raise SpecError(f"{path}: invalid joystick mapping ({str(err).splitlines()[0]})") from err
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as err:
+        raise SpecError(f"{path}: cannot read the joystick mapping ({type(err).__name__})") from err
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise SpecError(f"{path}: invalid joystick mapping (not YAML{where})") from err
+    if not isinstance(data, dict):
+        raise SpecError(f"{path}: invalid joystick mapping (expected keys: "
+                        f"{', '.join(JoyMapping.model_fields)})")
+    try:
+        return JoyMapping.model_validate(data)
+    except ValidationError as err:
+        first = err.errors()[0]
+        key = ".".join(str(x) for x in first["loc"]) or "(top level)"
+        raise SpecError(f"{path}: invalid joystick mapping ({key}: {first['msg']})") from err
+
+
+def check_pad(m: JoyMapping, name: str, log: Path, topic: str) -> None:
+    """The recorded pad must have the mapping's axis and button counts: a pad of another make
+    would otherwise be read with the wrong axes, silently."""
+    from kartci.logs import messages
+
+    for _, _, joy in messages(log, [topic]):
+        check_counts(m, name, joy, f"{log} {topic}")
+        return
+
+
+def check_counts(m: JoyMapping, name: str, joy: Any, where: str) -> None:
+    """One Joy message against the mapping's counts (SpecError, one line, when they differ)."""
+    axes, buttons = len(joy.axes), len(joy.buttons)
+    if (axes, buttons) != (m.axes, m.buttons):
+        raise SpecError(f"{where}: the pad has {axes} axes and {buttons} buttons, but mapping "
+                        f"'{name}' ({m.name}) expects {m.axes} axes and {m.buttons} buttons; "
+                        f"choose a matching mapping (known: {', '.join(known_mappings())}) or "
+                        "give the path of your own mapping file")
 
 
 def _pedal(p: PedalAxis, axes: Any) -> float:

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from kartci.agents.base import Outbox
-from kartci.agents.joy import kart_command, load_mapping, to_command, to_joy
+from kartci.agents.joy import check_counts, kart_command, load_mapping, to_command, to_joy
 from kartci.agents.params import (
     CommandsController,
     JoyDriverController,
@@ -45,6 +45,8 @@ class ManualAgent:
         self.frame = base_link(ctx.name)
         self.mapping = load_mapping(spec.mapping)
         self.source = Recorded(spec.source, JOY)
+        check_counts(self.mapping, spec.mapping, self.source.msgs[0],
+                     f"{self.source.path} {self.source.topic}")
         self._last = -1
 
     def on_message(self, topic: str, message: Any) -> None:

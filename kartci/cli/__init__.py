@@ -3,6 +3,7 @@ Errors: one line on stderr, exit 2."""
 
 from __future__ import annotations
 
+import os
 import sys
 
 from kartci.cli import (  # noqa: F401  (commands)
@@ -34,3 +35,10 @@ def main() -> None:
     except KeyboardInterrupt:
         print("kartci: interrupted", file=sys.stderr)
         sys.exit(130)
+    except Exception as err:  # a bug: still one line, and exit 2, never CI's "regression" 1
+        if os.environ.get("KARTCI_TRACEBACK"):
+            raise
+        text = " ".join(str(err).split())[:300]
+        print(f"kartci: internal error: {type(err).__name__}: {text} (set KARTCI_TRACEBACK=1 "
+              "for the traceback)", file=sys.stderr)
+        sys.exit(2)

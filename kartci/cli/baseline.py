@@ -9,37 +9,49 @@ import typer
 
 from kartci.cli.common import BaselinesOpt, baseline_app, baselines_dir, out_console
 from kartci.errors import SpecError
-from kartci.report.tables import num
+
+
+def exact(x: float | None) -> str:
+    """A value as the shortest text that reads back as the same float: a change shows even
+    where 4 significant digits would print "0.6612 -> 0.6612"."""
+    return "—" if x is None else repr(float(x))
 
 
 @baseline_app.command("update")
 def baseline_update(
     out: Annotated[Path, typer.Argument(help="A folder written by `kartci run`.")],
-    names: Annotated[list[str] | None, typer.Argument(help="Scenarios (default: all in OUT).")]
-    = None,
+    names: Annotated[list[str] | None, typer.Argument(
+        help="Scenarios (default: those of the last run in OUT).")] = None,
     baselines: BaselinesOpt = None,
 ) -> None:
-    """Store a run's metrics as the baselines; the only command that writes baselines."""
-    from kartci.runner import ERROR_NAME
+    """Store a run's metrics as the baselines; the only command that writes baselines. Only a
+    complete, current run is taken: a scenario whose last run failed or did not finish is
+    refused, and with no names only the scenarios of the last run in OUT are taken."""
+    from kartci.runner.outdir import locked, read_manifest, valid_label
+    from kartci.runner.run import check_complete
     from kartci.verdict import load, read_metrics, update
 
-    folders = [out / n for n in names] if names else sorted(
-        p.parent for p in out.glob("*/metrics.json"))
-    if not folders:
-        raise SpecError(f"{out}: no <scenario>/metrics.json found; run `kartci run` first")
+    if not out.is_dir():
+        raise SpecError(f"{out}: no such folder; run `kartci run` first")
     target = baselines_dir(baselines, must_exist=False)
-    checked = []
-    for folder in folders:  # check everything before writing anything
-        if (folder / ERROR_NAME).exists():
-            raise SpecError(f"{folder}: the last run of this scenario failed; its metrics are "
-                            "stale and will not become a baseline")
-        load(target / f"{folder.name}.json")
-        checked.append((folder, read_metrics(folder / "metrics.json")))
-    for folder, values in checked:
-        changes = update(target / f"{folder.name}.json", folder.name, values)
-        moved = [c for c in changes if c.kind != "unchanged"]
-        out_console.print(f"{folder.name}: {len(moved)} of {len(changes)} metrics changed",
-                          highlight=False)
-        for c in moved:
-            out_console.print(f"  {c.kind:8s} {c.metric}: {num(c.old)} -> {num(c.new)}",
-                              highlight=False)
+    with locked(out):
+        labels = names or read_manifest(out)
+        bad = [n for n in labels if not valid_label(n)]
+        if bad:
+            raise SpecError(f"{bad[0]}: not a scenario name (a folder directly in {out})")
+        if not labels:
+            raise SpecError(f"{out}: its last run had no scenarios")
+        checked = []
+        for label in labels:  # check everything before writing anything
+            folder = out / label
+            check_complete(folder)
+            load(target / f"{label}.json")
+            checked.append((label, read_metrics(folder / "metrics.json")))
+        for label, values in checked:
+            changes = update(target / f"{label}.json", label, values)
+            moved = [c for c in changes if c.kind != "unchanged"]
+            out_console.print(f"{label}: {len(moved)} of {len(changes)} metrics changed",
+                              highlight=False, markup=False)
+            for c in moved:
+                out_console.print(f"  {c.kind:8s} {c.metric}: {exact(c.old)} -> {exact(c.new)}",
+                                  highlight=False, markup=False)

@@ -10,10 +10,11 @@ from typing import Annotated
 import typer
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
-from kartci.errors import KartciError, SpecError
+from kartci.errors import KartciError, RunError, SpecError
 from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
-from kartci.results import ScenarioResult, exit_code
+from kartci.results import ScenarioResult, exit_code, one_line
 
 # Help text is shown as written (rich_markup_mode=None): rich markup would eat `kartci[ray]`
 # and `[default: ...]`.
@@ -63,6 +64,15 @@ OutOpt = Annotated[Path | None, typer.Option(
     "--out", "-o", help="Output folder [default: the project's reports/<command>].")]
 BaselinesOpt = Annotated[Path | None, typer.Option(
     help="Folder of baseline files (default: the project's baselines/).")]
+StrictOpt = Annotated[bool | None, typer.Option(
+    "--strict/--no-strict", help="Fail a scenario without a baseline or with a metric its "
+    "baseline lacks [default: strict when the CI environment variable is set].")]
+
+
+def strict_mode(flag: bool | None) -> bool:
+    from kartci.runner.gate import strict_default
+
+    return strict_default() if flag is None else flag
 
 
 def baselines_dir(path: Path | None, must_exist: bool = True) -> Path:
@@ -81,30 +91,45 @@ def out_dir(out: Path | None, name: str) -> Path:
 
 
 def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
+    """The verdicts on the terminal. Every user text (names, errors) goes in as plain Text:
+    rich would read `[...]` in it as markup and fail on `[/oops]`."""
     for r in results:
         if r.error:
-            out_console.print(f"[bold]{r.name}[/]: {MARK[r.status]} error: {r.error}",
-                              markup=True, highlight=False)
+            line = Text.assemble((r.name, "bold"), f": {MARK[r.status]} error: {r.error}")
+            out_console.print(line, highlight=False)
             continue
         table = Table("metric", "value", words.base, "delta", "tolerance", "verdict",
-                      title=f"{r.name}: {MARK[r.status]} {r.status.value}", title_justify="left")
+                      title=Text(f"{r.name}: {MARK[r.status]} {r.status.value}"),
+                      title_justify="left")
         for v in r.verdicts:
-            table.add_row(v.name, num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
+            table.add_row(Text(v.name), num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
                           tolerance(v), f"{MARK[v.status]} {v.status.value}")
         for c in r.criteria:
-            table.add_row(f"criterion {c.name}", num(c.value), c.bound, "", "",
+            table.add_row(Text(f"criterion {c.name}"), num(c.value), Text(c.bound), "", "",
                           "✅ pass" if c.ok else "❌ failed")
         out_console.print(table)
+        for problem in r.problems:
+            out_console.print(Text(f"{r.name}: ❌ {problem}"), highlight=False)
+        for warning in r.warnings:
+            err_console.print(Text(f"kartci: warning: {r.name}: {warning}"), highlight=False)
 
 
 def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
             ci: bool = True) -> None:
     """Write every report, print the verdicts and (unless `ci` is off, as for a shard, whose
-    merge reports for it) the CI outputs; exit with the gating code."""
+    merge reports for it) the CI outputs; exit with the gating code. A report that cannot be
+    written is exit 2, and no earlier report stays in its place (write_all removes them
+    first)."""
     from kartci.report import write_all
     from kartci.report.ci import annotation_lines, append_step_summary, in_github_actions
 
-    paths = write_all(results, out, words)
+    try:
+        paths = write_all(results, out, words)
+    except (KartciError, OSError):
+        raise
+    except Exception as err:  # a report that cannot be drawn: bad input, not a regression
+        raise RunError(f"writing the reports in {out} failed: {type(err).__name__}: "
+                       f"{one_line(str(err), 200)} (no report was left in place)") from err
     print_verdicts(results, words)
     if ci:
         append_step_summary(paths["markdown"].read_text(encoding="utf-8"))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -11,14 +11,19 @@ from kartci.cli.common import (
     BaselinesOpt,
     OutOpt,
     SetOpt,
+    StrictOpt,
     app,
     baselines_dir,
     err_console,
     finish,
     out_console,
     out_dir,
+    strict_mode,
 )
 from kartci.errors import SpecError
+
+if TYPE_CHECKING:
+    from kartci.logs.reader import TopicInfo
 
 
 @app.command()
@@ -28,21 +33,24 @@ def replay(
     = "kart_replay",
     topic: Annotated[str | None, typer.Option(
         help="Input topic (default: the log's only Joy or command topic).")] = None,
-    mapping: Annotated[str, typer.Option(help="Joystick mapping for Joy logs: "
-                                              "models/gokart/joy/<name>.yaml.")] = "ps4",
+    mapping: Annotated[str, typer.Option(help="Joystick mapping for Joy logs: a name "
+                                              "(models/gokart/joy/<name>.yaml: ps4, xbox, g29) "
+                                              "or a path to a mapping YAML file.")] = "ps4",
     agent: Annotated[str | None, typer.Option(help="Agent to drive (default: the first).")]
     = None,
     set_: SetOpt = None,
     out: OutOpt = None,
     baselines: BaselinesOpt = None,
+    strict: StrictOpt = None,
 ) -> None:
     """Run a scenario with a recorded input stream driving one kart: sensor_msgs/Joy through a
     joystick mapping (the manual agent), or AckermannDriveStamped / Twist / TwistStamped
     commands. Log time is re-based so the first message is at sim time 0."""
-    from kartci.agents.kart import COMMANDS, JOY
+    from kartci.agents.joy import check_pad, load_mapping
+    from kartci.agents.kart import JOY
     from kartci.agents.params import CommandsController, ManualController
-    from kartci.logs import topics
     from kartci.runner import Job, run_jobs
+    from kartci.runner.outdir import clear_reports, locked, write_manifest
     from kartci.spec import load_scenario
     from kartci.spec.models import LogSource
 
@@ -52,28 +60,50 @@ def replay(
     if name not in spec.agents:
         raise SpecError(f"scenario {spec.name} has no agent '{name}' "
                         f"(agents: {', '.join(spec.agents)})")
-    info = topics(log)
-    candidates = [i for i in info if (topic is None or i.topic == topic)
-                  and i.msgtype in (*JOY, *COMMANDS) and i.count > 0]
-    if len(candidates) != 1:
-        listed = ", ".join(f"{i.topic} ({i.msgtype}, {i.count})" for i in info) or "none"
-        what = f"topic {topic}" if topic else "exactly one Joy or drive-command topic"
-        raise SpecError(f"{log}: needs {what} with messages; it has: {listed}"
-                        + ("" if topic else "; choose one with --topic"))
-    chosen = candidates[0]
+    chosen = _input_topic(log, topic)
     source = LogSource(log=str(log.resolve()), topic=chosen.topic)
     controller: ManualController | CommandsController
     if chosen.msgtype in JOY:
+        check_pad(load_mapping(mapping), mapping, log, chosen.topic)
         controller = ManualController(mapping=mapping, source=source)
     else:
         controller = CommandsController(source=source)
     agents = dict(spec.agents)
     agents[name] = agents[name].model_copy(update={"controller": controller})
     spec = spec.model_copy(update={"agents": agents})
-    out.mkdir(parents=True, exist_ok=True)
     err_console.print(f"replaying {chosen.topic} ({chosen.msgtype}, {chosen.count} messages) "
-                      f"into {spec.name}/{name}", highlight=False)
-    finish(run_jobs([Job(spec, spec.name)], out, baselines_dir(baselines)), out)
+                      f"into {spec.name}/{name}", highlight=False, markup=False)
+    with locked(out):
+        clear_reports(out)
+        write_manifest(out, "replay", [spec.name])
+        finish(run_jobs([Job(spec, spec.name)], out, baselines_dir(baselines),
+                        strict=strict_mode(strict)), out)
+
+
+def _input_topic(log: Path, topic: str | None) -> TopicInfo:
+    """The log's input topic: the one named (which must be a Joy or drive-command topic with
+    messages), else its only such topic."""
+    from kartci.agents.kart import COMMANDS, JOY
+    from kartci.logs import topics
+
+    info = topics(log)
+    usable = (*JOY, *COMMANDS)
+    listed = ", ".join(f"{i.topic} ({i.msgtype}, {i.count})" for i in info) or "none"
+    if topic is not None:
+        named = [i for i in info if i.topic == topic]
+        if not named:
+            raise SpecError(f"{log}: no topic {topic}; it has: {listed}")
+        if named[0].msgtype not in usable:
+            raise SpecError(f"{log}: topic {topic} is {named[0].msgtype}, which cannot drive a "
+                            f"kart; expected one of {', '.join(usable)}")
+        if named[0].count == 0:
+            raise SpecError(f"{log}: topic {topic} has no messages")
+        return named[0]
+    candidates = [i for i in info if i.msgtype in usable and i.count > 0]
+    if len(candidates) != 1:
+        raise SpecError(f"{log}: needs exactly one Joy or drive-command topic with messages; "
+                        f"it has: {listed}; choose one with --topic")
+    return candidates[0]
 
 
 @app.command()

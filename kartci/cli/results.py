@@ -7,7 +7,16 @@ from typing import Annotated
 
 import typer
 
-from kartci.cli.common import BaselinesOpt, OutOpt, app, baselines_dir, finish, out_dir
+from kartci.cli.common import (
+    BaselinesOpt,
+    OutOpt,
+    StrictOpt,
+    app,
+    baselines_dir,
+    finish,
+    out_dir,
+    strict_mode,
+)
 from kartci.errors import SpecError
 
 
@@ -16,12 +25,18 @@ def merge(
     dirs: Annotated[list[Path], typer.Argument(help="Partial results (`run --shard` OUTs).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")],
     baselines: BaselinesOpt = None,
+    strict: StrictOpt = None,
 ) -> None:
     """Join partial results into one run: copy the scenario folders into OUT, then judge and
     report them exactly as an unsharded run would (same summary, verdicts, exit code)."""
     from kartci.runner.merge import merge as join
+    from kartci.runner.outdir import clear_reports, locked, write_manifest
 
-    finish(join(dirs, out, baselines_dir(baselines)), out)
+    with locked(out):
+        clear_reports(out)
+        results = join(dirs, out, baselines_dir(baselines), strict_mode(strict))
+        write_manifest(out, "merge", [r.name for r in results])
+        finish(results, out)
 
 
 @app.command("compare")
@@ -39,17 +54,33 @@ def compare_cmd(
     regressed, 0 when not, 2 when a run failed."""
     from kartci.report import COMPARE
     from kartci.runner.compare import compare_outs
+    from kartci.runner.outdir import clear_reports, locked
 
     out = out_dir(out, "compare")
     if not 0 < alpha < 1:
         raise SpecError(f"--alpha {alpha:g}: expected 0 < alpha < 1")
-    finish(compare_outs(base, head, baselines_dir(baselines), alpha), out, COMPARE)
+    with locked(out):
+        clear_reports(out)
+        finish(compare_outs(base, head, baselines_dir(baselines), alpha), out, COMPARE)
 
 
 @app.command()
 def report(out: Annotated[Path, typer.Argument(help="A folder written by `kartci run`.")],
-           baselines: BaselinesOpt = None) -> None:
-    """Rebuild metrics and all reports of a run folder from its logs alone."""
+           baselines: BaselinesOpt = None, strict: StrictOpt = None) -> None:
+    """Rebuild metrics and all reports of a run folder from its logs alone (the scenarios of
+    its last run); a scenario whose log is missing or damaged is an error."""
     from kartci.runner import rescore
+    from kartci.runner.gate import require_baselines
+    from kartci.runner.outdir import clear_reports, locked, manifest_labels, write_manifest
 
-    finish(rescore(out, baselines_dir(baselines)), out)
+    if not out.is_dir():
+        raise SpecError(f"{out}: no such folder")
+    target = baselines_dir(baselines)
+    with locked(out):
+        clear_reports(out)
+        results = rescore(out, target)
+        if strict_mode(strict):
+            results = [require_baselines(r, out, target) for r in results]
+        if manifest_labels(out) is None:
+            write_manifest(out, "report", [r.name for r in results])
+        finish(results, out)

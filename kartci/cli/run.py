@@ -11,12 +11,14 @@ from kartci.cli.common import (
     BaselinesOpt,
     OutOpt,
     SetOpt,
+    StrictOpt,
     app,
     baselines_dir,
     complete_scenario,
     err_console,
     finish,
     out_dir,
+    strict_mode,
 )
 from kartci.errors import SpecError
 from kartci.runner.executors import ExecutorKind
@@ -48,7 +50,9 @@ def run(
         help="Run K seeds (seed, seed+1, ...): extra runs in OUT/<scenario>/repeat_<k>/, for "
              "`kartci compare`.")] = 1,
     timeout_s: Annotated[float | None, typer.Option(
-        "--timeout-s", help="Wall-clock limit per run, s: a slower run is an error.")] = None,
+        "--timeout-s", help="Wall-clock limit per run, s: a slower run is an error (held "
+                            "within a second, even inside a slow controller step).")] = None,
+    strict: StrictOpt = None,
 ) -> None:
     """Run scenarios, record each as OUT/<scenario>/run.mcap, score and judge them.
 
@@ -60,6 +64,7 @@ def run(
     from kartci.runner import expand, parse_shard, run_jobs
     from kartci.runner import shard as share
     from kartci.runner.merge import write_marker
+    from kartci.runner.outdir import clear_reports, locked, write_manifest
     from kartci.spec import load_scenario
 
     out = out_dir(out, "latest")
@@ -80,13 +85,16 @@ def run(
     todo = expand(selected, set_ or [], sweep, repeat)
     if part is not None:
         todo = share(todo, *part)
-    out.mkdir(parents=True, exist_ok=True)  # an unusable --out fails here, before any run
     index, total = part or (None, None)
-    write_marker(out, index, total, [j.label for j in todo if j.repeat == 0])
+    labels = [j.label for j in todo if j.repeat == 0]
     workers = jobs or (os.cpu_count() or 1 if executor is ExecutorKind.RAY else 1)
     live = err_console.is_terminal and not os.environ.get("CI")
-    with ProgressView(todo, err_console, live) as view:
-        results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
-                           executor=executor, ray_address=ray_address, timeout_s=timeout_s,
-                           on_event=view)
-    finish(results, out, ci=part is None)
+    with locked(out):  # an unusable or busy --out fails here, before any run
+        clear_reports(out)
+        write_marker(out, index, total, labels)
+        write_manifest(out, "run", labels)
+        with ProgressView(todo, err_console, live) as view:
+            results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
+                               executor=executor, ray_address=ray_address, timeout_s=timeout_s,
+                               strict=strict_mode(strict), on_event=view)
+        finish(results, out, ci=part is None)

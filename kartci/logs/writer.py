@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 from types import TracebackType
 from typing import Any, BinaryIO
@@ -13,16 +14,23 @@ from kartci.logs.types import typestore
 
 
 class McapLogWriter:
-    """Writes to `<path>.partial` and renames on a clean close, so a failed run never leaves a
-    truncated log in place of a good one."""
+    """Writes to a `.<name>.<unique>.partial` file beside `path` and renames it on a clean
+    close, so a failed run never leaves a truncated log in place of a good one, two writers of
+    one path never share a partial file, and a failed write (a full disk) leaves no partial
+    file behind to fill the disk for the runs after it."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        self._tmp = path.with_name(path.name + ".partial")
         path.parent.mkdir(parents=True, exist_ok=True)
-        self._file: BinaryIO = self._tmp.open("wb")
-        self._writer = Writer(self._file, compression=CompressionType.ZSTD)
-        self._writer.start(profile="ros2", library="kartci")
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".partial")
+        self._tmp = Path(tmp)
+        self._file: BinaryIO = os.fdopen(fd, "wb")
+        try:
+            self._writer = Writer(self._file, compression=CompressionType.ZSTD)
+            self._writer.start(profile="ros2", library="kartci")
+        except BaseException:
+            self._discard()
+            raise
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._seq: dict[int, int] = {}
@@ -49,11 +57,26 @@ class McapLogWriter:
                                  sequence=seq)
 
     def close(self, ok: bool = True) -> None:
-        self._writer.finish()  # type: ignore[no-untyped-call]
-        self._file.close()
-        if ok:
+        """Finish the log and move it into place (`ok`), or throw it away; any failure on the
+        way removes the partial file too."""
+        if not ok:
+            self._discard()
+            return
+        try:
+            self._writer.finish()  # type: ignore[no-untyped-call]
+            self._file.close()
+            os.chmod(self._tmp, 0o644)  # mkstemp makes 0600; a log is a shared artifact
             os.replace(self._tmp, self.path)
-        else:
+        except BaseException:
+            self._discard()
+            raise
+
+    def _discard(self) -> None:
+        try:
+            self._file.close()
+        except OSError:
+            pass  # the buffered rest could not be written either: the file goes anyway
+        finally:
             self._tmp.unlink(missing_ok=True)
 
     def __enter__(self) -> McapLogWriter:

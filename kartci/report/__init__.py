@@ -26,6 +26,8 @@ def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
                                      "status": v.status.value} for v in r.verdicts},
                 "criteria": {c.name: {"bound": c.bound, "value": c.value, "ok": c.ok}
                              for c in r.criteria},
+                "problems": list(r.problems),
+                "warnings": list(r.warnings),
             } for r in results
         },
     }
@@ -33,15 +35,22 @@ def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
 
 def _write_text(path: Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN) -> dict[str, Path]:
-    """report.html, summary.md, summary.json and junit.xml in `out`."""
+    """report.html, summary.md, summary.json and junit.xml in `out`. The old ones are removed
+    first: a report that fails half-way leaves some missing, never an earlier one standing."""
     out.mkdir(parents=True, exist_ok=True)
     paths = {"html": out / "report.html", "markdown": out / "summary.md",
              "json": out / "summary.json", "junit": out / "junit.xml"}
+    for path in paths.values():
+        path.unlink(missing_ok=True)
     _write_text(paths["html"], report_html(results, words))
     _write_text(paths["markdown"], summary_md(results, words))
     write_json_atomic(paths["json"], summary_json(results))

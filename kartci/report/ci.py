@@ -57,6 +57,8 @@ def annotation_lines(results: list[ScenarioResult], limit: int = MAX_ANNOTATIONS
         if r.error:
             items.append((-float("inf"), "error", f"kartci {r.name}: error", r.error))
             continue
+        for problem in r.problems:
+            items.append((-1e300, "error", f"kartci {r.name}: failed", problem))
         for c in r.criteria:
             if not c.ok:
                 items.append((-1e300, "error", f"kartci {r.name}: criterion failed",

@@ -28,6 +28,8 @@ def _scenario(r: ScenarioResult, words: Wording) -> str:
     if r.error:
         out.append(f'<p class="error">{html.escape(r.error)}</p></section>')
         return "\n".join(out)
+    out += [f'<p class="failed">{html.escape(x)}</p>' for x in r.problems]
+    out += [f'<p class="missing">warning: {html.escape(x)}</p>' for x in r.warnings]
     if r.run:
         out.append(f"<p>sim time {num(r.run.get('sim_time_s'), 's')}, wall "
                    f"{num(r.run.get('wall_s'), 's')}, real-time factor "

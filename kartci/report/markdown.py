@@ -33,11 +33,13 @@ def summary_md(results: list[ScenarioResult], words: Wording = RUN) -> str:
             continue
         bad = [v for v in r.verdicts if v.status is not Status.PASS]
         failed = [c for c in r.criteria if not c.ok]
-        if not bad and not failed:
+        if not bad and not failed and not r.problems and not r.warnings:
             continue
         lines += ["", f"### `{r.name}`"]
-        if failed:
+        if failed or r.problems or r.warnings:
             lines.append("")
+        lines += [f"- ❌ {p}" for p in r.problems]
+        lines += [f"- ⚠️ warning: {w}" for w in r.warnings]
         for c in failed:
             lines.append(f"- ❌ criterion `{c.name}` {c.bound}: got {num(c.value)}")
         if bad:

@@ -14,7 +14,10 @@ from matplotlib.figure import Figure
 
 from kartci.results import Plots
 
-plt.rcParams.update({"svg.hashsalt": "kartci", "figure.dpi": 96, "font.size": 9})
+# Labels carry user text (agent names): `$` must stay a dollar sign, never start mathtext, which
+# fails on text like `a$\\foo{$b` and took the whole report down.
+plt.rcParams.update({"svg.hashsalt": "kartci", "figure.dpi": 96, "font.size": 9,
+                     "text.parse_math": False})
 
 
 def _finish(fig: Figure, ax: Axes, xlabel: str, ylabel: str, title: str) -> str:

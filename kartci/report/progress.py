@@ -10,6 +10,7 @@ from types import TracebackType
 from rich.console import Console
 from rich.live import Live
 from rich.table import Table
+from rich.text import Text
 
 from kartci.report.tables import MARK, num
 from kartci.runner import Event, EventKind, Job
@@ -86,7 +87,7 @@ class ProgressView:
         for folder, r in self.rows.items():
             if r.state is JobState.DONE:
                 continue  # already printed as a line above the table
-            table.add_row(folder, r.state.value,
+            table.add_row(Text(folder), r.state.value,
                           f"{r.sim_t:6.1f} / {r.duration_s:g} s" if r.state is JobState.RUNNING
                           else "", num(r.rtf) if r.state is JobState.RUNNING else "")
         return table

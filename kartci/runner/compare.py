@@ -10,7 +10,7 @@ from pathlib import Path
 from kartci.errors import SpecError
 from kartci.results import ScenarioResult, overlay
 from kartci.runner.jobs import REPEAT_PREFIX
-from kartci.runner.run import evaluate, scenario_folders
+from kartci.runner.run import evaluate, failed_reason, scenario_folders
 from kartci.verdict import load, read_metrics
 from kartci.verdict.runs import ALPHA, Samples, compare_runs
 
@@ -29,13 +29,18 @@ def samples(folder: Path) -> Samples:
 
 def compare_outs(base_out: Path, head_out: Path, baselines: Path,
                  alpha: float = ALPHA) -> list[ScenarioResult]:
+    """Head judged against base. Both must hold scored scenarios: an empty or unscorable side
+    is bad input (exit 2), and a side whose run failed is an error for that scenario."""
     for d in (base_out, head_out):
         if not d.is_dir():
             raise SpecError(f"{d}: no such folder")
     base = {p.name: p for p in scenario_folders(base_out)}
     head = {p.name: p for p in scenario_folders(head_out)}
-    if not base and not head:
-        raise SpecError(f"{base_out}, {head_out}: no scenario folders; run `kartci run` first")
+    for side, d, found in (("base", base_out, base), ("head", head_out, head)):
+        if not found:  # else every metric of the other side would be NEW, and pass
+            hint = (f"run `kartci report {d}` to score its logs" if any(d.glob("*/run.mcap"))
+                    else "run `kartci run` first")
+            raise SpecError(f"{side} {d}: no scored scenario folders; {hint}")
     return [_one(label, base.get(label), head.get(label), baselines, alpha)
             for label in sorted(set(base) | set(head))]
 
@@ -48,6 +53,11 @@ def _one(label: str, b: Path | None, h: Path | None, baselines: Path,
     for side, r in (("head", hr), ("base", br)):
         if r is not None and r.error:
             return ScenarioResult(label, r.description, error=f"{side}: {r.error}")
+    for side, folder in (("head", h), ("base", b)):
+        for rep in sorted(folder.glob(f"{REPEAT_PREFIX}*")) if folder else []:
+            reason = failed_reason(rep)
+            if reason is not None:  # its stale metrics must not count as a sample
+                return ScenarioResult(label, "", error=f"{side}: {rep.name}: {reason}")
     verdicts = compare_runs(samples(b) if b else {}, samples(h) if h else {},
                             load(baselines / f"{label}.json"), alpha)
     first = hr or br

@@ -7,8 +7,15 @@ scenario + seed gives the same bytes in any process, so all executors give the s
 
 from __future__ import annotations
 
+import ctypes
 import multiprocessing as mp
+import os
 import queue as queue_mod
+import shutil
+import signal
+import sys
+import threading
+import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -18,6 +25,9 @@ from enum import StrEnum
 from typing import Any
 
 from kartci.runner.jobs import Context, Job, Outcome, run_job
+from kartci.runner.run import STAGE_PREFIX, mark_failed
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
 class ExecutorKind(StrEnum):
@@ -64,9 +74,30 @@ def _here(job: Job, ctx: Context, emit: Listener,
 _QUEUE: Any = None  # the worker's end of the progress queue (set by _init_worker)
 
 
-def _init_worker(q: Any) -> None:
+def _init_worker(q: Any, parent: int) -> None:
     global _QUEUE
     _QUEUE = q
+    die_with_parent(parent)
+
+
+def die_with_parent(parent: int) -> None:
+    """A worker must not outlive the command that started it: orphaned, it would keep writing
+    into OUT and then block for ever on the progress pipe. On Linux the kernel kills it when
+    its parent dies (prctl PR_SET_PDEATHSIG); everywhere, a daemon thread checks once a second
+    that the parent is still its parent (which also covers a parent that died before prctl)."""
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):
+            pass  # the thread below still applies
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="kartci-parent-watch", daemon=True).start()
 
 
 def _report(folder: str, t: float) -> None:
@@ -86,8 +117,8 @@ class _Workers:
         self.ctx, self.emit, self.slots = ctx, emit, n
         mpc = mp.get_context("spawn")
         self.events = mpc.Queue()
-        self.ex = ProcessPoolExecutor(max_workers=n, mp_context=mpc,
-                                      initializer=_init_worker, initargs=(self.events,))
+        self.ex = ProcessPoolExecutor(max_workers=n, mp_context=mpc, initializer=_init_worker,
+                                      initargs=(self.events, os.getpid()))
         self.running: dict[Future[Outcome], Job] = {}
         self.finished: deque[Outcome] = deque()
 
@@ -100,7 +131,7 @@ class _Workers:
                 break
             self.emit(Event(kind, folder, t))
         for fut in [f for f in self.running if f.done()]:
-            outcome = _outcome(fut, self.running.pop(fut))
+            outcome = _outcome(fut, self.running.pop(fut), self.ctx)
             self.emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
             self.finished.append(outcome)
         while todo and len(self.running) < self.slots:
@@ -137,11 +168,22 @@ def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Ite
         others.close()
 
 
-def _outcome(fut: Future[Outcome], job: Job) -> Outcome:
+def _outcome(fut: Future[Outcome], job: Job, ctx: Context) -> Outcome:
     try:
         return fut.result()
     except Exception as err:  # the worker process died (e.g. a segfault in native code)
-        return Outcome.failed(job, f"worker process failed: {type(err).__name__}: {err}")
+        return lost(job, ctx, f"worker process failed: {type(err).__name__}: {err}")
+
+
+def lost(job: Job, ctx: Context, error: str) -> Outcome:
+    """A job whose process died: its folder is marked failed here, since the dead process
+    could not (its own unfinished mark says no more than that it did not finish)."""
+    folder = ctx.out / job.folder
+    if folder.is_dir():
+        mark_failed(folder, job.label, error)
+        for stage in folder.glob(f"{STAGE_PREFIX}*"):  # its half-written run: nobody owns it
+            shutil.rmtree(stage, ignore_errors=True)
+    return Outcome.failed(job, error)
 
 
 def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,

@@ -9,15 +9,25 @@ from __future__ import annotations
 
 import itertools
 import re
+import signal
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
-from kartci.errors import KartciError, RunError, SpecError
-from kartci.results import ScenarioResult
-from kartci.runner.run import check_criteria_names, evaluate, run_one
+from kartci.errors import RunError, SpecError
+from kartci.results import ScenarioResult, one_line
+from kartci.runner.gate import require_baselines
+from kartci.runner.run import (
+    check_criteria_names,
+    evaluate,
+    failure_text,
+    run_one,
+)
 from kartci.spec import Scenario, load_scenario
 
 REPEAT_PREFIX = "repeat_"
@@ -55,6 +65,7 @@ class Context:
     out: Path
     baselines: Path
     timeout_s: float | None = None
+    strict: bool = False  # a missing baseline or baseline metric fails (see runner.gate)
 
 
 def parse_sweep(text: str) -> tuple[str, list[str]]:
@@ -112,24 +123,60 @@ def shard(jobs: list[Job], index: int, total: int) -> list[Job]:
     return [j for j in jobs if j.label in mine]
 
 
+@contextmanager
+def wall_clock_limit(limit_s: float | None, where: Callable[[], str]) -> Iterator[None]:
+    """Bound the enclosed work in wall-clock time, wherever it is.
+
+    An interval timer (SIGALRM) interrupts the main thread of the process running the job,
+    even inside a controller step that sleeps or spins in Python, and raises RunError there;
+    it fires again every second in case a controller swallows the exception. Native code
+    (one PyBullet call) is interrupted when it returns. Off the main thread (a Ray worker
+    thread) or without SIGALRM (Windows) only the check at each progress report applies."""
+    usable = (limit_s is not None and hasattr(signal, "setitimer")
+              and threading.current_thread() is threading.main_thread())
+    if not usable or limit_s is None:
+        yield
+        return
+    armed = [True]
+
+    def expire(signum: int, frame: FrameType | None) -> None:
+        if armed[0]:
+            raise RunError(f"time limit: over {limit_s:g} s wall clock ({where()})")
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, limit_s, 1.0)
+    try:
+        yield
+    finally:
+        armed[0] = False
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
     """Simulate, score and (for the judged run) evaluate one job; never raises for a failed run,
     so one crashing scenario cannot take the others down. Runs in any process."""
     start = time.perf_counter()
+    sim_t = [0.0]
+
+    def where() -> str:
+        return f"at sim time {sim_t[0]:.1f} s"
 
     def progress(t: float) -> None:
+        sim_t[0] = t
         if ctx.timeout_s is not None and time.perf_counter() - start > ctx.timeout_s:
-            raise RunError(f"time limit: over {ctx.timeout_s:g} s wall clock (at sim time "
-                           f"{t:.1f} s)")
+            raise RunError(f"time limit: over {ctx.timeout_s:g} s wall clock ({where()})")
         if report is not None:
             report(job.folder, t)
 
     try:
-        run = run_one(job.spec, ctx.out, progress, ctx.out / job.folder)
-        result = evaluate(ctx.out / job.folder, ctx.baselines) if job.repeat == 0 else None
-        return Outcome(job, None, result, run)
-    except KartciError as err:
-        error = str(err)
+        with wall_clock_limit(ctx.timeout_s, where):
+            run = run_one(job.spec, ctx.out, progress, ctx.out / job.folder)
     except Exception as err:  # a crashing controller must not take the suite down
-        error = f"run crashed: {type(err).__name__}: {err}"
-    return Outcome.failed(job, error)
+        return Outcome.failed(job, one_line(failure_text(err)))
+    if job.repeat != 0:
+        return Outcome(job, None, None, run)
+    result = evaluate(ctx.out / job.folder, ctx.baselines)
+    if ctx.strict:
+        result = require_baselines(result, ctx.out, ctx.baselines)
+    return Outcome(job, result.error, result, run)

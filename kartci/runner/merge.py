@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import json
 import shutil
+import tempfile
 from pathlib import Path
 
 from kartci.errors import SpecError
 from kartci.results import ScenarioResult
-from kartci.runner.run import evaluate, scenario_folders
+from kartci.runner.gate import require_baselines
+from kartci.runner.outdir import valid_label
+from kartci.runner.run import STAGE_PREFIX, evaluate, scenario_folders
 from kartci.verdict import read_json, write_json_atomic
 
 SHARD_NAME = "shard.json"
@@ -29,15 +32,41 @@ def write_marker(out: Path, index: int | None, total: int | None, labels: list[s
 
 
 def _shard_of(folder: Path) -> tuple[int, int, list[str]] | None:
+    """A shard's marker, checked as untrusted input (a CI artifact anyone could have made):
+    the message names what is wrong, never the file's contents."""
     path = folder / SHARD_NAME
-    if not path.exists():
+    if not path.exists() and not path.is_symlink():
         return None
+    if path.is_symlink() or not path.is_file():
+        raise SpecError(f"{path}: not a regular file")
     try:
         doc = read_json(path)
-        index, total, labels = int(doc["index"]), int(doc["total"]), list(doc["scenarios"])
-    except (OSError, ValueError, KeyError, TypeError) as err:
-        raise SpecError(f"{path}: malformed shard marker ({err})") from None
+        index, total, labels = doc["index"], doc["total"], doc["scenarios"]
+    except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError):
+        raise SpecError(f"{path}: malformed shard marker (expected JSON with index, total "
+                        "and scenarios)") from None
+    if not (isinstance(index, int) and isinstance(total, int) and 1 <= index <= total):
+        raise SpecError(f"{path}: malformed shard marker (index and total: 1 <= index <= total)")
+    if not isinstance(labels, list) or not all(valid_label(x) for x in labels):
+        raise SpecError(f"{path}: malformed shard marker (scenarios must be folder names: "
+                        "no path separators, no '..')")
     return index, total, [str(x) for x in labels]
+
+
+def _labels(d: Path) -> list[str]:
+    """The labels a folder to merge holds: its shard marker's, which must match the scenario
+    folders present (a listed folder may be absent: that shard died before writing it)."""
+    present = {p.name for p in scenario_folders(d)}
+    bad = sorted(x for x in present if not valid_label(x))
+    if bad:
+        raise SpecError(f"{d}: a scenario folder with an unusable name ({len(bad)} found)")
+    marker = _shard_of(d)
+    if marker is None:
+        return sorted(present)
+    extra = sorted(present - set(marker[2]))
+    if extra:
+        raise SpecError(f"{d}: scenario folders not listed in {SHARD_NAME}: {', '.join(extra)}")
+    return marker[2]
 
 
 def _sources(dirs: list[Path]) -> dict[str, Path | None]:
@@ -48,17 +77,16 @@ def _sources(dirs: list[Path]) -> dict[str, Path | None]:
         if not d.is_dir():
             raise SpecError(f"{d}: no such folder")
         marker = _shard_of(d)
-        if marker is None:
-            labels = [p.name for p in scenario_folders(d)]
-        else:
-            index, total, labels = marker
+        if marker is not None:
+            index, total, _ = marker
             if index in shards:
                 raise SpecError(f"{d}: shard {index}/{total} given twice")
             shards[index] = total
-        for label in labels:
+        for label in _labels(d):
             if label in found:
                 raise SpecError(f"{label}: in more than one of the folders to merge")
-            found[label] = d / label if (d / label).is_dir() else None
+            src = d / label
+            found[label] = src if src.is_dir() and not src.is_symlink() else None
     totals = set(shards.values())
     if len(totals) > 1:
         raise SpecError(f"shards of different splits: /{' /'.join(map(str, sorted(totals)))}")
@@ -70,31 +98,65 @@ def _sources(dirs: list[Path]) -> dict[str, Path | None]:
     return found
 
 
-def merge(dirs: list[Path], out: Path, baselines: Path) -> list[ScenarioResult]:
-    """Copy every shard's scenario folders into OUT and judge them as one run would."""
+def _check_tree(src: Path) -> None:
+    """Only plain folders and files: a symlink in an artifact could pull outside files in."""
+    for p in [src, *src.rglob("*")]:
+        if p.is_symlink() or not (p.is_dir() or p.is_file()):
+            raise SpecError(f"{src}: holds a symlink or special file ({p.relative_to(src)}); "
+                            "refusing to merge it")
+
+
+def merge(dirs: list[Path], out: Path, baselines: Path,
+          strict: bool = False) -> list[ScenarioResult]:
+    """Copy every shard's scenario folders into OUT and judge them as one run would. Labels
+    and folders are checked first (shard artifacts are untrusted); nothing is written outside
+    OUT, and a folder is replaced only by a complete copy."""
     sources = _sources(dirs)
+    for src in sources.values():
+        if src is not None:
+            _check_tree(src)
     out.mkdir(parents=True, exist_ok=True)
+    root = out.resolve()
     results = []
     for label, src in sorted(sources.items()):
         if src is None:
             results.append(ScenarioResult(label, "", error="its shard wrote no result"))
             continue
         dst = out / label
+        if dst.resolve().parent != root:
+            raise SpecError(f"{label}: would be written outside {out}")
         if src.resolve() != dst.resolve():
-            shutil.rmtree(dst, ignore_errors=True)
-            shutil.copytree(src, dst)
-            _relocate_log(dst)
-        results.append(evaluate(dst, baselines))
+            _replace_tree(src, dst)
+        result = evaluate(dst, baselines)
+        results.append(require_baselines(result, out, baselines) if strict else result)
     write_marker(out, None, None, [])
     return results
 
 
-def _relocate_log(folder: Path) -> None:
+def _replace_tree(src: Path, dst: Path) -> None:
+    """Copy `src` to `dst` via a temporary folder beside it: the old folder goes only once the
+    copy is complete, and stale run artifacts (a run's staging folder) are left out."""
+    tmp = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".merge", dir=dst.parent))
+    try:
+        shutil.copytree(src, tmp / "new", ignore=shutil.ignore_patterns(f"{STAGE_PREFIX}*"))
+        _relocate_log(tmp / "new", dst)
+        if dst.is_symlink() or dst.is_file():
+            dst.unlink()
+        elif dst.exists():
+            dst.rename(tmp / "old")
+        (tmp / "new").rename(dst)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _relocate_log(folder: Path, final: Path) -> None:
+    """Point run.json's `log` at where the folder will be (`final`)."""
     for run_json in [folder / "run.json", *folder.glob("*/run.json")]:
         try:
             doc = json.loads(run_json.read_text(encoding="utf-8"))
         except (OSError, ValueError):
             continue
         if isinstance(doc, dict) and "log" in doc:
-            doc["log"] = str(run_json.parent / Path(str(doc["log"])).name)
+            where = final / run_json.parent.relative_to(folder)
+            doc["log"] = str(where / Path(str(doc["log"])).name)
             write_json_atomic(run_json, doc)

@@ -13,7 +13,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 from kartci.errors import RunError, SpecError
-from kartci.runner.executors import Event, EventKind, Listener
+from kartci.runner.executors import Event, EventKind, Listener, lost
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 
 
@@ -45,7 +45,7 @@ def ray_tasks(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
                 try:
                     outcome: Outcome = ray.get(ref)
                 except Exception as err:  # the task's worker died
-                    outcome = Outcome.failed(job, f"Ray task failed: {type(err).__name__}: {err}")
+                    outcome = lost(job, ctx, f"Ray task failed: {type(err).__name__}: {err}")
                 emit(Event(EventKind.FINISHED, job.folder, outcome=outcome))
                 yield outcome
     finally:

@@ -9,7 +9,12 @@ reports and, for a shard, `shard.json`. A sweep point's folder is `<scenario>@<k
 from __future__ import annotations
 
 import json
+import math
+import os
+import shutil
+import tempfile
 import time
+import traceback
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -21,14 +26,19 @@ from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
 from kartci.project import did_you_mean
 from kartci.report.data import PlotContext
-from kartci.results import Plots, ScenarioResult
+from kartci.results import Plots, ScenarioResult, one_line
+from kartci.runner.outdir import manifest_labels
 from kartci.sim import simulate
 from kartci.sim.session import describe
 from kartci.spec import Scenario
+from kartci.spec.models import LogSource
 from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
 
 LOG_NAME = "run.mcap"
 ERROR_NAME = "error.json"  # marks a scenario whose last run failed (older outputs are kept)
+TRACEBACK_NAME = "traceback.txt"  # beside error.json when a run crashed: for debugging only
+STAGE_PREFIX = ".new-"  # a run in progress writes here; moved into place when complete
+UNFINISHED = "the run did not finish (interrupted, or its process died)"
 
 
 def default_baselines() -> Path:
@@ -36,23 +46,69 @@ def default_baselines() -> Path:
     return project.current().baselines
 
 
+def mark_failed(folder: Path, name: str, error: str, err: BaseException | None = None) -> None:
+    """Mark a scenario folder as failed: its older outputs stay for debugging, but nothing
+    (report, compare, baseline update) takes them for this run's. A crash (not a KartciError)
+    also leaves its full traceback in traceback.txt; the message itself stays one line."""
+    write_json_atomic(folder / ERROR_NAME, {"scenario": name, "error": one_line(error)})
+    trace = folder / TRACEBACK_NAME
+    if err is not None and not isinstance(err, KartciError):
+        text = "".join(traceback.format_exception(err))
+        tmp = trace.with_name(f".{TRACEBACK_NAME}.tmp")
+        try:
+            tmp.write_text(text, encoding="utf-8")
+            os.replace(tmp, trace)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+    else:
+        trace.unlink(missing_ok=True)
+
+
+def failure_text(err: BaseException) -> str:
+    """What a failed run says: a KartciError as it is, anything else as a crash."""
+    if isinstance(err, KartciError):
+        return str(err)
+    return f"run crashed: {type(err).__name__}: {err}"
+
+
 def run_one(scenario: Scenario, out: Path,
             on_progress: Callable[[float], None] | None = None,
             folder: Path | None = None,
             agents: Mapping[str, object] | None = None) -> dict[str, Any]:
     """Simulate one scenario into `folder` (default OUT/<scenario>) and score its log; returns
-    the run facts (raises KartciError). `agents`: objects replacing those agents' controllers
-    (recorded in the log and in run.json as `replaced_agents`)."""
+    the run facts (raises on failure, with the folder marked failed). `agents`: objects
+    replacing those agents' controllers (recorded in the log and in run.json as
+    `replaced_agents`).
+
+    The folder is marked unfinished first, the run and its scoring happen in a private staging
+    folder, and only a complete result (log, metrics, facts) replaces the previous one: a run
+    that fails anywhere, or whose process dies, never destroys the previous good log and always
+    leaves the folder marked."""
     folder = folder or out / scenario.name
-    t0 = time.perf_counter()
+    folder.mkdir(parents=True, exist_ok=True)
+    for old in folder.glob(f"{STAGE_PREFIX}*"):  # left by a killed run (OUT is locked)
+        shutil.rmtree(old, ignore_errors=True)
+    mark_failed(folder, scenario.name, UNFINISHED)
+    stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=folder))
     try:
-        info = simulate(scenario, folder / LOG_NAME, on_progress, agents)
-    except Exception as err:
-        write_json_atomic(folder / ERROR_NAME, {"scenario": scenario.name, "error": str(err)})
+        run = _run_staged(scenario, stage, folder, on_progress, agents)
+        _commit(stage, folder)
+    except BaseException as err:
+        mark_failed(folder, scenario.name, failure_text(err), err)
         raise
-    (folder / ERROR_NAME).unlink(missing_ok=True)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return run
+
+
+def _run_staged(scenario: Scenario, stage: Path, folder: Path,
+                on_progress: Callable[[float], None] | None,
+                agents: Mapping[str, object] | None = None) -> dict[str, Any]:
+    t0 = time.perf_counter()
+    info = simulate(scenario, stage / LOG_NAME, on_progress, agents)
     wall = time.perf_counter() - t0
-    score(folder)
+    score(stage)
     run: dict[str, Any] = {
         "sim_time_s": round(info.sim_time_s, 6), "wall_s": round(wall, 3),
         "real_time_factor": round(info.sim_time_s / wall, 2) if wall > 0 else None,
@@ -60,8 +116,44 @@ def run_one(scenario: Scenario, out: Path,
         "log": str(folder / LOG_NAME)}
     if agents:
         run["replaced_agents"] = {name: describe(a) for name, a in sorted(agents.items())}
-    write_json_atomic(folder / "run.json", run)
+    warnings = input_warnings(scenario)
+    if warnings:
+        run["warnings"] = warnings
+    write_json_atomic(stage / "run.json", run)
     return run
+
+
+def _commit(stage: Path, folder: Path) -> None:
+    """Move a complete result into place; the unfinished mark goes last, so a death half-way
+    leaves the folder marked."""
+    for name in (LOG_NAME, "metrics.json", "run.json"):
+        os.replace(stage / name, folder / name)
+    (folder / TRACEBACK_NAME).unlink(missing_ok=True)
+    (folder / ERROR_NAME).unlink(missing_ok=True)
+
+
+def input_warnings(scenario: Scenario) -> list[str]:
+    """Recorded inputs longer than the scenario: the rest is not replayed, which a user must be
+    told (not silently cut)."""
+    from kartci.agents.kart import COMMANDS, JOY
+    from kartci.agents.source import Recorded
+
+    out = []
+    for name, agent in scenario.agents.items():
+        source = getattr(agent.controller, "source", None)
+        if not isinstance(source, LogSource):
+            continue
+        try:
+            rec = Recorded(source, (*JOY, *COMMANDS))
+        except KartciError:  # the agent itself reports an unusable log
+            continue
+        end_s = rec.times[-1] * 1e-9
+        if end_s > scenario.duration_s + 1e-9:
+            out.append(f"{name}: the input log {rec.topic} runs to {end_s:.1f} s but the "
+                       f"scenario stops at {scenario.duration_s:g} s; the last "
+                       f"{end_s - scenario.duration_s:.1f} s are not replayed (set "
+                       f"duration_s={math.ceil(end_s)} to replay all of it)")
+    return out
 
 
 def score(folder: Path) -> dict[str, Any]:
@@ -90,27 +182,73 @@ def plots(folder: Path, scenario: Scenario) -> Plots | None:
     return result
 
 
-def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> ScenarioResult:
-    """Judge one scenario folder (metrics.json + log) against its baseline and criteria."""
-    name = folder.name
+def failed_reason(folder: Path) -> str | None:
+    """Why a folder's last run failed, or None when it is not marked failed."""
     marker = folder / ERROR_NAME
-    if marker.exists():
-        try:
-            reason = json.loads(marker.read_text(encoding="utf-8")).get("error", "")
-        except (OSError, ValueError, AttributeError):
-            reason = ""
-        return ScenarioResult(name, "", error=f"the last run failed: {reason}".rstrip(": "))
+    if not marker.exists() and not marker.is_symlink():
+        return None
     try:
-        scenario, _ = _recorded(folder)
-        values = read_metrics(folder / "metrics.json")
-        verdicts = compare(values, load(baselines / f"{name}.json"))
-        crit = check_criteria(values, scenario.criteria)
-        run_path = folder / "run.json"
-        run = json.loads(run_path.read_text(encoding="utf-8")) if run_path.exists() else {}
-        return ScenarioResult(name, scenario.description, verdicts, crit, None, run,
-                              plots(folder, scenario) if with_plots else None)
-    except (KartciError, OSError, ValueError, KeyError) as err:
+        reason = json.loads(marker.read_text(encoding="utf-8")).get("error", "")
+    except (OSError, ValueError, AttributeError):
+        reason = ""
+    return f"the last run failed: {one_line(str(reason))}".rstrip(": ")
+
+
+def check_complete(folder: Path) -> None:
+    """A folder whose outputs are one complete, current run (raises SpecError otherwise): what
+    `baseline update` may promote."""
+    if not folder.is_dir():
+        raise SpecError(f"{folder}: no such scenario folder")
+    reason = failed_reason(folder)
+    if reason is not None:
+        why = reason.removeprefix("the last run failed").lstrip(": ")
+        raise SpecError(f"{folder}: the last run of this scenario failed"
+                        f"{f' ({why})' if why else ''}; its metrics are stale and will not "
+                        "become a baseline")
+    missing = [n for n in (LOG_NAME, "metrics.json") if not (folder / n).is_file()]
+    if missing:
+        raise SpecError(f"{folder}: incomplete (no {' or '.join(missing)}); run it again")
+
+
+def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> ScenarioResult:
+    """Judge one scenario folder (metrics.json + log) against its baseline and criteria.
+
+    A folder that cannot be judged (log, metrics or plots unreadable) is marked failed, so that
+    nothing promotes or compares its outputs later; a bad baseline file is the baseline's fault
+    and leaves the folder as it is."""
+    name = folder.name
+    reason = failed_reason(folder)
+    if reason is not None:
+        return ScenarioResult(name, "", error=reason)
+    try:
+        baseline = load(baselines / f"{name}.json")
+    except KartciError as err:
         return ScenarioResult(name, "", error=str(err))
+    try:
+        return _judge(folder, baseline, with_plots)
+    except Exception as err:  # this scenario only: the others are still judged
+        error = str(err) if isinstance(err, KartciError) else (
+            f"cannot judge {name}: {type(err).__name__}: {err}")
+        if folder.is_dir():
+            mark_failed(folder, name, error, err)
+        return ScenarioResult(name, "", error=one_line(error))
+
+
+def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None,
+           with_plots: bool) -> ScenarioResult:
+    scenario, _ = _recorded(folder)
+    values = read_metrics(folder / "metrics.json")
+    verdicts = compare(values, baseline)
+    crit = check_criteria(values, scenario.criteria)
+    run_path = folder / "run.json"
+    run = json.loads(run_path.read_text(encoding="utf-8")) if run_path.exists() else {}
+    if not isinstance(run, dict):
+        raise LogError(f"{run_path}: expected a JSON object")
+    warnings = run.get("warnings")
+    return ScenarioResult(
+        folder.name, scenario.description, verdicts, crit, None, run,
+        plots(folder, scenario) if with_plots else None,
+        warnings=tuple(one_line(str(w)) for w in warnings) if isinstance(warnings, list) else ())
 
 
 def _recorded(folder: Path) -> tuple[Scenario, dict[str, pd.DataFrame]]:
@@ -137,21 +275,28 @@ def scenario_folders(out: Path) -> list[Path]:
 
 
 def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:
-    """Recompute every scenario's metrics from its log alone and judge them again."""
-    folders = sorted(p.parent for p in out.glob(f"*/{LOG_NAME}"))
-    if not folders:
+    """Recompute every scenario's metrics from its log alone and judge them again: those of the
+    last run in OUT (its manifest), else every folder with a log, metrics or a failure mark.
+    Each gets a result: one whose log is gone or damaged is an error, its folder marked."""
+    names = set(manifest_labels(out) or []) or {
+        p.parent.name for pattern in (f"*/{LOG_NAME}", "*/metrics.json", f"*/{ERROR_NAME}")
+        for p in out.glob(pattern)}
+    if not names:
         raise LogError(f"{out}: no <scenario>/{LOG_NAME} logs found")
-    results = []
-    for folder in folders:
-        if (folder / ERROR_NAME).exists():
-            results.append(evaluate(folder, baselines))
-            continue
-        try:
-            score(folder)
-            results.append(evaluate(folder, baselines))
-        except KartciError as err:
-            results.append(ScenarioResult(folder.name, "", error=str(err)))
-        except Exception as err:  # a log that breaks a reader in a new way: this scenario only
-            results.append(ScenarioResult(folder.name, "",
-                                          error=f"{type(err).__name__}: {err}"))
-    return results
+    return [_rescore_one(out / name, baselines) for name in sorted(names)]
+
+
+def _rescore_one(folder: Path, baselines: Path) -> ScenarioResult:
+    if failed_reason(folder) is not None:
+        return evaluate(folder, baselines)
+    if not folder.is_dir():
+        return ScenarioResult(folder.name, "", error=f"{folder}: the scenario folder is missing")
+    try:
+        if not (folder / LOG_NAME).is_file():
+            raise LogError(f"{folder / LOG_NAME}: missing; nothing to score")
+        score(folder)
+    except Exception as err:  # a log that breaks a reader in a new way: this scenario only
+        error = str(err) if isinstance(err, KartciError) else f"{type(err).__name__}: {err}"
+        mark_failed(folder, folder.name, error, err)
+        return ScenarioResult(folder.name, "", error=one_line(error))
+    return evaluate(folder, baselines)

@@ -16,12 +16,13 @@ def _ignore(_: Event) -> None:
 
 def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
              executor: ExecutorKind = ExecutorKind.LOCAL, ray_address: str | None = None,
-             timeout_s: float | None = None,
+             timeout_s: float | None = None, strict: bool = False,
              on_event: Listener | None = None) -> list[ScenarioResult]:
     """A run that fails is an ERROR result for its label only (a failed repeat included);
-    earlier outputs of a failed run stay in place."""
+    earlier outputs of a failed run stay in place, marked failed. `strict`: a scenario without
+    a baseline, or with a metric its baseline lacks, fails (see runner.gate)."""
     emit = on_event or _ignore
-    ctx = Context(out, baselines, timeout_s)
+    ctx = Context(out, baselines, timeout_s, strict)
     # Longest first: a cheap schedule that keeps the last worker from running alone.
     order = sorted(jobs, key=lambda j: -j.spec.duration_s)
     outcomes: dict[str, Outcome] = {}

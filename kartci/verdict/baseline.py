@@ -100,8 +100,11 @@ def read_json(path: Path) -> Any:
 
 
 def load(path: Path) -> dict[str, dict[str, Any]] | None:
-    """The baseline's metrics by name, or None when there is no baseline file."""
+    """The baseline's metrics by name, or None when there is no baseline file. A dangling
+    symlink is a broken baseline, not a missing one (that would pass everything as NEW)."""
     if not path.exists():
+        if path.is_symlink():
+            raise BaselineError(f"{path}: a symlink to a missing file; fix or remove it")
         return None
     try:
         data = read_json(path)

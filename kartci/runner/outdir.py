@@ -1,0 +1,91 @@
+"""OUT as a whole: one writer at a time (a lock), and the manifest of the last run's labels.
+
+Two commands writing one OUT would share scenario folders and mix their results, so every
+command that writes OUT holds an exclusive `flock` on `OUT/.kartci.lock` for as long as it runs;
+a second one stops at once with one line. The lock dies with its process (the kernel drops it),
+so a killed run never leaves OUT locked.
+
+`OUT/manifest.json` lists the labels of the last command that wrote scenario folders (run,
+replay, merge, report). OUT is reused (`reports/latest` by default), so it may also hold folders
+of older runs; `kartci baseline update OUT` with no names takes only the manifest's labels.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from kartci.errors import RunError, SpecError
+from kartci.verdict import read_json, write_json_atomic
+
+LOCK_NAME = ".kartci.lock"
+MANIFEST_NAME = "manifest.json"
+REPORT_NAMES = ("report.html", "summary.md", "summary.json", "junit.xml")
+_LABEL = re.compile(r"^[A-Za-z0-9_=@+,-][A-Za-z0-9_.=@+,-]*$")  # as jobs._safe makes them
+
+
+def valid_label(label: object) -> bool:
+    """A label names one folder directly in OUT: no separator, no `..`, no hidden name."""
+    return isinstance(label, str) and bool(_LABEL.match(label)) and ".." not in label
+
+
+@contextmanager
+def locked(out: Path) -> Iterator[None]:
+    """Hold OUT's writer lock (creating OUT); a second writer gets a RunError at once."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock, as before
+        out.mkdir(parents=True, exist_ok=True)
+        yield
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    fd = os.open(out / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+            raise RunError(f"{out}: in use by another kartci command"
+                           f"{f' (pid {holder})' if holder.isdigit() else ''}; wait for it to "
+                           "end or choose another --out") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def clear_reports(out: Path) -> None:
+    """Remove the suite reports before anything else changes OUT, so an interrupted or failed
+    command can never leave an earlier all-pass report beside its own results."""
+    for name in REPORT_NAMES:
+        (out / name).unlink(missing_ok=True)
+
+
+def write_manifest(out: Path, command: str, labels: list[str]) -> None:
+    write_json_atomic(out / MANIFEST_NAME, {"command": command, "scenarios": sorted(labels)})
+
+
+def read_manifest(out: Path) -> list[str]:
+    """The labels of the last run in OUT (SpecError when OUT has no usable manifest)."""
+    path = out / MANIFEST_NAME
+    if not path.is_file():
+        raise SpecError(f"{out}: no {MANIFEST_NAME} (not written by `kartci run`, `replay`, "
+                        "`merge` or `report`); name the scenarios to use")
+    try:
+        labels = read_json(path)["scenarios"]
+    except (OSError, ValueError, KeyError, TypeError):
+        labels = None
+    if not isinstance(labels, list) or not all(valid_label(x) for x in labels):
+        raise SpecError(f"{path}: malformed manifest; name the scenarios to use")
+    return [str(x) for x in labels]
+
+
+def manifest_labels(out: Path) -> list[str] | None:
+    """The manifest's labels, or None when OUT has no manifest (a folder of an older kartci)."""
+    if not (out / MANIFEST_NAME).is_file():
+        return None
+    return read_manifest(out)
