@@ -37,3 +37,17 @@ def test_the_hall_refuses_a_track_through_its_walls(tmp_path: Path) -> None:
                                         r"kind: circuit"):
         simulate(spec, tmp_path / "run.mcap")
     assert not (tmp_path / "run.mcap").exists()
+
+
+def test_a_run_on_another_track_is_judged_against_that_tracks_baseline(
+        tmp_path: Path) -> None:
+    """`--set world.track=...` (or `world=...`) is a different run: its label and folder say
+    so, and the original scenario's baseline never judges it."""
+    from kartci.runner import expand
+
+    jobs = expand(["kart_wall"], ["world.track=tracks/chicane.csv"])
+    assert [j.label for j in jobs] == ["kart_wall@track=chicane"]
+    jobs = expand(["kart_wall"], ["world=club/circuit"], ["duration_s=1,2"])
+    assert [j.label for j in jobs] == ["kart_wall@world=club_circuit,duration_s=1",
+                                       "kart_wall@world=club_circuit,duration_s=2"]
+    assert [j.label for j in expand(["kart_wall"], ["duration_s=1"])] == ["kart_wall"]

@@ -93,7 +93,7 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     for name in names:
         for point in points:
             spec = load_scenario(name, [*overrides, *(f"{k}={v}" for k, v in point)])
-            label = spec.name + ("@" + ",".join(f"{k}={v}" for k, v in point) if point else "")
+            label = spec.name + _variant(overrides, point)
             jobs += [Job(spec if k == 0 else spec.model_copy(update={"seed": spec.seed + k}),
                          _safe(label), k) for k in range(repeat)]
     check_criteria_names([j.spec for j in jobs])
@@ -102,6 +102,21 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     if twice:
         raise SpecError(f"scenario selected twice: {', '.join(twice)}")
     return jobs
+
+
+def _variant(overrides: list[str], point: list[tuple[str, str]]) -> str:
+    """The label suffix of a run that is not the scenario as written: a sweep point, or a world
+    or track given with `--set` (a run on another track is judged against that track's own
+    baseline, `<scenario>@track=<name>`, never the original's)."""
+    parts = [f"{k}={v}" for k, v in point]
+    for assignment in overrides:
+        key, _, value = assignment.partition("=")
+        key, value = key.strip(), value.strip()
+        if key == "world.track" and "world.track" not in dict(point):
+            parts.insert(0, f"track={Path(value).stem}")
+        elif key == "world" and "world" not in dict(point):
+            parts.insert(0, f"world={value}")
+    return "@" + ",".join(parts) if parts else ""
 
 
 def parse_shard(text: str) -> tuple[int, int]:
