@@ -43,16 +43,55 @@ def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baseline
     assert exit_code(list(results.values())) == 2
 
 
+NAN_PLUGIN = """
+from typing import Any, Literal
+
+import numpy as np
+
+from kartci.logs import header, msg
+from kartci.plugins import Controller, register
+from kartci.spec.models import ControllerParams
+
+
+class Params(ControllerParams):
+    type: Literal["nan_wheels"] = "nan_wheels"
+    period_s: float = 0.01
+
+
+class NanWheels:
+    inputs: tuple[str, ...] = ()
+
+    def __init__(self, params: Params, ctx: Any) -> None:
+        self.period_s = params.period_s
+
+    def on_message(self, topic: str, message: Any) -> None:
+        pass
+
+    def step(self, t_ns: int) -> list[tuple[str, Any]]:
+        return [("wheel_cmd", msg("sensor_msgs/msg/JointState", header=header(t_ns, "lt0"),
+                                  name=[], position=np.zeros(0), effort=np.zeros(0),
+                                  velocity=np.array([np.nan, np.nan])))]
+
+
+register(Controller("nan_wheels", Params, NanWheels, ("line_tracker",)))
+"""
+
+
 def test_nan_state_in_a_pool_and_the_report_is_still_written(tmp_path: Path,
                                                              baselines: Path) -> None:
-    spec = yaml.safe_load((SCENARIOS / "line_straight.yaml")
-                          .read_text())
-    spec["agents"]["lt0"]["controller"]["kp"] = float("nan")
-    bad = tmp_path / "nan_straight.yaml"
-    bad.write_text(yaml.safe_dump(spec))
+    """A controller that commands NaN (a team's plugin, imported in the workers too) drives
+    the state non-finite: an error for that scenario only; the other finishes, reports are
+    written, exit 2. (A NaN in a scenario file is refused before anything runs.)"""
+    proj = tmp_path / "proj"
+    (proj / "scenarios").mkdir(parents=True)
+    (proj / "kartci.toml").write_text('plugins = ["nan_plugin"]\n')
+    (proj / "nan_plugin.py").write_text(NAN_PLUGIN)
+    spec = yaml.safe_load((SCENARIOS / "line_straight.yaml").read_text())
+    spec["agents"]["lt0"]["controller"] = {"type": "nan_wheels"}
+    (proj / "scenarios" / "nan_straight.yaml").write_text(yaml.safe_dump(spec))
     out = tmp_path / "out"
-    p = kartci("run", "line_circle", bad, *QUICK, "-j", "2", "--out", out,
-               "--baselines", baselines)
+    p = kartci("run", "line_circle", "nan_straight", *QUICK, "-j", "2", "--out", out,
+               "--baselines", baselines, cwd=proj)
     assert p.returncode == 2, p.stderr
     assert "Traceback" not in p.stdout + p.stderr
     summary = json.loads((out / "summary.json").read_text())["scenarios"]

@@ -36,7 +36,7 @@ def test_the_pure_pursuit_package_runs_everywhere(tmp_path: Path, fresh_venv: Pa
     assert p.returncode == 0 and "pure_pursuit" in p.stdout and "cornering" in p.stdout
 
     # the CLI, judged against the example's own committed baseline, strictly
-    p = sh(str(fresh_venv / "kartci"), "run", "--out", "reports/serial")
+    p = sh(str(fresh_venv / "kartci"), "run", "--strict", "--out", "reports/serial")
     assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-2000:]
     summary = json.loads((work / "reports/serial/summary.json").read_text())["scenarios"]
     metrics = summary["pure_pursuit_lap"]["metrics"]
