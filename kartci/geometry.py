@@ -16,6 +16,7 @@ Array = NDArray[np.float64]
 
 
 def length_m(course: Course) -> float:
+    """Length of the course, m (a circle's circumference)."""
     if isinstance(course, StraightCourse):
         return float(np.hypot(*np.subtract(course.end_m, course.start_m)))
     return float(2.0 * np.pi * course.radius_m)

@@ -71,10 +71,12 @@ class Project:
 
     @property
     def world_path(self) -> tuple[Path, ...]:
+        """World folders in search order: the project's own, then the built-in ones."""
         return _unique((*self.worlds, BUILTIN / "worlds"))
 
     @property
     def model_path(self) -> tuple[Path, ...]:
+        """Robot model folders in search order: the project's own, then the built-in ones."""
         return _unique((*self.models, BUILTIN / "models"))
 
     def own_scenarios(self) -> list[Path]:
@@ -93,6 +95,7 @@ class Project:
         return Origin.PROJECT if path.parent.resolve() in own else Origin.BUILTIN
 
     def find_scenario(self, name: str) -> Path:
+        """A scenario's file by name; a SpecError naming close matches when there is none."""
         known = self.all_scenarios()
         if name in known:
             return known[name]

@@ -30,6 +30,9 @@ class Plots:
 
 @dataclass(frozen=True)
 class ScenarioResult:
+    """What became of one scenario: metric verdicts, criteria, gate problems and warnings, or the
+    error that stopped it; run facts and what its plots draw."""
+
     name: str
     description: str
     verdicts: list[MetricVerdict] = field(default_factory=list)
@@ -43,6 +46,7 @@ class ScenarioResult:
 
     @property
     def status(self) -> Status:
+        """The worst of its verdicts, failed criteria and problems; ERROR when it has an error."""
         if self.error is not None:
             return Status.ERROR
         statuses = [v.status for v in self.verdicts]

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from enum import Enum
 from importlib import metadata
 from pathlib import Path
+from typing import NoReturn
 
 from kartci import __version__
 from kartci.errors import SpecError
@@ -32,6 +33,8 @@ NUMERIC = ("casadi", "numpy", "pybullet", "scipy")
 
 
 class Action(Enum):
+    """What `init` does with a file."""
+
     CREATED = "created"
     OVERWRITTEN = "overwrote"
     APPENDED = "appended to"
@@ -92,6 +95,7 @@ def dependency_pins(dist: str = "kartci") -> list[str]:
 
 
 def constraints_text() -> str:
+    """constraints.txt: the pins of `dependency_pins`, with a note on why they are there."""
     pins = "\n".join(dependency_pins())
     return (f"# kartci {__version__}'s dependencies, pinned to the versions installed when "
             "`kartci init` ran.\n"
@@ -144,7 +148,21 @@ def plan(folder: Path, force: bool = False) -> list[Step]:
     if folder.exists() and not folder.is_dir():
         raise SpecError(f"{folder}: not a folder; nothing written")
     conflicts: list[Path] = []
-    steps = [_config_step(folder, conflicts)]
+    steps = [_config_step(folder, conflicts), *_template_steps(folder, conflicts),
+             _readme_step(folder)]
+    ignored = {ln.strip().strip("/") for ln in _lines(folder / ".gitignore")}
+    if "reports" not in ignored:
+        steps.append(_appended(folder, ".gitignore", "reports/\n"))
+    _refuse_paths_in_the_way(folder, steps)
+    if conflicts and not force:
+        _refuse_conflicts(folder, conflicts)
+    return steps
+
+
+def _template_steps(folder: Path, conflicts: list[Path]) -> list[Step]:
+    """The files written whole from templates: the scenario, the baselines README, the
+    workflow and constraints.txt; each one already there is added to `conflicts`."""
+    steps: list[Step] = []
     for rel, text in ((Path("scenarios") / f"{SCENARIO}.yaml", template(f"{SCENARIO}.yaml")),
                       (Path("baselines") / "README.md", template("baselines-README.md")),
                       (WORKFLOW, workflow_text()),
@@ -153,29 +171,38 @@ def plan(folder: Path, force: bool = False) -> list[Step]:
         if exists:
             conflicts.append(folder / rel)
         steps.append(Step(rel, text, Action.OVERWRITTEN if exists else Action.CREATED))
+    return steps
+
+
+def _readme_step(folder: Path) -> Step:
+    """kartci's README section, appended once; a new README gets the folder's name as title."""
     section = template("README-section.md")
     readme = _appended(folder, "README.md", section, README_MARK)
     if readme.action is Action.CREATED:
         readme = Step(readme.path, f"# {folder.resolve().name}\n\n{section}", readme.action)
-    steps.append(readme)
-    ignored = {ln.strip().strip("/") for ln in _lines(folder / ".gitignore")}
-    if "reports" not in ignored:
-        steps.append(_appended(folder, ".gitignore", "reports/\n"))
-    for step in steps:  # a path in the way fails here, before anything is written
+    return readme
+
+
+def _refuse_paths_in_the_way(folder: Path, steps: list[Step]) -> None:
+    """A file where a step needs a folder, or a folder where it writes a file, fails here,
+    before anything is written."""
+    for step in steps:
         for rel in (*reversed(step.path.parents[:-1]), step.path):
             path = folder / rel
             if rel != step.path and path.exists() and not path.is_dir():
                 raise SpecError(f"{path}: not a folder; nothing written")
             if rel == step.path and path.is_dir():
                 raise SpecError(f"{path}: a folder, expected a file; nothing written")
-    if conflicts and not force:
-        first = conflicts[0].relative_to(folder)
-        what = ("already has [tool.kartci]" if first == Path("pyproject.toml")
-                else "already exists")
-        more = f" (and {len(conflicts) - 1} more)" if len(conflicts) > 1 else ""
-        raise SpecError(f"{folder / first} {what}{more}; nothing written "
-                        "(`kartci init --force` overwrites kartci's files)")
-    return steps
+
+
+def _refuse_conflicts(folder: Path, conflicts: list[Path]) -> NoReturn:
+    """The SpecError for files `init` would overwrite: the first by name, the rest counted."""
+    first = conflicts[0].relative_to(folder)
+    what = ("already has [tool.kartci]" if first == Path("pyproject.toml")
+            else "already exists")
+    more = f" (and {len(conflicts) - 1} more)" if len(conflicts) > 1 else ""
+    raise SpecError(f"{folder / first} {what}{more}; nothing written "
+                    "(`kartci init --force` overwrites kartci's files)")
 
 
 def _read(path: Path) -> str:

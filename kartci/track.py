@@ -85,14 +85,17 @@ OBSTACLES_TOPIC = "/kartci/obstacles"  # visualization_msgs/MarkerArray: boxes, 
 
 @cache
 def load_track(path: Path) -> Track:
+    """A track from a TUMFTM CSV file, read within TRACK_MAX_BYTES; cached by path."""
     return track_from_rows(parse_csv(path, read_text_bounded(path, TRACK_MAX_BYTES)), path)
 
 
 def track_from_text(text: str, name: str) -> Track:
+    """A track from CSV text, as recorded in a run log."""
     return track_from_rows(parse_csv(Path(name), text), Path(name))
 
 
 def track_from_rows(rows: Array, path: Path) -> Track:
+    """The Track splined through CSV rows; refuses coincident points and splined widths <= 0."""
     pts = np.vstack([rows, rows[:1]])
     seg = np.hypot(*np.diff(pts[:, :2], axis=0).T)
     if (seg < 1e-6).any():
@@ -113,6 +116,7 @@ def track_from_rows(rows: Array, path: Path) -> Track:
 
 
 def write_csv(path: Path, rows: Array, comment: str = "") -> None:
+    """Rows as a TUMFTM CSV (4 decimals), with an optional comment above the column header."""
     header = "x_m,y_m,w_tr_right_m,w_tr_left_m"
     if comment:
         header = comment.rstrip("\n") + "\n" + header

@@ -25,21 +25,31 @@ class _M(BaseModel):
 
 
 class SteeringAxis(_M):
+    """The Joy axis that steers; the steering-column angle is linear in it (+1: full left)."""
+
     axis: int = Field(ge=0)
     scale_rad: float = Field(description="steering-column angle at axis value +1 (full left)")
 
 
 class PedalAxis(_M):
+    """A pedal on a Joy axis: its value released (`rest`) and fully pressed (`full`); in between it
+    maps linearly to 0..1."""
+
     axis: int = Field(ge=0)
     rest: float = 1.0
     full: float = -1.0
 
 
 class Button(_M):
+    """A Joy button by index; pressed while its value is non-zero."""
+
     button: int = Field(ge=0)
 
 
 class JoyMapping(_M):
+    """How one make of controller's Joy messages map to kart inputs, and the axis and button counts
+    its messages have (a pad of another make is refused)."""
+
     name: str
     steering: SteeringAxis
     throttle: PedalAxis
@@ -153,6 +163,7 @@ def to_joy(m: JoyMapping, model: GokartModel, cmd: KartInput, t_ns: int, frame: 
 
 
 def kart_command(cmd: KartInput, t_ns: int, frame: str) -> Any:
+    """A command as the seed's kartci_msgs/KartCommand, stamped `t_ns` in `frame`."""
     return msg("kartci_msgs/msg/KartCommand", header=header(t_ns, frame),
                steering_wheel_angle_rad=cmd.steering_rad, acceleration_mps2=cmd.accel_mps2,
                brake_mps2=cmd.brake_mps2, reverse=cmd.reverse, emergency_stop=cmd.estop)

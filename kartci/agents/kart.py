@@ -50,9 +50,11 @@ class ManualAgent:
         self._last = -1
 
     def on_message(self, topic: str, message: Any) -> None:
-        pass
+        """Nothing to read: the joystick stream comes from the log."""
 
     def step(self, t_ns: int) -> Outbox:
+        """Republish the Joy messages recorded since the last tick and command the kart from the
+        latest one (a zero command before the log's first message)."""
         i = self.source.index(t_ns)
         if i < 0:
             return [("cmd", kart_command(KartInput(), t_ns, self.frame))]
@@ -82,9 +84,11 @@ class CommandsAgent:
             "cmd_vel")
 
     def on_message(self, topic: str, message: Any) -> None:
-        pass
+        """Nothing to read: the commands come from the log."""
 
     def step(self, t_ns: int) -> Outbox:
+        """The latest recorded command, restamped with sim time when it has a header; nothing before
+        the log's first one."""
         m = self.source.at(t_ns)
         if m is None:
             return []
@@ -94,6 +98,8 @@ class CommandsAgent:
 
 
 class ScriptAgent:
+    """Open-loop kart commands from timed steps: each holds from its `t_s` until the next one's."""
+
     inputs: tuple[str, ...] = ()
 
     def __init__(self, spec: ScriptController, ctx: AgentContext) -> None:
@@ -101,9 +107,10 @@ class ScriptAgent:
         self.period_s, self.frame = spec.period_s, base_link(ctx.name)
 
     def on_message(self, topic: str, message: Any) -> None:
-        pass
+        """Nothing to read: the script is open loop."""
 
     def step(self, t_ns: int) -> Outbox:
+        """The command of the latest step that is due (the first step before any is)."""
         current = self.steps[0]
         for s in self.steps:
             if s.t_s * 1e9 <= t_ns:
@@ -127,6 +134,7 @@ class JoyDriver:
         self.track: Track | None = None
 
     def on_message(self, topic: str, message: Any) -> None:
+        """Keep the track (from its CSV text), and the pose and forward speed from odometry."""
         if topic == TRACK_TOPIC:
             self.track = track_from_text(message.data, TRACK_TOPIC)
         elif topic == "odom":
@@ -135,6 +143,8 @@ class JoyDriver:
             self._pose = (p.x, p.y, yaw, float(message.twist.twist.linear.x))
 
     def step(self, t_ns: int) -> Outbox:
+        """The Joy message for the steering and pedals pure pursuit wants, and the kart command the
+        mapping makes of it; nothing until the track and a pose have arrived."""
         if self._pose is None or self.track is None:
             return []
         x, y, yaw, v = self._pose

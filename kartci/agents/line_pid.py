@@ -34,12 +34,15 @@ class LinePid:
         self._integral = 0.0
 
     def on_message(self, topic: str, message: Any) -> None:
+        """Keep the latest camera luminances (left, right) and sonar range (m)."""
         if topic == "line_sensor":
             self._left, self._right = message.left, message.right
         elif topic == "sonar":
             self._range = message.range
 
     def step(self, t_ns: int) -> Outbox:
+        """Wheel speeds (rad/s) from the offset estimate, zero while the sonar reads less than
+        `stop_range_m`; and the controller's state, for the log."""
         s = self.spec
         y = self._left - self._right
         d = s.slope_m * y + s.offset_m

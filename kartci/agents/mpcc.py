@@ -43,6 +43,9 @@ class MpccAgent:
         self._karts: dict[str, tuple[float, float, float, float]] = {}
 
     def on_message(self, topic: str, message: Any) -> None:
+        """Build the solver on the track, place static obstacles (boxes as circles), follow the
+        steering from joint states, and take this and other karts' states from odometry (moved from
+        base_link to the CoG)."""
         if topic == TRACK_TOPIC:
             self.track = track_from_text(message.data, TRACK_TOPIC)
             self.mpcc = Mpcc(self.spec, self.model, self.track)
@@ -87,6 +90,9 @@ class MpccAgent:
         return out
 
     def step(self, t_ns: int) -> Outbox:
+        """Solve from the measured state and the progress of the last tick (unwrapped across the
+        start line); publish the command, the horizon and solver statistics. Nothing until the track
+        and a state have arrived."""
         if self._state is None or self.mpcc is None or self.track is None:
             return []
         st = self._state

@@ -49,9 +49,11 @@ class Recorded:
 
     @property
     def duration_s(self) -> float:
+        """Time from the first recorded message to the last, s."""
         return (self.times[-1] - self.times[0]) * 1e-9
 
     def at(self, t_ns: int) -> Any | None:
+        """The latest message at or before sim time `t_ns`, or None before the first."""
         i = self.index(t_ns)
         return self.msgs[i] if i >= 0 else None
 

@@ -70,12 +70,14 @@ StrictOpt = Annotated[bool | None, typer.Option(
 
 
 def strict_mode(flag: bool | None) -> bool:
+    """`--strict/--no-strict` as given, else the default (strict under CI)."""
     from kartci.runner.gate import strict_default
 
     return strict_default() if flag is None else flag
 
 
 def baselines_dir(path: Path | None, must_exist: bool = True) -> Path:
+    """`--baselines` (a folder, when it must exist), else the project's baselines folder."""
     from kartci.runner import default_baselines
 
     if path is not None and must_exist and not path.is_dir():

@@ -41,12 +41,14 @@ class ScoreContext:
 
     @property
     def odom(self) -> pd.DataFrame:
+        """The agent's odometry table; a LogError when the log has none."""
         odom = self.table("odom")
         if odom is None or odom.empty:
             raise LogError(f"{self.path}: no /{self.agent}/odom messages")
         return odom
 
     def shared(self, key: str, make: Callable[[], T]) -> T:
+        """`make()` computed once per log and shared by all its agents, under `key`."""
         if key not in self.cache:
             self.cache[key] = make()
         value: T = self.cache[key]
@@ -83,6 +85,7 @@ def metric_sets(scenario: Scenario, agent: str) -> list[plugins.MetricSet]:
 
 
 def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
+    """The scenario a run log recorded on /kartci/scenario: the one its metrics are scored with."""
     table = log_tables.get("/kartci/scenario")
     if table is None or getattr(table, "empty", True):
         raise LogError(f"{path}: no /kartci/scenario message; not a kartci run log")
@@ -90,6 +93,7 @@ def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
 
 
 def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
+    """The track a run log recorded on /kartci/track, so laps are scored from the log alone."""
     table = log_tables.get(TRACK_TOPIC)
     if table is None or getattr(table, "empty", True):
         raise LogError(f"{path}: no {TRACK_TOPIC} message; cannot score laps")

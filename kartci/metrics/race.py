@@ -18,6 +18,7 @@ Rect = np.ndarray  # (4, 2) corners, counter-clockwise
 
 
 def rect(cx: float, cy: float, length: float, width: float, yaw: float) -> Rect:
+    """Corners of a `length` x `width` rectangle (m) centred on (cx, cy), turned by `yaw` (rad)."""
     c, s = math.cos(yaw), math.sin(yaw)
     local = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]]) * [length / 2, width / 2]
     out: Rect = local @ np.array([[c, s], [-s, c]]) + [cx, cy]
@@ -25,6 +26,7 @@ def rect(cx: float, cy: float, length: float, width: float, yaw: float) -> Rect:
 
 
 def kart_rects(odom: pd.DataFrame) -> list[Rect]:
+    """The kart's footprint at each odometry row (centred ahead of base_link: FOOTPRINT_M)."""
     ahead, length, width = FOOTPRINT_M
     return [rect(x + ahead * math.cos(yaw), y + ahead * math.sin(yaw), length, width, yaw)
             for x, y, yaw in odom[["x", "y", "yaw"]].to_numpy()]

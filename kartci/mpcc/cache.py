@@ -36,6 +36,8 @@ def cache_dir() -> Path:
 
 
 def solver_key(spec: MpccController) -> str:
+    """The cache key: a hash of CasADi's version, the solver's sources and the spec fields compiled
+    into it (horizon, step, RK4 substeps, vehicle)."""
     here = Path(__file__).parent
     h = hashlib.sha256()
     h.update(str(ca.CasadiMeta.version()).encode())
@@ -48,6 +50,8 @@ def solver_key(spec: MpccController) -> str:
 
 @dataclass(frozen=True)
 class Built:
+    """A solver ready to use, its decision-vector layout, and how it was obtained."""
+
     solver: ca.Function  # warm-started from the previous solution
     cold: ca.Function  # the same NLP with Ipopt's default start, for retries
     layout: Layout

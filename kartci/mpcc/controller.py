@@ -25,6 +25,8 @@ FEASIBLE = 1e-4  # largest constraint violation of a usable iterate (m, m/s, ...
 
 @dataclass(frozen=True)
 class Plan:
+    """The outcome of one solve: the command, the predicted horizon and solver statistics."""
+
     success: bool
     status: str
     iterations: int
@@ -37,6 +39,8 @@ class Plan:
 
 
 class Mpcc:
+    """The MPCC on one track, each solve warm-started from the last successful one."""
+
     def __init__(self, spec: MpccController, model: GokartModel, track: Track) -> None:
         self.spec, self.model, self.track = spec, model, track
         self.built: Built = get_solver(spec)
@@ -51,6 +55,8 @@ class Mpcc:
         self.failures = 0
 
     def solve(self, x0: np.ndarray, obstacles: list[Obstacle]) -> Plan:
+        """One solve from `x0` = [X, Y, psi, vx, vy, r, s, delta, acc]; retried cold once when a
+        warm start fails, else the braking fallback."""
         sp, lay = self.spec, self.lay
         x0 = x0.copy()
         x0[DELTA] = float(np.clip(x0[DELTA], -self.max_delta, self.max_delta))

@@ -46,24 +46,30 @@ class Layout:
 
     @property
     def size(self) -> int:
+        """Length of the decision vector w."""
         return self.n * (NX + NU) + NX
 
     def x(self, k: int) -> slice:
+        """Stage k's state in w."""
         start = k * (NX + NU)
         return slice(start, start + NX)
 
     def u(self, k: int) -> slice:
+        """Stage k's input in w."""
         start = k * (NX + NU) + NX
         return slice(start, start + NU)
 
     def states(self, w: np.ndarray) -> np.ndarray:
+        """The N + 1 states in w, one row per stage."""
         return np.stack([w[self.x(k)] for k in range(self.n + 1)])
 
     def inputs(self, w: np.ndarray) -> np.ndarray:
+        """The N inputs in w, one row per stage."""
         return np.stack([w[self.u(k)] for k in range(self.n)])
 
 
 def weights_vector(w: MpccWeights) -> list[float]:
+    """The cost weights in the order the NLP's parameter vector holds them."""
     return [w.contouring, w.lag, w.progress, w.jerk, w.steer_rate, w.slack]
 
 
@@ -123,6 +129,7 @@ def equality(n: int) -> list[bool]:
 
 
 def constraint_bounds(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds (lbg, ubg) on g: 0 for the dynamics, at most 0 for the path constraints."""
     eq = np.array(equality(n))
     return np.where(eq, 0.0, -np.inf), np.zeros(len(eq))
 

@@ -26,6 +26,7 @@ class Obstacle:
 
 def obstacle_from_xy(track: Track, x: float, y: float, radius_m: float, speed_mps: float = 0.0,
                      follow_gap_m: float = 0.0) -> Obstacle:
+    """An obstacle at world point (x, y) m, placed in track coordinates."""
     s, lat, _, _ = track.project(np.array([[x, y]]))
     return Obstacle(float(s[0]), float(lat[0]), radius_m, speed_mps, follow_gap_m)
 

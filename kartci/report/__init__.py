@@ -15,6 +15,8 @@ from kartci.verdict import write_json_atomic
 
 
 def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
+    """summary.json: the exit code and, per scenario, its status, metric verdicts, criteria,
+    problems and warnings."""
     return {
         "exit_code": exit_code(results),
         "scenarios": {

@@ -80,4 +80,5 @@ def annotation_lines(results: list[ScenarioResult], limit: int = MAX_ANNOTATIONS
 
 
 def in_github_actions() -> bool:
+    """True inside a GitHub Actions job (GITHUB_ACTIONS=true)."""
     return os.environ.get("GITHUB_ACTIONS") == "true"

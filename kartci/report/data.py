@@ -14,6 +14,9 @@ from kartci.spec import Scenario
 
 @dataclass(frozen=True)
 class PlotContext:
+    """What a robot kind's `plots` function reads: the scenario, the run log's tables, and the log's
+    path (for messages)."""
+
     scenario: Scenario
     tables: Mapping[str, pd.DataFrame]
     path: Path

@@ -66,6 +66,8 @@ def _scenario(r: ScenarioResult, words: Wording) -> str:
 
 
 def report_html(results: list[ScenarioResult], words: Wording = RUN) -> str:
+    """report.html, self-contained: the verdict, a table of scenarios, and each scenario's metrics,
+    criteria and figures (inline SVG)."""
     code = exit_code(results)
     rows = "".join(f'<tr><td><a href="#{html.escape(r.name)}">{html.escape(r.name)}</a></td>'
                    f'<td class="{r.status.value}">{MARK[r.status]} {r.status.value}</td></tr>'

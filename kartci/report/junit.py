@@ -17,6 +17,8 @@ def xml_text(text: str) -> str:
 
 
 def junit_xml(results: list[ScenarioResult], report_path: str, words: Wording = RUN) -> str:
+    """junit.xml: a test case per scenario with a failure per failing metric, failed criterion or
+    gate problem, or an error when it did not run."""
     suite = ET.Element("testsuite", name="kartci", tests=str(len(results)))
     failures = errors = 0
     for r in results:

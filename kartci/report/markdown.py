@@ -19,6 +19,8 @@ def _scenario_key(r: ScenarioResult) -> tuple[int, float, str]:
 
 
 def summary_md(results: list[ScenarioResult], words: Wording = RUN) -> str:
+    """summary.md for a pull request or job summary: the scenarios, worst first, then what
+    regressed, failed or warned in each."""
     code = exit_code(results)
     ordered = sorted(results, key=_scenario_key)
     lines = [f"## {words.title}: {VERDICT_WORD[code]}", "",

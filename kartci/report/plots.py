@@ -38,29 +38,13 @@ def _svg(fig: Figure) -> str:
 
 
 def top_view(p: Plots) -> str:
+    """Paths seen from above: on a track (edges, obstacles, MPCC horizons, collisions; a lone
+    path coloured by speed), or along a line."""
     fig, ax = plt.subplots(figsize=(5.5, 4.0))
     if p.kind == "track":
-        for edge in p.edges:
-            ax.plot(*_closed(edge), color="black", lw=1)
-        ax.plot(*_closed(p.course), color="grey", lw=0.6, ls="--", label="centreline")
-        ax.plot(*p.course[0], marker="|", color="black", ms=14, label="start / finish")
-        if len(p.tracks) > 1:  # several karts, or base and head: one colour per path
-            for agent, tr in p.tracks.items():
-                ax.plot(tr["x"], tr["y"], lw=1.2, label=f"{agent} path")
-        for agent, tr in p.tracks.items() if len(p.tracks) == 1 else ():
-            sc = ax.scatter(tr["x"], tr["y"], c=tr["speed"], s=2, cmap="viridis", vmin=0,
-                            vmax=max(float(tr["speed"].max()), 1.0), label=f"{agent} path")
-            fig.colorbar(sc, ax=ax, label="speed [m/s]", shrink=0.8)
-        for i, box in enumerate(p.obstacles):
-            ax.fill(*_closed(box), color="saddlebrown", zorder=4,
-                    label="obstacles" if i == 0 else None)
-        for agent, plans in p.horizons.items():
-            for i, plan in enumerate(plans):
-                ax.plot(plan[:, 0], plan[:, 1], color="magenta", lw=2, alpha=0.9, zorder=6,
-                        label=f"{agent} MPCC horizons" if i == 0 else None)
-        for agent, col in p.collisions.items():
-            ax.scatter(col["x"], col["y"], marker="x", color="red", s=60, zorder=5,
-                       label=f"{agent} collisions ({len(col)})")
+        _track_outline(ax, p)
+        _track_paths(fig, ax, p)
+        _track_overlays(ax, p)
     else:
         ax.plot(p.course[:, 0], p.course[:, 1], color="black", lw=3, label="line", alpha=0.35)
         for agent, tr in p.tracks.items():
@@ -69,11 +53,45 @@ def top_view(p: Plots) -> str:
     return _finish(fig, ax, "x [m]", "y [m]", "path seen from above")
 
 
+def _track_outline(ax: Axes, p: Plots) -> None:
+    """The track's edges, its centreline and the start / finish line."""
+    for edge in p.edges:
+        ax.plot(*_closed(edge), color="black", lw=1)
+    ax.plot(*_closed(p.course), color="grey", lw=0.6, ls="--", label="centreline")
+    ax.plot(*p.course[0], marker="|", color="black", ms=14, label="start / finish")
+
+
+def _track_paths(fig: Figure, ax: Axes, p: Plots) -> None:
+    """Several paths (karts, or base and head) one colour each; a lone path coloured by speed."""
+    if len(p.tracks) > 1:
+        for agent, tr in p.tracks.items():
+            ax.plot(tr["x"], tr["y"], lw=1.2, label=f"{agent} path")
+    for agent, tr in p.tracks.items() if len(p.tracks) == 1 else ():
+        sc = ax.scatter(tr["x"], tr["y"], c=tr["speed"], s=2, cmap="viridis", vmin=0,
+                        vmax=max(float(tr["speed"].max()), 1.0), label=f"{agent} path")
+        fig.colorbar(sc, ax=ax, label="speed [m/s]", shrink=0.8)
+
+
+def _track_overlays(ax: Axes, p: Plots) -> None:
+    """Obstacles, a few MPCC horizons and the collisions, over the paths."""
+    for i, box in enumerate(p.obstacles):
+        ax.fill(*_closed(box), color="saddlebrown", zorder=4,
+                label="obstacles" if i == 0 else None)
+    for agent, plans in p.horizons.items():
+        for i, plan in enumerate(plans):
+            ax.plot(plan[:, 0], plan[:, 1], color="magenta", lw=2, alpha=0.9, zorder=6,
+                    label=f"{agent} MPCC horizons" if i == 0 else None)
+    for agent, col in p.collisions.items():
+        ax.scatter(col["x"], col["y"], marker="x", color="red", s=60, zorder=5,
+                   label=f"{agent} collisions ({len(col)})")
+
+
 def _closed(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.append(a[:, 0], a[0, 0]), np.append(a[:, 1], a[0, 1])
 
 
 def speed(p: Plots) -> str:
+    """Speed over sim time of every agent, collisions marked."""
     fig, ax = plt.subplots(figsize=(5.5, 3.0))
     for agent, tr in p.tracks.items():
         ax.plot(tr["t"], tr["speed"], lw=1, label=agent)
@@ -84,6 +102,7 @@ def speed(p: Plots) -> str:
 
 
 def solve_times(p: Plots) -> str:
+    """MPCC solve time (wall clock, ms, log scale) over sim time, failed solves marked."""
     fig, ax = plt.subplots(figsize=(5.5, 3.0))
     for agent, st in p.solves.items():
         ax.plot(st["t"], st["solve_ms"], lw=0.8, label=f"{agent}")
@@ -96,6 +115,8 @@ def solve_times(p: Plots) -> str:
 
 
 def tracking_error(p: Plots, band_m: float = 0.008) -> str:
+    """Cross-track error (mm) over sim time, with the line sensor's range `band_m` (m) and the
+    unscored start-up transient shown."""
     fig, ax = plt.subplots(figsize=(5.5, 3.0))
     for agent, tr in p.tracks.items():
         ax.plot(tr["t"], tr["offset"] * 1000, lw=1, label=agent)
@@ -108,6 +129,7 @@ def tracking_error(p: Plots, band_m: float = 0.008) -> str:
 
 
 def wheel_speeds(p: Plots) -> str:
+    """Measured and commanded wheel speeds (rad/s) over sim time."""
     fig, ax = plt.subplots(figsize=(5.5, 3.0))
     for agent, w in p.wheels.items():
         ax.plot(w["t"], w["left"], lw=1, label=f"{agent} left")
@@ -123,6 +145,8 @@ def wheel_speeds(p: Plots) -> str:
 
 
 def sensor_sweep(offsets_m: list[float], curves: dict[str, list[float]], title: str) -> str:
+    """Line-sensor luminance curves against the sensor's lateral offset (mm), its ±8 mm range
+    marked."""
     fig, ax = plt.subplots(figsize=(5.5, 3.5))
     for label, ys in curves.items():
         ax.plot([o * 1000 for o in offsets_m], ys, lw=1.2, label=label)

@@ -18,6 +18,8 @@ from kartci.verdict import Status
 
 
 class JobState(StrEnum):
+    """Where a job is, as the progress view shows it."""
+
     QUEUED = "queued"
     RUNNING = "running"
     DONE = "done"
@@ -54,6 +56,7 @@ class ProgressView:
             self.live.stop()
 
     def __call__(self, ev: Event) -> None:
+        """Update a job's row from a runner event; print a line when the job finishes."""
         row = self.rows.get(ev.folder)
         if row is None or row.state is JobState.DONE:
             return  # late news from a worker about a job already finished
@@ -77,6 +80,7 @@ class ProgressView:
             self.console.print(line, highlight=False, markup=False)
 
     def counts(self) -> dict[JobState, int]:
+        """How many jobs are in each state."""
         return {s: sum(r.state is s for r in self.rows.values()) for s in JobState}
 
     def _table(self) -> Table:

@@ -11,6 +11,8 @@ MARK = {Status.PASS: "✅", Status.IMPROVED: "🟢", Status.REGRESSED: "❌", St
 
 
 def num(x: float | None, unit: str = "") -> str:
+    """A number to 4 significant digits with its unit (none for bool and fraction); a dash for no
+    value."""
     if x is None:
         return "—"
     text = f"{x:.4g}"
@@ -18,11 +20,13 @@ def num(x: float | None, unit: str = "") -> str:
 
 
 def delta(v: MetricVerdict) -> str:
+    """The signed change from the baseline to 3 significant digits; a dash when there is none."""
     d = v.delta
     return "—" if d is None else f"{d:+.3g}"
 
 
 def tolerance(v: MetricVerdict) -> str:
+    """The tolerance and the direction it applies in; a dash when there is none."""
     return "—" if v.tolerance is None else f"±{v.tolerance:.3g} ({v.direction.value})"
 
 

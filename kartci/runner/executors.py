@@ -31,11 +31,15 @@ _PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
 class ExecutorKind(StrEnum):
+    """Where jobs run (`--executor`)."""
+
     LOCAL = "local"  # this process with -j 1, a process pool with -j N
     RAY = "ray"  # one Ray task per job, local Ray or a cluster
 
 
 class EventKind(StrEnum):
+    """What an Event reports."""
+
     STARTED = "started"
     PROGRESS = "progress"
     FINISHED = "finished"
@@ -43,6 +47,8 @@ class EventKind(StrEnum):
 
 @dataclass(frozen=True)
 class Event:
+    """News of one job, for progress listeners."""
+
     kind: EventKind
     folder: str  # the job's folder, relative to OUT
     sim_t: float = 0.0
@@ -53,6 +59,7 @@ Listener = Callable[[Event], None]
 
 
 def serial(jobs: Sequence[Job], ctx: Context, emit: Listener) -> Iterator[Outcome]:
+    """Run the jobs one after another in this process."""
     for job in jobs:
         yield _here(job, ctx, emit)
 

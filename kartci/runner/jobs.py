@@ -36,17 +36,22 @@ Report = Callable[[str, float], None]  # (job folder, sim time s), called from t
 
 @dataclass(frozen=True)
 class Job:
+    """One simulation: a validated scenario, the label it is reported under, its repeat index."""
+
     spec: Scenario
     label: str  # the scenario result's name and top-level folder
     repeat: int = 0  # k: the run with seed + k; 0 is the judged run
 
     @property
     def folder(self) -> str:
+        """The job's folder relative to OUT: `<label>`, or `<label>/repeat_<k>` for a repeat."""
         return self.label if self.repeat == 0 else f"{self.label}/{REPEAT_PREFIX}{self.repeat}"
 
 
 @dataclass(frozen=True)
 class Outcome:
+    """How a job ended: its error, or the judged result (repeat 0 only), and its run.json facts."""
+
     job: Job
     error: str | None = None
     result: ScenarioResult | None = None  # the judged run (repeat 0) only
@@ -54,6 +59,8 @@ class Outcome:
 
     @classmethod
     def failed(cls, job: Job, error: str) -> Outcome:
+        """A job that failed with `error`; the judged run gets an errored result, so its scenario is
+        still reported."""
         return cls(job, error, ScenarioResult(job.label, job.spec.description, error=error)
                    if job.repeat == 0 else None)
 
@@ -69,6 +76,7 @@ class Context:
 
 
 def parse_sweep(text: str) -> tuple[str, list[str]]:
+    """`--sweep dotted.key=v1,v2,...` as the key and its values."""
     key, sep, values = text.partition("=")
     items = [v.strip() for v in values.split(",") if v.strip()]
     if not sep or not key.strip() or not items:
@@ -120,6 +128,7 @@ def _variant(overrides: list[str], point: list[tuple[str, str]]) -> str:
 
 
 def parse_shard(text: str) -> tuple[int, int]:
+    """`--shard I/N` as (I, N), 1 <= I <= N."""
     index, sep, total = text.partition("/")
     try:
         i, n = int(index), int(total)

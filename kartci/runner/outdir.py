@@ -66,6 +66,8 @@ def clear_reports(out: Path) -> None:
 
 
 def write_manifest(out: Path, command: str, labels: list[str]) -> None:
+    """manifest.json in OUT: the command that wrote it and its scenarios' labels, which later
+    commands use when given no names."""
     write_json_atomic(out / MANIFEST_NAME, {"command": command, "scenarios": sorted(labels)})
 
 

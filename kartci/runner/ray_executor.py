@@ -26,6 +26,8 @@ def _ray() -> Any:
 
 def ray_tasks(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
               address: str | None) -> Iterator[Outcome]:
+    """Run the jobs as Ray tasks of one CPU each, on a new local instance of `workers` CPUs or the
+    cluster at `address`; yields outcomes as tasks finish."""
     ray = _ray()
     started = not ray.is_initialized()
     if started:

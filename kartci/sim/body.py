@@ -18,6 +18,7 @@ def _t3(v: np.ndarray) -> tuple[float, float, float]:
 
 
 def rotation(quat: tuple[float, float, float, float]) -> np.ndarray:
+    """The 3x3 rotation matrix of a quaternion (x, y, z, w)."""
     return np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
 
 
@@ -32,10 +33,12 @@ class BodyState:
 
     @property
     def rotation(self) -> np.ndarray:
+        """base_link's orientation as a 3x3 rotation matrix (body to world)."""
         return rotation(self.quat)
 
     @property
     def yaw(self) -> float:
+        """Heading about the world's z axis, rad."""
         x, y, z, w = self.quat
         return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
@@ -48,6 +51,7 @@ class Base:
         self._com_offset = np.asarray(pb.getDynamicsInfo(body, -1, physicsClientId=client)[3])
 
     def state(self) -> BodyState:
+        """Ground truth now: PyBullet's centre-of-mass pose and velocity, moved to base_link."""
         c = self.client
         com, quat = pb.getBasePositionAndOrientation(self.body, physicsClientId=c)
         lin, ang = pb.getBaseVelocity(self.body, physicsClientId=c)

@@ -17,6 +17,8 @@ NO_CEILING_M = 1000.0  # open sky: upward lidar beams find nothing in range
 
 
 class Circuit(TrackWorld):
+    """A TUMFTM track on open ground with optional barriers and obstacles; no walls, no ceiling."""
+
     spec: CircuitWorld
 
     def __init__(self, spec: WorldParams, dt_s: float) -> None:
@@ -25,6 +27,7 @@ class Circuit(TrackWorld):
         super().__init__(spec, dt_s, [], NO_CEILING_M)
 
     def build(self) -> int:
+        """Barriers (when asked for), obstacles, and a floor spanning the track plus `margin_m`."""
         spec, track = self.spec, self.track
         if spec.barriers:
             self.blocks = barrier_blocks(track, spec)

@@ -15,6 +15,8 @@ from kartci.spec.models import HallWorld, WorldParams
 
 
 def blocks(spec: HallWorld) -> list[Block]:
+    """The hall's static boxes: the four walls, then the pillars, then the obstacles (the track
+    check relies on this order)."""
     sx, sy = spec.size_m
     t, h = spec.wall_thickness_m, spec.wall_height_m
     out = [
@@ -46,6 +48,7 @@ class Hall(TrackWorld):
             raise
 
     def build(self) -> int:
+        """Floor, walls, pillars and obstacles, and a ceiling on the walls."""
         spec = self.spec
         floor = self._floor(np.zeros(2), np.asarray(spec.size_m), 1.0)
         for blk in self.blocks:

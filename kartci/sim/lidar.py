@@ -30,6 +30,7 @@ class LidarModel:
     range_accuracy_m: float
 
     def azimuths(self, rate_hz: float) -> Array:
+        """Beam azimuths of one revolution (rad, from 0) at the model's resolution for `rate_hz`."""
         n = round(360.0 / (self.resolution_per_hz_deg * rate_hz))
         return np.arange(n, dtype=float) * (2 * np.pi / n)
 

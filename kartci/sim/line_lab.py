@@ -18,9 +18,13 @@ COURSE_TOPIC = "/kartci/course"  # nav_msgs/Path: the line's axis or the track's
 
 
 class LineLab(World):
+    """A floor with the line (a straight strip or a ring) and obstacles."""
+
     spec: LineLabWorld
 
     def build(self) -> int:
+        """Floor around the course with a 1 m margin, the line (visual only, no collision) and
+        obstacle boxes."""
         spec = self.spec
         pts = geometry.polyline(spec.course)
         floor = self._floor(pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0, spec.floor_friction)
@@ -35,6 +39,7 @@ class LineLab(World):
         return x, y, yaw + start.heading_rad
 
     def static_messages(self) -> list[tuple[str, Any]]:
+        """The course as a path, for controllers and metrics."""
         return [(COURSE_TOPIC, path_message(geometry.polyline(self.spec.course, 200)))]
 
     def end_m(self) -> float | None:

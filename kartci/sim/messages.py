@@ -13,26 +13,31 @@ from kartci.sim.body import BodyState
 
 
 def vec(x: float, y: float, z: float) -> Any:
+    """A geometry_msgs/Vector3."""
     return msg("geometry_msgs/msg/Vector3", x=x, y=y, z=z)
 
 
 def quat_msg(q: Any) -> Any:
+    """A geometry_msgs/Quaternion from (x, y, z, w)."""
     return msg("geometry_msgs/msg/Quaternion", x=q[0], y=q[1], z=q[2], w=q[3])
 
 
 def pose(xyz: Any, q: Any) -> Any:
+    """A geometry_msgs/Pose from a position (m) and a quaternion (x, y, z, w)."""
     return msg("geometry_msgs/msg/Pose",
                position=msg("geometry_msgs/msg/Point", x=xyz[0], y=xyz[1], z=xyz[2]),
                orientation=quat_msg(q))
 
 
 def transform(t_ns: int, parent: str, child: str, xyz: Any, q: Any) -> Any:
+    """A geometry_msgs/TransformStamped of frame `child` in `parent` at `t_ns`."""
     tr = msg("geometry_msgs/msg/Transform", translation=vec(*xyz), rotation=quat_msg(q))
     return msg("geometry_msgs/msg/TransformStamped", header=header(t_ns, parent),
                child_frame_id=child, transform=tr)
 
 
 def quat_from_matrix(r: np.ndarray) -> tuple[float, float, float, float]:
+    """The quaternion (x, y, z, w) of a 3x3 rotation matrix."""
     w = math.sqrt(max(0.0, 1 + r[0, 0] + r[1, 1] + r[2, 2])) / 2
     x = math.copysign(math.sqrt(max(0.0, 1 + r[0, 0] - r[1, 1] - r[2, 2])) / 2, r[2, 1] - r[1, 2])
     y = math.copysign(math.sqrt(max(0.0, 1 - r[0, 0] + r[1, 1] - r[2, 2])) / 2, r[0, 2] - r[2, 0])
@@ -41,6 +46,8 @@ def quat_from_matrix(r: np.ndarray) -> tuple[float, float, float, float]:
 
 
 def odometry(t_ns: int, ns: str, st: BodyState) -> Any:
+    """nav_msgs/Odometry of `<ns>/base_link` in the world frame from ground truth, twist in
+    base_link; zero covariances."""
     zeros36 = np.zeros(36)
     return msg("nav_msgs/msg/Odometry", header=header(t_ns, WORLD_FRAME),
                child_frame_id=f"{ns}/base_link",
@@ -54,10 +61,12 @@ def odometry(t_ns: int, ns: str, st: BodyState) -> Any:
 
 def joint_state(t_ns: int, frame: str, names: list[str], position: list[float],
                 velocity: list[float]) -> Any:
+    """A sensor_msgs/JointState: joint positions (rad) and velocities (rad/s), no efforts."""
     return msg("sensor_msgs/msg/JointState", header=header(t_ns, frame), name=names,
                position=np.asarray(position, dtype=float),
                velocity=np.asarray(velocity, dtype=float), effort=np.zeros(0))
 
 
 def tf_message(transforms: list[Any]) -> Any:
+    """A tf2_msgs/TFMessage, for /tf and /tf_static."""
     return msg("tf2_msgs/msg/TFMessage", transforms=transforms)

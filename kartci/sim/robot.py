@@ -24,19 +24,29 @@ class SimWorld(Protocol):
     collision reports, and the robots in it (so sensors can see each other)."""
 
     @property
-    def spec(self) -> WorldParams: ...
+    def spec(self) -> WorldParams:
+        """The world's parameters from the scenario."""
+        ...
 
     @property
-    def client(self) -> int: ...
+    def client(self) -> int:
+        """The PyBullet physics client every body lives in."""
+        ...
 
     @property
-    def floor(self) -> int: ...
+    def floor(self) -> int:
+        """Body id of the floor (contacts with it are not collisions)."""
+        ...
 
     @property
-    def names(self) -> dict[int, str]: ...
+    def names(self) -> dict[int, str]:
+        """Body id -> name, for collision reports."""
+        ...
 
     @property
-    def robots(self) -> list[Robot]: ...
+    def robots(self) -> list[Robot]:
+        """Every robot in the world, so sensors can see each other."""
+        ...
 
     def start_pose(self, start: Pose2D) -> tuple[float, float, float]:
         """x, y (m) and yaw (rad) of a start given along the world's course or track."""
@@ -46,9 +56,13 @@ class SimWorld(Protocol):
         """Messages at t = 0 that describe the world (course, track, obstacles)."""
         ...
 
-    def step(self) -> None: ...
+    def step(self) -> None:
+        """Advance the physics by one step."""
+        ...
 
-    def close(self) -> None: ...
+    def close(self) -> None:
+        """Disconnect the physics client."""
+        ...
 
 
 @dataclass(frozen=True)

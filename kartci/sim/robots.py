@@ -28,12 +28,16 @@ def every(period_s: float, dt_s: float) -> int:
 
 @dataclass
 class RobotBase:
+    """What robot kinds share: name, agent, control period in physics steps and fixed frames, with
+    tf and pose publishing."""
+
     name: str
     agent: Agent
     ctrl_every: int
     frames: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     def static_tf(self, frames: tuple[str, ...]) -> list[Any]:
+        """tf_static of the given fixed frames, relative to base_link."""
         out = []
         for frame in frames:
             rel, rot = self.frames[frame]
@@ -42,6 +46,8 @@ class RobotBase:
         return out
 
     def publish_pose(self, st: BodyState, t_ns: int, put: Put) -> None:
+        """Odometry and base_link's tf at `t_ns`; a RunError once the state is not finite (the
+        simulation blew up)."""
         if not all(math.isfinite(v) for v in (*st.xyz, *st.v_body)):
             raise RunError(f"agent {self.name}: non-finite state at t={t_ns * 1e-9:.3f} s")
         put("odom", odometry(t_ns, self.name, st), t_ns)

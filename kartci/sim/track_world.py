@@ -30,6 +30,7 @@ class TrackWorld(World):
         super().__init__(spec, dt_s)
 
     def start_pose(self, start: Pose2D) -> tuple[float, float, float]:
+        """x, y (m) and yaw (rad) of a start given along the track's centreline."""
         x, y, yaw = self.track.pose_at(start.along_m, start.lateral_m)
         return x, y, yaw + start.heading_rad
 

@@ -25,6 +25,7 @@ def urdf_path(model: Any) -> Path:
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> NDArray[np.float64]:
+    """Rotation matrix of URDF roll, pitch, yaw (rad): about fixed x, then y, then z."""
     cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
                               np.cos(yaw), np.sin(yaw))
     return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],

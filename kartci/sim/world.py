@@ -42,9 +42,11 @@ class World:
         raise NotImplementedError
 
     def start_pose(self, start: Pose2D) -> tuple[float, float, float]:
+        """x, y (m) and yaw (rad) of a start given along the world's course or track."""
         raise NotImplementedError
 
     def static_messages(self) -> list[tuple[str, Any]]:
+        """Messages at t = 0 that describe the world; none by default."""
         return []
 
     def _floor(self, lo: np.ndarray, hi: np.ndarray, friction: float) -> int:
@@ -74,8 +76,10 @@ class World:
                                       physicsClientId=c))
 
     def step(self) -> None:
+        """Advance the physics by one fixed step."""
         pb.stepSimulation(physicsClientId=self.client)
 
     def close(self) -> None:
+        """Disconnect the physics client; closing twice is harmless."""
         if pb.isConnected(self.client):
             pb.disconnect(self.client)

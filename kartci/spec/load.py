@@ -79,6 +79,18 @@ def _resolve_refs(data: dict[str, Any], path: Path) -> None:
     """World and model names become their files' contents; data files named inside them become
     absolute paths found on the project's search path (never outside it)."""
     proj = project.current()
+    _resolve_world(data, proj)
+    agents = data.get("agents")
+    if not isinstance(agents, dict):
+        return
+    for agent in agents.values():
+        if isinstance(agent, dict):
+            _resolve_agent(agent, proj, path)
+
+
+def _resolve_world(data: dict[str, Any], proj: project.Project) -> None:
+    """`world: <name>` or `world: {from: <name>, ...}` becomes the world file's keys (with those
+    given replacing its own), and a relative track file its path on the search path."""
     world = data.get("world")
     if isinstance(world, str):
         data["world"] = _read_yaml(proj.find_world(world))
@@ -90,27 +102,26 @@ def _resolve_refs(data: dict[str, Any], path: Path) -> None:
     if isinstance(world, dict) and isinstance(world.get("track"), str):
         track = world["track"]
         if not Path(track).is_absolute():
-            with contextlib.suppress(SpecError):  # may be a command-line path: checked below
+            with contextlib.suppress(SpecError):  # may be a command-line path: checked later
                 world["track"] = str(proj.world_file(track))
-    agents = data.get("agents")
-    if not isinstance(agents, dict):
-        return
-    for agent in agents.values():
-        if not isinstance(agent, dict):
-            continue
-        model = agent.get("model")
-        if isinstance(model, str):
-            params = _read_yaml(proj.find_model(model))
-            urdf = params.get("urdf")
-            if isinstance(urdf, str) and not Path(urdf).is_absolute():
-                params["urdf"] = str(proj.model_file(f"{model}/{urdf}"))
-            agent["model"] = params
-        controller = agent.get("controller")
-        source = controller.get("source") if isinstance(controller, dict) else None
-        if isinstance(source, dict) and isinstance(source.get("log"), str):
-            log = Path(source["log"])
-            if not log.is_absolute():  # relative to the scenario file
-                source["log"] = str((path.parent / log).resolve())
+
+
+def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path) -> None:
+    """`model: <name>` becomes the model's parameters (its URDF a path on the search path), and
+    a controller's relative source log a path relative to the scenario file at `path`."""
+    model = agent.get("model")
+    if isinstance(model, str):
+        params = _read_yaml(proj.find_model(model))
+        urdf = params.get("urdf")
+        if isinstance(urdf, str) and not Path(urdf).is_absolute():
+            params["urdf"] = str(proj.model_file(f"{model}/{urdf}"))
+        agent["model"] = params
+    controller = agent.get("controller")
+    source = controller.get("source") if isinstance(controller, dict) else None
+    if isinstance(source, dict) and isinstance(source.get("log"), str):
+        log = Path(source["log"])
+        if not log.is_absolute():  # relative to the scenario file
+            source["log"] = str((path.parent / log).resolve())
 
 
 def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str]) -> None:

@@ -128,7 +128,8 @@ class _BoundedLoader(yaml.SafeLoader):
             raise _Refused(None, None, f"nested more than {YAML_MAX_DEPTH_LEVELS} levels deep",
                            mark)
 
-    def compose_node(self, parent: Node | None, index: Any) -> Node | None:
+    # C901: kept line-for-line with PyYAML's compose_node so it can be diffed against upstream
+    def compose_node(self, parent: Node | None, index: Any) -> Node | None:  # noqa: C901
         """Composer.compose_node (PyYAML 3.x to 6.x) with the counting added. Written out rather
         than wrapped, and dispatching on the event's class, so that loading a normal file is
         no slower than with plain SafeLoader."""
@@ -277,44 +278,52 @@ class _PreviewFullError(Exception):
     """The preview has reached its length."""
 
 
+class _Preview:
+    """One-line JSON written piece by piece until `limit_chars` + 1 characters are out, then
+    stopped by _PreviewFullError."""
+
+    def __init__(self, limit_chars: int) -> None:
+        self.limit_chars = limit_chars
+        self.out: list[str] = []
+        self.room = limit_chars + 1
+
+    def emit(self, piece: str) -> None:
+        self.out.append(piece[: self.room])
+        self.room -= len(piece)
+        if self.room <= 0:
+            raise _PreviewFullError
+
+    def walk(self, v: Any) -> None:
+        if isinstance(v, str):
+            self.emit(json.dumps(v[: self.limit_chars + 1]))
+        elif v is None or isinstance(v, bool | float):
+            self.emit(json.dumps(v))
+        elif isinstance(v, int):
+            self.emit(_short_str(v, self.limit_chars))
+        elif isinstance(v, dict):
+            self.emit("{")
+            for i, (key, item) in enumerate(v.items()):
+                self.emit(", " if i else "")
+                self.walk(key if isinstance(key, str) else _short_str(key, self.limit_chars))
+                self.emit(": ")
+                self.walk(item)
+            self.emit("}")
+        elif isinstance(v, list | tuple | set | frozenset):
+            self.emit("[")
+            for i, item in enumerate(v):
+                if i:
+                    self.emit(", ")
+                self.walk(item)
+            self.emit("]")
+        else:
+            self.emit(json.dumps(_short_str(v, self.limit_chars)))
+
+
 def preview(value: Any, limit_chars: int = 60) -> str:
     """`value` as one line of JSON of at most `limit_chars`, built piece by piece and stopped
     once long enough: a huge or cyclic value costs no more than a short one."""
-    out: list[str] = []
-    room = [limit_chars + 1]
-
-    def emit(piece: str) -> None:
-        out.append(piece[: room[0]])
-        room[0] -= len(piece)
-        if room[0] <= 0:
-            raise _PreviewFullError
-
-    def walk(v: Any) -> None:
-        if isinstance(v, str):
-            emit(json.dumps(v[: limit_chars + 1]))
-        elif v is None or isinstance(v, bool | float):
-            emit(json.dumps(v))
-        elif isinstance(v, int):
-            emit(_short_str(v, limit_chars))
-        elif isinstance(v, dict):
-            emit("{")
-            for i, (key, item) in enumerate(v.items()):
-                emit(", " if i else "")
-                walk(key if isinstance(key, str) else _short_str(key, limit_chars))
-                emit(": ")
-                walk(item)
-            emit("}")
-        elif isinstance(v, list | tuple | set | frozenset):
-            emit("[")
-            for i, item in enumerate(v):
-                if i:
-                    emit(", ")
-                walk(item)
-            emit("]")
-        else:
-            emit(json.dumps(_short_str(v, limit_chars)))
-
+    writer = _Preview(limit_chars)
     with contextlib.suppress(_PreviewFullError):
-        walk(value)
-    text = "".join(out)
+        writer.walk(value)
+    text = "".join(writer.out)
     return text if len(text) <= limit_chars else text[: limit_chars - 1] + "…"

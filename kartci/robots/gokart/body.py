@@ -19,6 +19,9 @@ SLIP_WINDOW_MPS = 0.5  # the motor's speed reference stays within this of the wh
 
 
 class Gokart(Base):
+    """The kart's PyBullet body: the latest command, clamped to the model's limits, becomes joint
+    motor targets before every physics step."""
+
     def __init__(self, client: int, model: GokartModel, model_dir: Path,
                  pose: tuple[float, float, float], dt_s: float) -> None:
         self.model, self.dt = model, dt_s
@@ -44,6 +47,8 @@ class Gokart(Base):
         self.v_ref = 0.0  # motor speed reference at the rear tire, m/s
 
     def command(self, cmd: KartInput) -> None:
+        """Take a command, each input clamped to the model's range (steering column, rad;
+        acceleration and brake, m/s^2)."""
         lo, hi = self.model.steering_limit_rad
         self.input = KartInput(min(max(cmd.steering_rad, lo), hi),
                                min(max(cmd.accel_mps2, 0.0), self.model.max_accel_mps2),
@@ -59,6 +64,8 @@ class Gokart(Base):
         self.friction = list(mu)
 
     def pre_step(self) -> None:
+        """Turn the steering column towards its target at the steering rate, and drive the rear
+        wheels at the motor's speed reference within the torque limit."""
         m, inp, dt = self.model, self.input, self.dt
         step = m.steering_rate_radps * dt
         self.column += min(max(inp.steering_rad - self.column, -step), step)
@@ -90,6 +97,7 @@ class Gokart(Base):
                                      physicsClientId=self.client)
 
     def rear_speed(self) -> float:
+        """Mean rear-wheel speed at the tire, m/s."""
         js = pb.getJointStates(self.body, self.rear, physicsClientId=self.client)
         return float(js[0][1] + js[1][1]) / 2 * self.model.rear_wheel_radius_m
 

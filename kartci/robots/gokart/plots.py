@@ -13,6 +13,8 @@ from kartci.results import Plots
 
 
 def kart_plots(ctx: PlotContext) -> Plots:
+    """What a go-kart report draws: paths along the recorded track, wheel speeds, collisions,
+    obstacles, a few MPCC horizons and solve times."""
     t, scenario = ctx.tables, ctx.scenario
     track = recorded_track(t, ctx.path)
     tracks = {a: kart_track(track, odom) for a in scenario.agents

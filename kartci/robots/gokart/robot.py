@@ -38,6 +38,9 @@ class _Contact:
 
 
 class KartRobot(RobotBase):
+    """A go-kart in the loop: its body, IMU, lidar, camera and wheel odometry, collision reports,
+    and a drive-by-wire for the standard command topics."""
+
     STATIC = ("cog_link", "imu_link", "velodyne_link", "camera_link")
     JOINTS = ("front_left_wheel_steer_joint", "front_right_wheel_steer_joint",
               "rear_left_wheel_joint", "rear_right_wheel_joint", "front_left_wheel_joint",
@@ -75,15 +78,19 @@ class KartRobot(RobotBase):
         self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
 
     def static_transforms(self) -> list[Any]:
+        """tf of the CoG, IMU, lidar and camera mounts."""
         return self.static_tf(self.STATIC)
 
     def footprint(self) -> Block:
+        """The kart as a box at its current pose, for other karts' lidar."""
         st = self.body.state()
         ahead, length, width = FOOTPRINT_M
         c = (st.xyz[0] + ahead * math.cos(st.yaw), st.xyz[1] + ahead * math.sin(st.yaw))
         return Block(self.name, c, (length, width, 0.45), st.yaw)
 
     def sense(self, k: int, t_ns: int, put: Put) -> None:
+        """At the odometry rate: odometry, joint states, tf of the moving frames, floor friction and
+        the speed loop; camera, IMU and lidar at their own rates."""
         st = self.body.state()
         ns = self.name
         if k % self.odom_every == 0:
@@ -217,6 +224,7 @@ class KartRobot(RobotBase):
                 self._report(other, put)
 
     def finish(self, put: Put) -> None:
+        """Report the collisions still open at the end of the run."""
         for other in list(self.contacts):
             self._report(other, put)
 
@@ -257,9 +265,11 @@ class KartRobot(RobotBase):
             self.body.command(KartInput(column, accel, brake, reverse))
 
     def pre_step(self, k: int) -> None:
+        """Steering and wheel motors, from the latest command."""
         self.body.pre_step()
 
     def done(self, k: int) -> bool:
+        """Never: a kart drives until the scenario's duration is up."""
         return False
 
 

@@ -50,10 +50,12 @@ class LineTracker(Base):
         self.actual_target = np.zeros(2)  # after the first-order lag
 
     def command(self, left_radps: float, right_radps: float) -> None:
+        """New wheel-speed targets (rad/s: left, right), clamped at the motor's saturation speed."""
         lim = self.model.wheel_speed_limit_radps
         self.target = np.clip([left_radps, right_radps], -lim, lim)
 
     def pre_step(self) -> None:
+        """Advance the lagged targets by one physics step and hand them to the wheel motors."""
         self.actual_target += self._alpha * (self.target - self.actual_target)
         tau = self.model.wheel_torque_limit_nm
         pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
@@ -61,5 +63,6 @@ class LineTracker(Base):
                                      forces=[tau, tau], physicsClientId=self.client)
 
     def wheel_speeds(self) -> tuple[float, float]:
+        """Measured wheel speeds, rad/s (left, right)."""
         js = pb.getJointStates(self.body, self.wheels, physicsClientId=self.client)
         return float(js[0][1]), float(js[1][1])

@@ -21,12 +21,15 @@ from kartci.spec import Scenario
 
 @dataclass(frozen=True)
 class Sweep:
+    """Camera luminances (left, right) at each lateral offset of a sweep (m, left of the line +)."""
+
     offsets_m: np.ndarray
     left: np.ndarray
     right: np.ndarray
 
     @property
     def difference(self) -> np.ndarray:
+        """Left minus right: the signal the controller estimates its offset from."""
         out: np.ndarray = self.left - self.right
         return out
 

@@ -14,6 +14,8 @@ from kartci.spec.models import LineMetricsParams
 
 
 def line_plots(ctx: PlotContext) -> Plots:
+    """What a line-tracker report draws: the sensor point against the line, its cross-track error,
+    wheel speeds, and the unscored transient."""
     scenario = ctx.scenario
     tracks = {}
     for agent in scenario.agents:

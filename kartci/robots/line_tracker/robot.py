@@ -19,6 +19,9 @@ from kartci.sim.urdf import urdf_path
 
 
 class LineTrackerRobot(RobotBase):
+    """A line tracker in the loop: its body, two line cameras and an optional sonar; done past the
+    end of a straight course."""
+
     STATIC = ("line_sensor", "line_camera_left", "line_camera_right", "sonar")
 
     def __init__(self, ctx: RobotContext) -> None:
@@ -39,9 +42,12 @@ class LineTrackerRobot(RobotBase):
         self.end_m = world.end_m()
 
     def static_transforms(self) -> list[Any]:
+        """tf of the line sensor, both cameras and the sonar mount."""
         return self.static_tf(self.STATIC)
 
     def sense(self, k: int, t_ns: int, put: Put) -> None:
+        """Odometry and wheel speeds at the odometry rate; the line cameras (with noise) and the
+        sonar at the control rate."""
         st = self.body.state()
         if k % self.odom_every == 0:
             self.publish_pose(st, t_ns, put)
@@ -66,17 +72,19 @@ class LineTrackerRobot(RobotBase):
                              range=self.sonar.range(*self.body.frame_pose("sonar", st))), t_ns)
 
     def apply(self, topic: str, m: Any) -> None:
+        """`wheel_cmd` (JointState velocities, rad/s: left, right); other topics are ignored."""
         if topic == "wheel_cmd":
             self.body.command(float(m.velocity[0]), float(m.velocity[1]))
 
     def pre_step(self, k: int) -> None:
+        """Wheel motors, from the latest command through their lag."""
         self.body.pre_step()
 
     def post_step(self, t_ns: int, put: Put) -> None:
-        pass
+        """Nothing: a line tracker reports no collisions."""
 
     def finish(self, put: Put) -> None:
-        pass
+        """Nothing is left open at the end of a run."""
 
     def done(self, k: int) -> bool:
         """Past the end of a straight course (checked at the odometry rate)."""

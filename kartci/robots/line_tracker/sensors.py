@@ -89,6 +89,8 @@ class Sonar:
         self._dirs = np.array(dirs)
 
     def range(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
+        """Distance (m) to the nearest hit in the cone from a sensor's world position and rotation,
+        quantised; +inf when nothing is in range."""
         s = self.spec
         world_dirs = self._dirs @ rot.T
         starts = pos + s.min_range_m * world_dirs

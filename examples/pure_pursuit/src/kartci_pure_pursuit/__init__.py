@@ -46,6 +46,7 @@ class PurePursuit:
         self.pose: tuple[float, float, float] | None = None
 
     def on_message(self, topic: str, message: Any) -> None:
+        """Keep the centreline points (from the track's CSV) and the pose (m, rad) from odometry."""
         if topic == TRACK:
             rows = np.loadtxt(io.StringIO(message.data), delimiter=",", comments="#", ndmin=2)
             self.xy = rows[:, :2]
@@ -55,6 +56,8 @@ class PurePursuit:
             self.pose = (p.x, p.y, yaw)
 
     def step(self, t_ns: int) -> list[tuple[str, Any]]:
+        """Steer towards the aim point at the speed the turn allows (lateral acceleration limit);
+        nothing until both the track and a pose have arrived."""
         if self.xy is None or self.pose is None:
             return []
         x, y, yaw = self.pose
