@@ -8,16 +8,19 @@ from types import TracebackType
 from typing import Any, BinaryIO
 
 from mcap.writer import CompressionType, Writer
+from rosbags.typesys.store import Typestore
 
 from kartci.logs.types import typestore
 
 
 class McapLogWriter:
     """Writes to `<path>.partial` and renames on a clean close, so a failed run never leaves a
-    truncated log in place of a good one."""
+    truncated log in place of a good one. `store` holds the types to write (default kartci's);
+    extract passes one that also has the types only its source log defines."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, store: Typestore | None = None) -> None:
         self.path = path
+        self._store = store if store is not None else typestore()
         self._tmp = path.with_name(path.name + ".partial")
         path.parent.mkdir(parents=True, exist_ok=True)
         self._file: BinaryIO = self._tmp.open("wb")
@@ -32,7 +35,7 @@ class McapLogWriter:
         if cid is None:
             sid = self._schemas.get(typename)
             if sid is None:
-                text, _ = typestore().generate_msgdef(typename, ros_version=2)
+                text, _ = self._store.generate_msgdef(typename, ros_version=2)
                 sid = self._writer.register_schema(typename, "ros2msg", text.encode())
                 self._schemas[typename] = sid
             cid = self._writer.register_channel(topic, "cdr", sid)
@@ -42,18 +45,23 @@ class McapLogWriter:
     def write(self, topic: str, message: Any, t_ns: int) -> None:
         typename = message.__msgtype__
         cid = self._channel(topic, typename)
-        data = typestore().serialize_cdr(message, typename)
+        data = self._store.serialize_cdr(message, typename)
         seq = self._seq.get(cid, 0)
         self._seq[cid] = seq + 1
         self._writer.add_message(cid, log_time=t_ns, data=bytes(data), publish_time=t_ns,
                                  sequence=seq)
 
     def close(self, ok: bool = True) -> None:
-        self._writer.finish()  # type: ignore[no-untyped-call]
-        self._file.close()
-        if ok:
-            os.replace(self._tmp, self.path)
-        else:
+        """Rename the finished file into place when ok; whatever fails on the way (a full disk
+        in finish()), the partial file is removed (closing twice, or unlinking a renamed file,
+        does nothing)."""
+        try:
+            self._writer.finish()  # type: ignore[no-untyped-call]
+            self._file.close()
+            if ok:
+                os.replace(self._tmp, self.path)
+        finally:
+            self._file.close()
             self._tmp.unlink(missing_ok=True)
 
     def __enter__(self) -> McapLogWriter:
