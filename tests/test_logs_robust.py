@@ -417,7 +417,7 @@ class Damage:
         out = bytearray(data)
         for k, pos in enumerate(at):
             if out:
-                out[pos] ^= 1 << (k % 8) | 0x01
+                out[pos] ^= (1 << (k % 8)) | 0x01  # bit 0 and one more
         return bytes(out)
 
 
