@@ -1,29 +1,85 @@
 """Logs: writing runs as MCAP (ROS 2 types, CDR) and reading ROS 1 / ROS 2 / MCAP logs."""
 
 from pathlib import Path
+from typing import Any
 
 from kartci.errors import LogError
-from kartci.logs.reader import TopicInfo, messages, open_log, topics
+from kartci.logs.damage import describe
+from kartci.logs.reader import LogReader, SalvagedLog, TopicInfo, messages, open_log, topics
 from kartci.logs.tables import tables
-from kartci.logs.types import header, msg, stamp_ns, typestore
+from kartci.logs.types import for_writing, header, msg, stamp_ns, typestore
 from kartci.logs.writer import McapLogWriter
 
 
+def _same(a: Path, b: Path) -> bool:
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return a.samefile(b)  # hard links
+    except OSError:
+        return False
+
+
+def _check_output(src: Path, dst: Path) -> None:
+    """Refuse an output that would replace or write into the log being read: the writer
+    truncates its `<dst>.partial` and renames it over `dst` at the end."""
+    partial = dst.with_name(dst.name + ".partial")
+    if _same(src, dst) or _same(src, partial):
+        raise LogError(f"{dst}: is the log being read; choose another output file")
+    if src.is_dir() and src.resolve() in dst.resolve().parents:
+        raise LogError(f"{dst}: is inside the log folder being read ({src}); "
+                       "choose an output outside it")
+    if dst.is_dir():
+        raise LogError(f"{dst}: is a folder; give the path of the .mcap file to write")
+
+
+def _write(out: McapLogWriter, log: LogReader, topic: str, m: Any, t_ns: int) -> None:
+    try:
+        out.write(topic, m, t_ns)
+    except OSError as err:
+        raise LogError(f"{out.path}: cannot write ({err.strerror or err})") from err
+    except Exception as err:  # the CDR serializer raises anything on a mismatch
+        raise LogError(f"{log.path}: {topic} ({m.__msgtype__}) cannot be written as ROS 2 CDR: "
+                       f"{describe(err)}") from err
+
+
 def extract(src: Path, wanted: list[str], dst: Path) -> int:
-    """Copy some topics of any log into a new MCAP file (ROS 2 types); returns the count."""
-    known = {i.topic for i in topics(src)}
-    missing = [t for t in wanted if t not in known]
-    if missing:
-        raise LogError(f"{src}: no topic {', '.join(missing)} (topics: {', '.join(sorted(known))})")
+    """Copy some topics of any log into a new MCAP file (ROS 2 types); returns the count.
+
+    Types that only the log defines (a ROS 1 bag's turtlesim/msg/Pose) are written with the
+    log's own definitions. The file appears only when the copy is complete (see
+    McapLogWriter); from a damaged log, what could be salvaged is copied (SalvagedLog warns)."""
+    _check_output(src, dst)
+    with open_log(src) as log:
+        known = {i.topic for i in log.topics()}
+        missing = [t for t in wanted if t not in known]
+        if missing:
+            raise LogError(f"{src}: no topic {', '.join(missing)} "
+                           f"(topics: {', '.join(sorted(known))})")
+        try:
+            store = for_writing(log.typestore)
+        except Exception as err:  # rosbags' type registry raises anything
+            raise LogError(f"{src}: its message types cannot be written as ROS 2 "
+                           f"({describe(err)})") from err
+        try:
+            return _copy(log, wanted, McapLogWriter(dst, store))
+        except OSError as err:
+            raise LogError(f"{dst}: cannot write ({err.strerror or err})") from err
+
+
+def _copy(log: LogReader, wanted: list[str], out: McapLogWriter) -> int:
     n = 0
-    with McapLogWriter(dst) as out:
-        for topic, t_ns, m in messages(src, wanted):
-            out.write(topic, m, t_ns)
+    with out:
+        for topic, t_ns, m in log.messages(wanted):
+            _write(out, log, topic, m, t_ns)
             n += 1
     return n
 
+
 __all__ = [
+    "LogReader",
     "McapLogWriter",
+    "SalvagedLog",
     "TopicInfo",
     "extract",
     "header",

@@ -9,6 +9,7 @@ from typing import Any
 
 import pandas as pd
 
+from kartci.errors import LogError
 from kartci.logs.reader import messages
 from kartci.logs.types import stamp_ns, yaw_of
 
@@ -60,14 +61,23 @@ FLATTENERS: dict[str, Callable[[Any], Row]] = {
 }
 
 
+def _row(path: Path, topic: str, t_ns: int, m: Any, flat: Callable[[Any], Row]) -> Row:
+    """A foreign log may define a type of the same name with other fields; say so in one line
+    instead of failing in a flattener."""
+    try:
+        hdr = getattr(m, "header", None)
+        t = stamp_ns(hdr) if hdr is not None else t_ns
+        return {"t": t * 1e-9, **flat(m)}
+    except (AttributeError, TypeError, ValueError) as err:
+        raise LogError(f"{path}: {topic} ({m.__msgtype__}) lacks the fields kartci reads from "
+                       f"that type ({err})") from err
+
+
 def tables(path: Path, wanted: Sequence[str] | None = None) -> dict[str, pd.DataFrame]:
     """`t` (s, from the header stamp when there is one, else log time) plus flattened fields."""
     rows: dict[str, list[Row]] = defaultdict(list)
     for topic, t_ns, m in messages(path, wanted):
         flat = FLATTENERS.get(m.__msgtype__)
-        if flat is None:
-            continue
-        hdr = getattr(m, "header", None)
-        t = stamp_ns(hdr) if hdr is not None else t_ns
-        rows[topic].append({"t": t * 1e-9, **flat(m)})
+        if flat is not None:
+            rows[topic].append(_row(path, topic, t_ns, m, flat))
     return {topic: pd.DataFrame(r) for topic, r in rows.items()}

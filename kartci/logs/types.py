@@ -7,8 +7,12 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
+
+from kartci.logs.damage import detail
+
+_IDL_SEP = "=" * 80 + "\n"
 
 
 @cache
@@ -32,6 +36,48 @@ WORLD_FRAME = "map"  # the fixed frame of every world (REP 105's map)
 def base_link(namespace: str) -> str:
     """A robot's body frame, as its tf publishes it: `<namespace>/base_link`."""
     return f"{namespace}/base_link"
+
+
+def for_writing(log_types: Typestore) -> Typestore:
+    """kartci's store plus the types only a log defines (a ROS 1 bag's turtlesim/msg/Pose), so
+    any log's messages can be written as ROS 2 CDR. Where both define a type, the ROS 2 one wins:
+    the copy is meant for ROS 2 tools, and a ROS 1 Header's `seq` is simply not written."""
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    store.register({k: v for k, v in typestore().fielddefs.items() if k not in store.fielddefs})
+    store.register({k: v for k, v in log_types.fielddefs.items() if k not in store.fielddefs})
+    return store
+
+
+def _parse(msgtype: str, fmt: str, text: str) -> dict[str, Any]:
+    if fmt == "msg":
+        return dict(get_types_from_msg(text, msgtype))
+    if not text.startswith(f"{_IDL_SEP}IDL: "):
+        return dict(get_types_from_idl(text))
+    found: dict[str, Any] = {}
+    for part in text.split(_IDL_SEP)[1:]:
+        found.update(get_types_from_idl(part.split("\n", 1)[1]))
+    return found
+
+
+def from_definitions(defs: list[tuple[str, str, str]]) -> tuple[Typestore, list[str]]:
+    """A store of the types a log defines, each (msgtype, "msg" | "idl" | "", text), and the
+    problems met. Used when a log is read without rosbags' AnyReader (salvaged): a definition
+    that does not parse or clashes with another only loses its own topics, and types the log
+    does not define come from kartci's store, as AnyReader's default_typestore would give."""
+    store = get_typestore(Stores.EMPTY)
+    problems: list[str] = []
+    for msgtype, fmt, text in defs:
+        if not fmt or msgtype in store.fielddefs:
+            continue
+        try:
+            store.register(_parse(msgtype, fmt, text))
+        except Exception as err:  # a damaged definition raises anything
+            problems.append(f"definition of {msgtype} unusable ({detail(str(err))})")
+    missing = {m for m, _, _ in defs} - store.fielddefs.keys()
+    if missing & typestore().fielddefs.keys():
+        store.register({k: v for k, v in typestore().fielddefs.items()
+                        if k not in store.fielddefs})
+    return store, problems
 
 
 def msg(typename: str, **fields: Any) -> Any:

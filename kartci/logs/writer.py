@@ -9,6 +9,7 @@ from types import TracebackType
 from typing import Any, BinaryIO
 
 from mcap.writer import CompressionType, Writer
+from rosbags.typesys.store import Typestore
 
 from kartci.logs.types import typestore
 
@@ -17,10 +18,13 @@ class McapLogWriter:
     """Writes to a `.<name>.<unique>.partial` file beside `path` and renames it on a clean
     close, so a failed run never leaves a truncated log in place of a good one, two writers of
     one path never share a partial file, and a failed write (a full disk) leaves no partial
-    file behind to fill the disk for the runs after it."""
+    file behind to fill the disk for the runs after it. `store` holds the types
+    to write (default kartci's); extract passes one that also has the types only its source log
+    defines."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, store: Typestore | None = None) -> None:
         self.path = path
+        self._store = store if store is not None else typestore()
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".partial")
         self._tmp = Path(tmp)
@@ -40,7 +44,7 @@ class McapLogWriter:
         if cid is None:
             sid = self._schemas.get(typename)
             if sid is None:
-                text, _ = typestore().generate_msgdef(typename, ros_version=2)
+                text, _ = self._store.generate_msgdef(typename, ros_version=2)
                 sid = self._writer.register_schema(typename, "ros2msg", text.encode())
                 self._schemas[typename] = sid
             cid = self._writer.register_channel(topic, "cdr", sid)
@@ -50,7 +54,7 @@ class McapLogWriter:
     def write(self, topic: str, message: Any, t_ns: int) -> None:
         typename = message.__msgtype__
         cid = self._channel(topic, typename)
-        data = typestore().serialize_cdr(message, typename)
+        data = self._store.serialize_cdr(message, typename)
         seq = self._seq.get(cid, 0)
         self._seq[cid] = seq + 1
         self._writer.add_message(cid, log_time=t_ns, data=bytes(data), publish_time=t_ns,

@@ -1,0 +1,322 @@
+"""Read what is readable of a damaged log by streaming through it, without its index.
+
+rosbags reads MCAP files and ROS 1 bags through their summary or index, which is written last:
+a recording that was killed, a truncated download or one flipped byte in the index makes the
+whole log unreadable, although most chunks are intact. Here the file is read front to back
+instead (mcap's StreamReader for MCAP, a small record walker for ROS 1 bags, whose format is a
+plain sequence of length-prefixed records), each chunk on its own: a damaged chunk is skipped,
+and reading stops at the first record whose framing is broken, keeping everything before it.
+
+Only damaged logs come here, so everything readable is held in memory (raw bytes of the
+messages, not decoded) and sorted by time once: simple, and in time order like rosbags.
+"""
+
+from __future__ import annotations
+
+import bz2
+import struct
+import sys
+import zlib
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from io import BytesIO
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import lz4.frame  # type: ignore[import-untyped]
+from mcap.data_stream import ReadDataStream
+from mcap.records import Channel, Chunk, DataEnd, Message, Schema
+from mcap.stream_reader import StreamReader
+from rosbags.typesys.msg import normalize_msgtype
+
+from kartci.logs.damage import count_of, describe
+
+if sys.version_info >= (3, 14):  # pragma: no cover
+    from compression import zstd
+else:
+    from backports import zstd
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+ROS1_MAGIC = b"#ROSBAG V2.0\n"
+_FORMATS = {"ros2msg": "msg", "ros2idl": "idl", "omgidl": "idl"}
+
+
+class NotStreamableError(Exception):
+    """The file is not a format this module can stream (or not a log at all)."""
+
+
+@dataclass(frozen=True)
+class Conn:
+    """One topic connection as found in the stream; `fmt` is "msg", "idl" or "" (none)."""
+
+    topic: str
+    msgtype: str
+    fmt: str
+    text: str
+    ros1: bool
+
+
+Key = tuple[int, int]  # (file number, connection or channel id)
+
+
+@dataclass
+class Salvage:
+    """What streaming found: connections, raw messages (time, key, bytes), and problems."""
+
+    conns: dict[Key, Conn] = field(default_factory=dict)
+    found: list[tuple[int, Key, bytes]] = field(default_factory=list)
+    problems: list[str] = field(default_factory=list)
+    skipped_chunks: int = 0
+
+    def counts(self) -> Counter[Key]:
+        return Counter(key for _, key, _ in self.found)
+
+    def in_time_order(self) -> list[tuple[int, Key, bytes]]:
+        return sorted(self.found, key=lambda m: m[0])
+
+
+class _DamagedError(Exception):
+    """A chunk or record does not hold together."""
+
+
+def _inflate(compression: str, data: bytes, size: int) -> bytes:
+    """Decompress a chunk, never to more than its declared size (a damaged size or frame header
+    must not make us allocate gigabytes)."""
+    if compression in ("", "none"):
+        raw = data
+    elif compression == "zstd":
+        raw = zstd.ZstdDecompressor().decompress(data, max_length=size + 1)
+    elif compression == "lz4":
+        raw = lz4.frame.LZ4FrameDecompressor().decompress(data, max_length=size + 1)
+    elif compression == "bz2":
+        raw = bz2.BZ2Decompressor().decompress(data, max_length=size + 1)
+    else:
+        raise _DamagedError(f"unknown chunk compression {compression!r}")
+    if len(raw) != size:
+        raise _DamagedError(f"a chunk decompresses to {len(raw)} bytes, not {size}")
+    return bytes(raw)
+
+
+# ---------------------------------------------------------------------------------------- MCAP
+
+
+def _mcap_chunk_records(chunk: Any) -> Iterator[Any]:
+    data = _inflate(chunk.compression, chunk.data, chunk.uncompressed_size)
+    if chunk.uncompressed_crc and zlib.crc32(data) != chunk.uncompressed_crc:
+        raise _DamagedError("a chunk fails its CRC check")
+    stream = ReadDataStream(BytesIO(data))
+    while stream.count < len(data):
+        opcode, length = stream.read1(), stream.read8()
+        end = stream.count + length
+        if end > len(data):
+            raise _DamagedError("a record runs past the end of its chunk")
+        if opcode == 0x03:
+            yield Schema.read(stream)
+        elif opcode == 0x04:
+            yield Channel.read(stream)
+        elif opcode == 0x05:
+            if length < 22:
+                raise _DamagedError("a message record is too short")
+            yield Message.read(stream, length)
+        if stream.count > end:
+            raise _DamagedError("a record's fields run past its length")
+        stream.read(end - stream.count)
+
+
+@dataclass
+class _McapState:
+    part: int
+    into: Salvage
+    schemas: dict[int, tuple[str, str, str]] = field(default_factory=dict)
+    foreign: set[str] = field(default_factory=set)
+
+    def take(self, rec: Any) -> None:
+        if isinstance(rec, Schema):
+            text = rec.data.decode("utf-8", errors="replace")
+            self.schemas[rec.id] = (rec.name, _FORMATS.get(rec.encoding, ""), text)
+        elif isinstance(rec, Channel):
+            name, fmt, text = self.schemas.get(rec.schema_id, ("", "", ""))
+            if rec.message_encoding == "cdr" and name:
+                self.into.conns.setdefault((self.part, rec.id),
+                                           Conn(rec.topic, name, fmt, text, ros1=False))
+            else:
+                self.foreign.add(rec.topic)
+        elif isinstance(rec, Message):
+            self.into.found.append((rec.log_time, (self.part, rec.channel_id), rec.data))
+        elif isinstance(rec, Chunk):
+            self.chunk(rec)
+
+    def chunk(self, rec: Any) -> None:
+        try:
+            for inner in _mcap_chunk_records(rec):
+                self.take(inner)
+        except Exception:  # a damaged chunk raises anything; keep the rest
+            self.into.skipped_chunks += 1
+
+
+def read_mcap(path: Path, part: int, into: Salvage) -> None:
+    """Stream one MCAP file into `into`; chunks are checked (CRC, size) and unpacked here."""
+    size = path.stat().st_size
+    with path.open("rb") as f:
+        if f.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+            raise NotStreamableError("does not start with the MCAP magic bytes")
+        f.seek(0)
+        state = _McapState(part, into)
+        records = StreamReader(f, emit_chunks=True, record_size_limit=size).records
+        data_ended = False
+        while True:
+            try:
+                rec = next(records)
+            except StopIteration:
+                break
+            except Exception as err:  # damaged framing raises anything
+                into.problems.append(_stopped(f, size, err, data_ended, "summary"))
+                break
+            data_ended = data_ended or isinstance(rec, DataEnd)
+            state.take(rec)
+    if state.foreign:
+        into.problems.append(f"left out {count_of(len(state.foreign), 'topic')} not in CDR with "
+                             f"a ROS 2 schema ({', '.join(sorted(state.foreign)[:3])})")
+
+
+def _stopped(f: BinaryIO, size: int, err: Exception, complete: bool, tail: str) -> str:
+    why = str(err) if isinstance(err, _DamagedError) else describe(err)
+    if complete:
+        return f"its {tail} is damaged ({why}), all data before it was read"
+    return f"reading stopped at byte {f.tell()} of {size}: {why}"
+
+
+# ------------------------------------------------------------------------------------ ROS 1 bag
+
+
+def _fields(header: bytes) -> dict[str, bytes]:
+    fields: dict[str, bytes] = {}
+    pos = 0
+    while pos < len(header):
+        if pos + 4 > len(header):
+            raise _DamagedError("a record header ends in the middle of a field")
+        (n,) = struct.unpack_from("<I", header, pos)
+        item = header[pos + 4: pos + 4 + n]
+        if len(item) != n or b"=" not in item:
+            raise _DamagedError("a record header field is malformed")
+        name, value = item.split(b"=", 1)
+        fields[name.decode("ascii", errors="replace")] = value
+        pos += 4 + n
+    return fields
+
+
+def _ros1_record(src: BinaryIO, limit: int) -> tuple[dict[str, bytes], int]:
+    """Read one record's header and return it with its data length (data not read yet)."""
+    fields = _fields(_sized(src, limit))
+    (length,) = struct.unpack("<I", _exact(src, 4))
+    if src.tell() + length > limit:
+        raise _DamagedError("a record's data runs past the end of the file")
+    if "op" not in fields or len(fields["op"]) != 1:
+        raise _DamagedError("a record has no op field")
+    return fields, length
+
+
+def _exact(src: BinaryIO, n: int) -> bytes:
+    data = src.read(n)
+    if len(data) != n:
+        raise _DamagedError("the file ends in the middle of a record (truncated)")
+    return data
+
+
+def _sized(src: BinaryIO, limit: int) -> bytes:
+    (n,) = struct.unpack("<I", _exact(src, 4))
+    if src.tell() + n > limit:
+        raise _DamagedError("a record header runs past the end of the file")
+    return _exact(src, n)
+
+
+def _u32(fields: dict[str, bytes], name: str) -> int:
+    value = fields.get(name, b"")
+    if len(value) != 4:
+        raise _DamagedError(f"a record's {name} field is malformed")
+    return int(struct.unpack("<I", value)[0])
+
+
+def _topic(raw: bytes) -> str:
+    name = raw.decode("utf-8")
+    return ("/" if name.startswith("/") else "") + "/".join(x for x in name.split("/") if x)
+
+
+@dataclass
+class _Ros1State:
+    part: int
+    into: Salvage
+
+    def take(self, op: int, fields: dict[str, bytes], data: bytes) -> None:
+        if op == 0x02:
+            time = fields.get("time", b"")
+            if len(time) != 8:
+                raise _DamagedError("a message record's time is malformed")
+            sec, nsec = struct.unpack("<II", time)
+            self.into.found.append((sec * 1_000_000_000 + nsec,
+                                    (self.part, _u32(fields, "conn")), data))
+        elif op == 0x07:
+            key = (self.part, _u32(fields, "conn"))
+            if key not in self.into.conns:
+                self.into.conns[key] = self.connection(fields, _fields(data))
+
+    @staticmethod
+    def connection(fields: dict[str, bytes], info: dict[str, bytes]) -> Conn:
+        text = info.get("message_definition", b"").decode("utf-8", errors="replace")
+        msgtype = normalize_msgtype(info["type"].decode("utf-8"))
+        return Conn(_topic(fields["topic"]), msgtype, "msg" if text else "", text, ros1=True)
+
+    def chunk(self, fields: dict[str, bytes], data: bytes) -> None:
+        try:
+            compression = fields.get("compression", b"").decode("ascii")
+            raw = _inflate(compression, data, _u32(fields, "size"))
+            src = BytesIO(raw)
+            while src.tell() < len(raw):
+                inner, length = _ros1_record(src, len(raw))
+                self.take(inner["op"][0], inner, _exact(src, length))
+        except Exception:  # a damaged chunk raises anything; keep the rest
+            self.into.skipped_chunks += 1
+
+
+def read_ros1(path: Path, part: int, into: Salvage) -> None:
+    """Walk a ROS 1 bag (format 2.0) record by record, chunks included, ignoring its index."""
+    size = path.stat().st_size
+    with path.open("rb") as f:
+        if f.readline(64) != ROS1_MAGIC:
+            raise NotStreamableError("does not start with '#ROSBAG V2.0'")
+        state = _Ros1State(part, into)
+        index_pos = 0
+        while f.tell() < size:
+            start = f.tell()
+            try:
+                fields, length = _ros1_record(f, size)
+                op = fields["op"][0]
+                if op == 0x03:
+                    index_pos = struct.unpack("<Q", fields.get("index_pos", bytes(8)))[0]
+                if op == 0x05:
+                    state.chunk(fields, _exact(f, length))
+                elif op in (0x02, 0x07):
+                    state.take(op, fields, _exact(f, length))
+                else:
+                    f.seek(length, 1)
+            except Exception as err:  # damaged framing raises anything
+                into.problems.append(_stopped(f, size, err, 0 < index_pos <= start, "index"))
+                return
+
+
+def salvage(path: Path) -> Salvage:
+    """Stream `path` (a .bag, an .mcap or a folder of .mcap files); NotStreamableError if it is
+    none of these."""
+    into = Salvage()
+    if path.is_dir():
+        parts = sorted(path.glob("*.mcap"))
+        if not parts:
+            raise NotStreamableError("holds no .mcap files to read by streaming")
+        for number, part in enumerate(parts):
+            read_mcap(part, number, into)
+    elif path.suffix == ".bag":
+        read_ros1(path, 0, into)
+    else:
+        read_mcap(path, 0, into)
+    return into
