@@ -19,8 +19,8 @@ import pandas as pd
 import pytest
 import typer
 import yaml
+from helpers import kartci
 from mcap.writer import Writer
-from test_cli import kartci
 
 from kartci import metrics
 from kartci.agents.base import Outbox

@@ -16,7 +16,7 @@ from kartci.project import BUILTIN
 
 pytest_plugins = ["pytester"]
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 # The inner runs load only kartci's plugin (and xdist where asked), whatever else the venv has
 # installed; in-process runs find it imported already, so it cannot be assertion-rewritten.
 PLUGIN = ("-p", "kartci.pytest_plugin", "-W", "ignore::pytest.PytestAssertRewriteWarning")

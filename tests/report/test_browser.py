@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 from cdp import Browser, find_browser
-from test_parallel import PAIR
+from helpers import PAIR
 
 from kartci.report import COMPARE, write_all
 from kartci.runner import expand, run_jobs

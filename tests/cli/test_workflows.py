@@ -26,13 +26,13 @@ from typing import Any
 
 import pytest
 import yaml
-from test_parallel import PAIR
+from helpers import PAIR
 from venvs import offline_env
 
 from kartci import __version__
 from kartci.scaffold import init_project, workflow_text
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 WORKFLOWS = sorted((ROOT / ".github" / "workflows").glob("*.yml"))
 GATE = "kartci init: .github/workflows/kartci.yml"
 TEXTS = {**{p.name: p.read_text() for p in WORKFLOWS}, GATE: workflow_text()}

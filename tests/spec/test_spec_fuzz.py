@@ -9,7 +9,7 @@ generated `--set` assignments to `line_straight`; any exception but a KartciErro
 does a message of more than one line. The normal run tries a few hundred derandomized examples
 (the same ones on every CI run). The long run, 10,000+ random examples of each, is opt-in:
 
-    KARTCI_LONG=1 pytest -m long tests/test_spec_fuzz.py --hypothesis-show-statistics
+    KARTCI_LONG=1 pytest -m long tests/spec/test_spec_fuzz.py --hypothesis-show-statistics
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from kartci.spec.yamlio import (
 )
 from kartci.track import load_track
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "kartci" / "data"
 # the scenario's body, without its editor modeline (the tests splice text after the first key)
 STRAIGHT = "".join(line for line in (DATA / "scenarios" / "line_straight.yaml").read_text(

@@ -5,8 +5,8 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
+from helpers import PAIR
 from rich.console import Console
-from test_parallel import PAIR
 
 from kartci.report.progress import JobState, ProgressView
 from kartci.runner import Event, EventKind, Outcome, expand, run_jobs

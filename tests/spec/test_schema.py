@@ -24,7 +24,7 @@ from kartci.spec.schema import scenario_schema
 
 jsonschema = pytest.importorskip("jsonschema", reason="pip install jsonschema (the dev extra)")
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "pure_pursuit"
 SHIPPED = sorted((BUILTIN / "scenarios").glob("*.yaml"))
 MODELINE = "# yaml-language-server: $schema="

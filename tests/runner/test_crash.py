@@ -7,8 +7,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from test_cli import kartci
-from test_parallel import PAIR, QUICK
+from helpers import PAIR, QUICK, kartci
 
 from kartci.agents.base import Outbox
 from kartci.agents.line_pid import LinePid

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -11,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from helpers import kartci
 
 from kartci.project import BUILTIN
 
@@ -20,14 +20,6 @@ SHORT = ["--set", "duration_s=6", "--set", "criteria={}",
          "--set", "metrics.line_tracking.transient_s=2"]
 
 
-def kartci(*args: str | Path, cwd: Path | None = None,
-           env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    """Run the CLI in a fresh process, outside any GitHub job unless `env` says otherwise."""
-    base = {k: v for k, v in os.environ.items()
-            if k not in ("GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY")}
-    return subprocess.run([sys.executable, "-m", "kartci.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=300,
-                          env={**base, **(env or {})})
 
 
 def _one_clean_line(p: subprocess.CompletedProcess[str]) -> str:

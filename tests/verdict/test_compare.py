@@ -6,9 +6,8 @@ import json
 from pathlib import Path
 
 import pytest
+from helpers import PAIR, QUICK, kartci
 from junitparser import JUnitXml
-from test_cli import kartci
-from test_parallel import PAIR, QUICK
 
 from kartci.metrics.base import Direction
 from kartci.report.ci import annotation_lines, truncate

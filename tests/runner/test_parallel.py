@@ -6,16 +6,12 @@ import json
 from pathlib import Path
 
 import pytest
+from helpers import PAIR, QUICK, kartci
 from junitparser import JUnitXml
-from test_cli import kartci
 
 from kartci.errors import SpecError
 from kartci.runner import expand, parse_shard, shard
 from kartci.runner.merge import merge
-
-QUICK = ["--set", "duration_s=3", "--set", "criteria={}",
-         "--set", "metrics.line_tracking.transient_s=1"]
-PAIR = ["line_straight", "line_circle"]
 
 
 def _metrics(out: Path) -> dict[str, bytes]:

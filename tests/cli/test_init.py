@@ -10,7 +10,7 @@ from importlib import metadata
 from pathlib import Path
 
 import pytest
-from test_cli import kartci
+from helpers import kartci
 from venvs import offline_env
 
 from kartci import __version__

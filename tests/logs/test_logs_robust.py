@@ -4,7 +4,7 @@ is readable and says so; never a traceback or a bare library exception.
 The fuzz tests feed truncated, byte-flipped and spliced copies of every shipped log (and of every
 real recorded log in ../shared/fixtures, when present) through topics(), messages(), tables()
 and extract(). Their inputs are derandomized, so CI sees the same ones on every run. The long
-run (10,000 inputs) is opt-in: `KARTCI_LONG=1 pytest -m long tests/test_logs_robust.py`.
+run (10,000 inputs) is opt-in: `KARTCI_LONG=1 pytest -m long tests/logs/test_logs_robust.py`.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from kartci.logs import (
 )
 from kartci.logs.damage import describe
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = sorted((ROOT / "kartci" / "data" / "scenarios" / "logs").glob("*.mcap"))
 FIXTURES = ROOT.parent / "shared" / "fixtures" / "bags"
 POSE = "float32 x\nfloat32 y\nfloat32 theta\nfloat32 linear_velocity\nfloat32 angular_velocity\n"

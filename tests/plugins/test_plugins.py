@@ -21,7 +21,7 @@ from kartci.spec import load_scenario
 from kartci.spec.models import ControllerParams
 from kartci.verdict import check_criteria
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.parametrize("name", plugins.CONTROLLERS.names())

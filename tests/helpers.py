@@ -1,0 +1,24 @@
+"""What several test modules share: running the CLI as a user does, and short runs."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]  # the checkout
+# Two short line-tracker runs, for tests of running many scenarios rather than one
+PAIR = ["line_straight", "line_circle"]
+QUICK = ["--set", "duration_s=3", "--set", "criteria={}",
+         "--set", "metrics.line_tracking.transient_s=1"]
+
+
+def kartci(*args: str | Path, cwd: Path | None = None,
+           env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """Run the CLI in a fresh process, outside any GitHub job unless `env` says otherwise."""
+    base = {k: v for k, v in os.environ.items()
+            if k not in ("GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY")}
+    return subprocess.run([sys.executable, "-m", "kartci.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=300,
+                          env={**base, **(env or {})})
