@@ -5,24 +5,32 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 
-from kartci.cli import (  # noqa: F401  (commands)
+from kartci.cli import (  # noqa: F401  (importing a command module registers its commands)
     baseline,
     init,
-    line,
     logs,
     results,
     run,
     scenarios,
 )
+from kartci.cli import line as line_commands  # noqa: F401
 from kartci.cli.common import app
 from kartci.errors import KartciError
 
 __all__ = ["app", "main"]
 
 
+def _warning_line(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  line: str | None = None) -> str:
+    """A warning (a salvaged log, say) as one line a user reads, not a Python location."""
+    return f"kartci: warning: {message}\n"
+
+
 def main() -> None:
     """Entry point: every KartciError becomes one line on stderr and exit code 2."""
+    warnings.formatwarning = _warning_line
     try:
         app(prog_name="kartci")
     except KartciError as err:
