@@ -10,7 +10,6 @@ The templates are in `kartci/data/init/`.
 
 from __future__ import annotations
 
-import os
 import re
 import tomllib
 from dataclasses import dataclass
@@ -20,6 +19,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from kartci import __version__
+from kartci.atomic import write_text_atomic
 from kartci.errors import SpecError
 from kartci.project import BUILTIN
 
@@ -230,10 +230,4 @@ def _write_atomic(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.is_symlink():  # a link is replaced by the file, never written through
         path.unlink()
-    tmp = path.with_name(f".{path.name}.kartci-init.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    write_text_atomic(path, text)

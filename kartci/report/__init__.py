@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
+from kartci.atomic import write_text_atomic
 from kartci.report.html import report_html
 from kartci.report.junit import junit_xml
 from kartci.report.markdown import summary_md
@@ -35,16 +35,6 @@ def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
     }
 
 
-def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
 def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN) -> dict[str, Path]:
     """report.html, summary.md, summary.json and junit.xml in `out`. The old ones are removed
     first: a report that fails half-way leaves some missing, never an earlier one standing."""
@@ -53,10 +43,10 @@ def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN) ->
              "json": out / "summary.json", "junit": out / "junit.xml"}
     for path in paths.values():
         path.unlink(missing_ok=True)
-    _write_text(paths["html"], report_html(results, words))
-    _write_text(paths["markdown"], summary_md(results, words))
+    write_text_atomic(paths["html"], report_html(results, words))
+    write_text_atomic(paths["markdown"], summary_md(results, words))
     write_json_atomic(paths["json"], summary_json(results))
-    _write_text(paths["junit"], junit_xml(results, str(paths["html"]), words))
+    write_text_atomic(paths["junit"], junit_xml(results, str(paths["html"]), words))
     return paths
 
 

@@ -22,6 +22,7 @@ from typing import Any
 import pandas as pd
 
 from kartci import metrics, plugins, project
+from kartci.atomic import write_text_atomic
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
 from kartci.project import did_you_mean
@@ -53,14 +54,7 @@ def mark_failed(folder: Path, name: str, error: str, err: BaseException | None =
     write_json_atomic(folder / ERROR_NAME, {"scenario": name, "error": one_line(error)})
     trace = folder / TRACEBACK_NAME
     if err is not None and not isinstance(err, KartciError):
-        text = "".join(traceback.format_exception(err))
-        tmp = trace.with_name(f".{TRACEBACK_NAME}.tmp")
-        try:
-            tmp.write_text(text, encoding="utf-8")
-            os.replace(tmp, trace)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
+        write_text_atomic(trace, "".join(traceback.format_exception(err)))
     else:
         trace.unlink(missing_ok=True)
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import os
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -12,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from kartci.atomic import write_text_atomic
 from kartci.errors import SpecError
 
 
@@ -90,9 +90,6 @@ def physics_urdf(path: Path) -> Path:
     text = ET.tostring(root, encoding="unicode")
     digest = hashlib.sha256(text.encode()).hexdigest()[:16]
     out = Path(tempfile.gettempdir()) / "kartci-urdf" / f"{path.stem}-{digest}.urdf"
-    if not out.exists():
-        out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = out.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, out)
+    if not out.exists():  # content-addressed: parallel writers write the same bytes
+        write_text_atomic(out, text)
     return out

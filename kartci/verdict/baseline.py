@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
+from kartci.atomic import write_json_atomic as write_json_atomic  # re-exported
 from kartci.errors import BaselineError
 from kartci.metrics.base import Direction, MetricDef
 from kartci.spec.models import Criterion
@@ -210,21 +209,6 @@ def _criterion(name: str, c: Criterion, metrics: dict[str, dict[str, Any]]) -> C
         parts.append(f"== {c.equal:g}")
         ok = ok and value is not None and math.isclose(value, c.equal, abs_tol=1e-12)
     return CriterionResult(name, value, " and ".join(parts), bool(ok))
-
-
-def write_json_atomic(path: Path, data: Any) -> None:
-    """Write JSON via a temporary file and a rename: a crash never leaves half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(data, f, indent=2, sort_keys=True, allow_nan=False)
-            f.write("\n")
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; these are shared, reviewable files
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 @dataclass(frozen=True)
