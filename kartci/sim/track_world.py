@@ -14,7 +14,7 @@ from kartci.sim.blocks import Block
 from kartci.sim.line_lab import COURSE_TOPIC, path_message
 from kartci.sim.messages import WORLD_FRAME, pose
 from kartci.sim.world import World
-from kartci.spec.models import FloorZone, Pose2D, WorldParams
+from kartci.spec.models import Pose2D, TrackWorldParams, WorldParams
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, load_track
 
 
@@ -22,9 +22,12 @@ class TrackWorld(World):
     """A world around a closed track. Subclasses build the bodies; `blocks` are its static
     boxes (what the fast lidar sees) and `ceiling_m` the height of a ceiling, if any."""
 
+    spec: TrackWorldParams
+
     def __init__(self, spec: WorldParams, dt_s: float, blocks: list[Block],
                  ceiling_m: float) -> None:
-        self.track_file = Path(str(getattr(spec, "track")))  # noqa: B009  (a track world's key)
+        assert isinstance(spec, TrackWorldParams)  # the world registry chose this class by kind
+        self.track_file = Path(spec.track)
         self.track = load_track(self.track_file)
         self.blocks, self.ceiling_m = blocks, ceiling_m
         super().__init__(spec, dt_s)
@@ -40,13 +43,12 @@ class TrackWorld(World):
         return [(COURSE_TOPIC, path_message(xy)),
                 (TRACK_TOPIC, msg("std_msgs/msg/String",
                                   data=self.track_file.read_text(encoding="utf-8"))),
-                (OBSTACLES_TOPIC, obstacle_markers(getattr(self.spec, "obstacles", ())))]
+                (OBSTACLES_TOPIC, obstacle_markers(self.spec.obstacles))]
 
     def friction_at(self, x: float, y: float) -> float:
         """Floor friction under a point: the zone it is in, else the world's floor."""
-        f: float = getattr(self.spec, "floor_friction", 0.9)
-        zones: tuple[FloorZone, ...] = getattr(self.spec, "zones", ())
-        for z in zones:
+        f = self.spec.floor_friction
+        for z in self.spec.zones:
             if z.min_m[0] <= x <= z.max_m[0] and z.min_m[1] <= y <= z.max_m[1]:
                 f = z.friction
         return f

@@ -126,7 +126,16 @@ class FloorZone(Frozen):
                             "floor)")
 
 
-class HallWorld(WorldParams):
+class TrackWorldParams(WorldParams):
+    """What every world around a closed race track has (each kind documents its own)."""
+
+    track: str = Field(description="closed track, TUMFTM CSV on the project's world path")
+    floor_friction: float = Field(0.9, ge=0.0, description="friction coefficient of the floor")
+    zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor")
+
+
+class HallWorld(TrackWorldParams):
     """An indoor hall: walls, pillars, a ceiling, floor zones and a closed TUMFTM track."""
 
     kind: Literal["hall"] = Field("hall", description="world kind: an indoor hall")
@@ -152,7 +161,7 @@ class HallWorld(WorldParams):
                                        "Sec. 6.5)")
 
 
-class CircuitWorld(WorldParams):
+class CircuitWorld(TrackWorldParams):
     """An outdoor race circuit from a TUMFTM track alone: ground sized to the track, optional
     barriers along both edges, no hall."""
 
