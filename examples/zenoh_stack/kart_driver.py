@@ -76,10 +76,13 @@ class Ros2Node:
         return f"{self.domain}/{topic.lstrip('/')}/{dds}/{h}"
 
     def subscribe(self, topic: str, typename: str, inbox: queue.Queue[Any]) -> None:
+        # indirect=False: called on the network thread itself, so samples of different topics
+        # stay in the order they were published (sensors first, then /clock)
         self.keep.append(self.session.declare_subscriber(
-            self.key(topic, typename),
-            lambda s: inbox.put((topic, self.store.deserialize_cdr(s.payload.to_bytes(),
-                                                                   typename)))))
+            self.key(topic, typename), zenoh.handlers.Callback(
+                lambda s: inbox.put((topic, self.store.deserialize_cdr(s.payload.to_bytes(),
+                                                                       typename))),
+                indirect=False)))
         self._token("MS", topic, typename)
 
     def publisher(self, topic: str, typename: str) -> Any:

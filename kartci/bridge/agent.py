@@ -112,14 +112,39 @@ class ExternalAgent:
             return [(LATE_TOPIC, msg("std_msgs/msg/UInt32", data=self.late))]
         return self._outbox(got)
 
+    def _declare(self) -> None:
+        """A publisher for each new (topic, type) of the pending messages; before its first
+        put, it waits until the stack's subscription (if its tokens show one) has matched."""
+        new = []
+        for topic, m in self._pending:
+            typename = type(m).__msgtype__
+            if (topic, typename) not in self._pubs:
+                self._pubs[(topic, typename)] = pub = self.node.publisher(topic, typename)
+                new.append((topic, typename, pub))
+        subscribed = self._stack_subscriptions()
+        deadline = time.perf_counter() + self.spec.startup_timeout_s
+        for topic, typename, pub in new:
+            while (topic, typename) in subscribed and not pub.matched():
+                if time.perf_counter() > deadline:
+                    raise RunError(f"external controller of {self.name}: the stack's "
+                                   f"subscription to {topic} never matched; {self._output()}")
+                time.sleep(0.001)
+
+    def _stack_subscriptions(self) -> set[tuple[str, str]]:
+        """(topic, type) of every subscription the stack's liveliness tokens announce."""
+        have = {(p[5], *p[9:12]) for p in (k.split("/") for k in list(self._tokens))
+                if len(p) == 13}
+        return {(topic, typename) for topic, typename in
+                {(t, type(m).__msgtype__) for t, m in self._pending} | set(self._pubs)
+                if ("MS", ros2.mangle(topic), ros2.dds_type_name(typename),
+                    ros2.type_hash(typename)) in have}
+
     def _publish(self, t_ns: int) -> None:
+        self._declare()
         store = typestore()
         for topic, m in self._pending:
             typename = type(m).__msgtype__
-            pub = self._pubs.get((topic, typename))
-            if pub is None:
-                pub = self._pubs[(topic, typename)] = self.node.publisher(topic, typename)
-            pub.put(bytes(store.serialize_cdr(m, typename)))
+            self._pubs[(topic, typename)].put(bytes(store.serialize_cdr(m, typename)))
         self._pending.clear()
         sec, nanosec = divmod(t_ns, 1_000_000_000)
         self.clock.put(bytes(store.serialize_cdr(msg(CLOCK, clock=msg(
@@ -207,6 +232,8 @@ class ExternalAgent:
                                f"{', no '.join(self._missing())} on {self.endpoint}; "
                                f"{self._output()}")
             time.sleep(0.01)
+        while not self.clock.matched():
+            time.sleep(0.001)
         self._ready = True
 
     def _outbox(self, got: dict[str, Any]) -> Outbox:

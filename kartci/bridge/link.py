@@ -65,6 +65,11 @@ class Publisher:
         self._token = node.session.liveliness().declare_token(ros2.entity_token(
             node.name, entity_id, ros2.EntityKind.PUBLISHER, topic, typename))
 
+    def matched(self) -> bool:
+        """Whether a subscriber's declaration has reached this publisher (until then a put
+        may go nowhere)."""
+        return bool(self._pub.matching_status.matching)
+
     def put(self, payload: bytes) -> None:
         """Publish one serialised message (sequence numbers from 1, wall-clock source stamp)."""
         self._seq += 1
@@ -96,8 +101,8 @@ class Node:
         """Declare a subscription (and its token); `on_payload` gets each CDR payload, on a
         Zenoh thread."""
         key = ros2.topic_key(self.name.domain_id, topic, typename)
-        sub = self.session.declare_subscriber(
-            key, lambda sample: on_payload(sample.payload.to_bytes()))
+        sub = self.session.declare_subscriber(key, zenoh.handlers.Callback(  # on the network
+            lambda sample: on_payload(sample.payload.to_bytes()), indirect=False))  # thread
         token = self.session.liveliness().declare_token(ros2.entity_token(
             self.name, self._entity_id(), ros2.EntityKind.SUBSCRIPTION, topic, typename))
         self._entities += [sub, token]
