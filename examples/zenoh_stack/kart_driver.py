@@ -23,6 +23,7 @@ import signal
 import struct
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -58,34 +59,36 @@ class Ros2Node:
             f"@ros2_lv/{domain_id}/{self.zid}/0/0/NN/%/%/{name}")]
         self.next_id = 10
 
-    def _names(self, topic: str, typename: str) -> tuple[str, str]:
+    def _names(self, typename: str) -> tuple[str, str]:
         pkg, kind, msg = typename.split("/")
-        dds = f"{pkg}::{kind}::dds_::{msg}_"
-        return dds, self.store.hash_rihs01(typename)
+        return f"{pkg}::{kind}::dds_::{msg}_", str(self.store.hash_rihs01(typename))
 
     def _token(self, kind: str, topic: str, typename: str) -> int:
         self.next_id += 1
-        dds, h = self._names(topic, typename)
+        dds, h = self._names(typename)
         self.keep.append(self.session.liveliness().declare_token(
             f"@ros2_lv/{self.domain}/{self.zid}/0/{self.next_id}/{kind}/%/%/{self.name}/"
             f"{topic.replace('/', '%')}/{dds}/{h}/{QOS}"))
         return self.next_id
 
     def key(self, topic: str, typename: str) -> str:
-        dds, h = self._names(topic, typename)
+        """`<domain>/<topic>/<dds type name>/<RIHS01 hash>`."""
+        dds, h = self._names(typename)
         return f"{self.domain}/{topic.lstrip('/')}/{dds}/{h}"
 
     def subscribe(self, topic: str, typename: str, inbox: queue.Queue[Any]) -> None:
+        """Decoded messages of `topic` into `inbox`, in arrival order, and an `MS` token."""
         # indirect=False: called on the network thread itself, so samples of different topics
         # stay in the order they were published (sensors first, then /clock)
+        def take(sample: zenoh.Sample) -> None:
+            inbox.put((topic, self.store.deserialize_cdr(sample.payload.to_bytes(), typename)))
+
         self.keep.append(self.session.declare_subscriber(
-            self.key(topic, typename), zenoh.handlers.Callback(
-                lambda s: inbox.put((topic, self.store.deserialize_cdr(s.payload.to_bytes(),
-                                                                       typename))),
-                indirect=False)))
+            self.key(topic, typename), zenoh.handlers.Callback(take, indirect=False)))
         self._token("MS", topic, typename)
 
-    def publisher(self, topic: str, typename: str) -> Any:
+    def publisher(self, topic: str, typename: str) -> Callable[[Any], None]:
+        """A function that publishes a message with rmw_zenoh's attachment; an `MP` token."""
         pub = self.session.declare_publisher(self.key(topic, typename))
         gid = hashlib.sha256(f"{self.zid}/{self._token('MP', topic, typename)}".encode()
                              ).digest()[:16]
@@ -106,6 +109,7 @@ class PurePursuit:
         self.xy: np.ndarray | None = None
 
     def set_track(self, csv_text: str) -> None:
+        """The centreline from the track CSV (x_m, y_m, ...), resampled every 0.1 m."""
         rows = [line.split(",")[:2] for line in csv_text.splitlines()
                 if line.strip() and not line.lstrip().startswith("#")]
         pts = np.array(rows, dtype=float)
@@ -117,7 +121,8 @@ class PurePursuit:
         n = len(self.xy)
         k = 10  # three-point curvature over +-1 m
         a, b, c = np.roll(self.xy, k, 0), self.xy, np.roll(self.xy, -k, 0)
-        cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+        cross = ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                 - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
         la, lb, lc = (np.hypot(*(b - a).T), np.hypot(*(c - b).T), np.hypot(*(c - a).T))
         self.kappa = np.abs(2 * cross / np.maximum(la * lb * lc, 1e-9))
         self.n = n
@@ -136,6 +141,7 @@ class PurePursuit:
 
 
 def parse() -> argparse.Namespace:
+    """The command line."""
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--connect", default=os.environ.get("KARTCI_ZENOH_ENDPOINT"),
                    help="Zenoh endpoint of the simulator (default $KARTCI_ZENOH_ENDPOINT)")
@@ -166,6 +172,7 @@ def config(endpoint: str) -> zenoh.Config:
 
 
 def main() -> int:
+    """Connect, declare, and answer every /clock tick until SIGTERM."""
     args = parse()
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     store = typestore()
@@ -179,9 +186,9 @@ def main() -> int:
     node.subscribe("/clock", "rosgraph_msgs/msg/Clock", inbox)  # last: kartci starts on it
     print(f"pure_pursuit: connected to {args.connect}, namespace {ns}", flush=True)
     driver, pose = PurePursuit(args), None
-    Header = store.types["std_msgs/msg/Header"]
-    Drive = store.types["ackermann_msgs/msg/AckermannDrive"]
-    Stamped = store.types["ackermann_msgs/msg/AckermannDriveStamped"]
+    header_t = store.types["std_msgs/msg/Header"]
+    drive_t = store.types["ackermann_msgs/msg/AckermannDrive"]
+    stamped_t = store.types["ackermann_msgs/msg/AckermannDriveStamped"]
     while True:
         topic, m = inbox.get()
         if topic == "/kartci/track":
@@ -204,9 +211,10 @@ def main() -> int:
                 time.sleep(args.delay_s)
             delta, speed = (0.0, 0.0) if pose is None or driver.xy is None else (
                 driver.command(*pose))
-            publish(Stamped(header=Header(stamp=m.clock, frame_id=f"{args.namespace}/base_link"),
-                            drive=Drive(steering_angle=delta, steering_angle_velocity=0.0,
-                                        speed=speed, acceleration=0.0, jerk=0.0)))
+            publish(stamped_t(
+                header=header_t(stamp=m.clock, frame_id=f"{args.namespace}/base_link"),
+                drive=drive_t(steering_angle=delta, steering_angle_velocity=0.0, speed=speed,
+                              acceleration=0.0, jerk=0.0)))
 
 
 if __name__ == "__main__":

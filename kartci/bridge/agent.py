@@ -15,6 +15,7 @@ from __future__ import annotations
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -67,14 +68,18 @@ class ExternalAgent:
         try:
             self.clock = self.node.publisher("/clock", CLOCK)
             for topic, typename in self.commands.items():
-                self.node.subscription(topic, typename,
-                                       lambda p, t=topic: self.inbox.push(t, p))
+                self.node.subscription(topic, typename, self._pusher(topic))
             self.node.watch_tokens(self._tokens.add)
             if spec.command:
                 self.child = self._start(ctx.run_dir)
         except BaseException:
             self.close()
             raise
+
+    def _pusher(self, topic: str) -> Callable[[bytes], None]:
+        def push(payload: bytes) -> None:
+            self.inbox.push(topic, payload)
+        return push
 
     def _full(self, topic: str) -> str:
         return topic if topic.startswith("/") else f"/{self.name}/{topic}"

@@ -68,7 +68,8 @@ class Publisher:
     def matched(self) -> bool:
         """Whether a subscriber's declaration has reached this publisher (until then a put
         may go nowhere)."""
-        return bool(self._pub.matching_status.matching)
+        status: Any = self._pub.matching_status  # a MatchingStatus; the stub says bool
+        return bool(status.matching)
 
     def put(self, payload: bytes) -> None:
         """Publish one serialised message (sequence numbers from 1, wall-clock source stamp)."""
@@ -101,8 +102,11 @@ class Node:
         """Declare a subscription (and its token); `on_payload` gets each CDR payload, on a
         Zenoh thread."""
         key = ros2.topic_key(self.name.domain_id, topic, typename)
-        sub = self.session.declare_subscriber(key, zenoh.handlers.Callback(  # on the network
-            lambda sample: on_payload(sample.payload.to_bytes()), indirect=False))  # thread
+        def take(sample: zenoh.Sample) -> None:
+            on_payload(sample.payload.to_bytes())
+
+        # indirect=False: called on the network thread, so samples keep their order
+        sub = self.session.declare_subscriber(key, zenoh.handlers.Callback(take, indirect=False))
         token = self.session.liveliness().declare_token(ros2.entity_token(
             self.name, self._entity_id(), ros2.EntityKind.SUBSCRIPTION, topic, typename))
         self._entities += [sub, token]
@@ -117,7 +121,7 @@ class Node:
 
     def close(self) -> None:
         """Close the session (its tokens vanish with it)."""
-        self.session.close()
+        self.session.close()  # type: ignore[no-untyped-call]
 
 
 class Inbox:

@@ -15,7 +15,7 @@ from enum import Enum
 from kartci.logs.types import typestore
 
 LIVELINESS_PREFIX = "@ros2_lv"
-DEFAULT_QOS = "::,10:,:,:,,"  # reliability, durability, KEEP_LAST 10, deadline, lifespan, liveliness
+DEFAULT_QOS = "::,10:,:,:,,"  # default reliability and durability, KEEP_LAST 10, the rest default
 _ATTACHMENT = struct.Struct("<qqB16s")  # sequence number, source timestamp (ns), GID length, GID
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -156,23 +156,27 @@ def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None,
                 ctx = AgentContext(name, spec.model,
                                    tuple(n for n in scenario.agents if n != name), run_dir)
                 agent = plugins.CONTROLLERS.get(spec.controller.type).build(spec.controller, ctx)
-            robot_kind = plugins.ROBOTS.get(spec.model.kind)
-            world.robots.append(robot_kind.factory(
-                RobotContext(name, spec, world, agent, dt, odom_every, rng)))
+            try:
+                robot_kind = plugins.ROBOTS.get(spec.model.kind)
+                world.robots.append(robot_kind.factory(
+                    RobotContext(name, spec, world, agent, dt, odom_every, rng)))
+            except BaseException:
+                close_agents([agent])
+                raise
     except BaseException:
         try:
-            close_agents(world.robots)
+            close_agents(r.agent for r in world.robots)
         finally:
             world.close()
         raise
     return world
 
 
-def close_agents(robots: list[Robot]) -> None:
+def close_agents(agents: Iterable[object]) -> None:
     """Let agents that hold resources (an external program, a network session) release them:
     an agent's optional `close()` is called when its run ends, however it ends."""
-    for r in robots:
-        closer = getattr(r.agent, "close", None)
+    for agent in agents:
+        closer = getattr(agent, "close", None)
         if callable(closer):
             closer()
 
@@ -370,7 +374,7 @@ class Session:
         finally:
             if self._world is not None:
                 try:
-                    close_agents(self._world.robots)
+                    close_agents(r.agent for r in self._world.robots)
                 finally:
                     self._world.close()
                     self._world = None

@@ -6,14 +6,12 @@ scenario only; the example stack's runs are byte-identical."""
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
-
 from helpers import ROOT, kartci
 
 SCENARIOS = ROOT / "kartci" / "data" / "scenarios"
@@ -23,7 +21,7 @@ DRIVER = ROOT / "examples" / "zenoh_stack" / "kart_driver.py"
 
 def external(duration_s: float, command: list[str], **controller: Any) -> dict[str, Any]:
     """The shipped external scenario, shortened, with another program and settings."""
-    spec = yaml.safe_load((SCENARIOS / "external_pure_pursuit.yaml").read_text())
+    spec: dict[str, Any] = yaml.safe_load((SCENARIOS / "external_pure_pursuit.yaml").read_text())
     spec["duration_s"] = duration_s
     spec["criteria"] = {}
     spec["agents"]["kart0"]["controller"].update(command=command, **controller)
@@ -89,7 +87,7 @@ def test_independent_subscriber_sees_clock_odometry_and_tokens(two_at_once: Any)
 
 
 def test_two_runs_at_once_do_not_hear_each_other(two_at_once: Any) -> None:
-    out, seen, p = two_at_once
+    _, seen, p = two_at_once
     assert p.returncode == 0, p.stdout + p.stderr
     for name, ticks in (("a", 51), ("b", 76)):
         s = json.loads((seen / f"{name}.json").read_text())
@@ -130,14 +128,14 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
         assert (out / name / "kart0.external.stderr.log").exists()
     assert "no such stack" in (out / "report.html").read_text()
     # every program was stopped with its run: no process with our driver's path is left
-    left = [pid for pid in os.listdir("/proc") if pid.isdigit() and str(DRIVER).encode() in
-            _cmdline(pid)] if sys.platform == "linux" else []
+    left = [p for p in Path("/proc").iterdir() if p.name.isdigit() and str(DRIVER).encode()
+            in _cmdline(p)] if sys.platform == "linux" else []
     assert left == []
 
 
-def _cmdline(pid: str) -> bytes:
+def _cmdline(proc: Path) -> bytes:
     try:
-        return Path(f"/proc/{pid}/cmdline").read_bytes()
+        return (proc / "cmdline").read_bytes()
     except OSError:
         return b""
 

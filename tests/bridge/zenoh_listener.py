@@ -16,6 +16,8 @@ import struct
 import sys
 import threading
 import time
+from pathlib import Path
+from typing import Any
 
 import zenoh
 
@@ -29,22 +31,22 @@ ACK_HASH = "RIHS01_48ca7612a08d3bb72744fd98b71b7cf2ea24c6ad50fa4e1aa0bbad963c90d
 CMD_KEY = f"0/{NS}/ackermann_cmd/{ACK_TYPE}/{ACK_HASH}"
 QOS = "::,10:,:,:,,"
 
-seen = {"clock": [], "odom": [], "tokens": [], "keys": []}
+seen: dict[str, list[Any]] = {"clock": [], "odom": [], "tokens": []}
 lock = threading.Lock()
 
 
-def attachment(sample):
+def attachment(sample: zenoh.Sample) -> dict[str, int]:
     raw = sample.attachment.to_bytes() if sample.attachment is not None else b""
-    seq, stamp, n = struct.unpack_from("<qqB", raw) if len(raw) == 33 else (-1, -1, -1)
-    return {"len": len(raw), "seq": seq, "source_ns": stamp, "gid_len": n}
+    seq, source_ns, n = struct.unpack_from("<qqB", raw) if len(raw) == 33 else (-1, -1, -1)
+    return {"len": len(raw), "seq": seq, "source_ns": source_ns, "gid_len": n}
 
 
-def stamp(payload, offset=4):  # after the 4-byte CDR encapsulation header
+def stamp(payload: bytes, offset: int = 4) -> int:  # after the 4-byte CDR encapsulation header
     sec, nsec = struct.unpack_from("<iI", payload, offset)
-    return sec * 1_000_000_000 + nsec
+    return int(sec) * 1_000_000_000 + int(nsec)
 
 
-def ackermann(t_ns):
+def ackermann(t_ns: int) -> bytes:
     sec, nsec = divmod(t_ns, 1_000_000_000)
     frame = f"{NS}/base_link".encode() + b"\0"
     body = struct.pack("<iII", sec, nsec, len(frame)) + frame
@@ -52,7 +54,7 @@ def ackermann(t_ns):
     return b"\x00\x01\x00\x00" + body + struct.pack("<5f", 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-def main():
+def main() -> None:
     conf = zenoh.Config()
     conf.insert_json5("mode", '"peer"')
     conf.insert_json5("connect/endpoints", json.dumps([os.environ["KARTCI_ZENOH_ENDPOINT"]]))
@@ -62,23 +64,22 @@ def main():
     s = zenoh.open(conf)
     zid = str(s.zid())
 
-    def write(*_):
+    def write(*_: object) -> None:
         with lock:
-            with open(OUT, "w") as f:
-                json.dump(seen, f)
+            Path(OUT).write_text(json.dumps(seen))
         os._exit(0)
 
     signal.signal(signal.SIGTERM, write)
 
-    def token(sample):
+    def token(sample: zenoh.Sample) -> None:
         if sample.kind == zenoh.SampleKind.PUT:
             with lock:
                 seen["tokens"].append(str(sample.key_expr))
 
-    keep = [s.liveliness().declare_subscriber("@ros2_lv/**", token, history=True)]
+    keep: list[Any] = [s.liveliness().declare_subscriber("@ros2_lv/**", token, history=True)]
     keep.append(s.liveliness().declare_token(f"@ros2_lv/0/{zid}/0/0/NN/%/%/listener"))
 
-    def odom(sample):
+    def odom(sample: zenoh.Sample) -> None:
         with lock:
             seen["odom"].append({"key": str(sample.key_expr), "stamp": stamp(
                 sample.payload.to_bytes()), **attachment(sample)})
@@ -93,7 +94,7 @@ def main():
     gid = bytes(range(16))
     count = [0]
 
-    def clock(sample):
+    def clock(sample: zenoh.Sample) -> None:
         t = stamp(sample.payload.to_bytes())
         with lock:
             seen["clock"].append({"key": str(sample.key_expr), "stamp": t, **attachment(sample)})
