@@ -89,7 +89,7 @@ class Ros2Node:
 
     def publisher(self, topic: str, typename: str) -> Callable[[Any], None]:
         """A function that publishes a message with rmw_zenoh's attachment; an `MP` token."""
-        pub = self.session.declare_publisher(self.key(topic, typename))
+        pub = self.session.declare_publisher(self.key(topic, typename), express=True)
         gid = hashlib.sha256(f"{self.zid}/{self._token('MP', topic, typename)}".encode()
                              ).digest()[:16]
         seq = [0]

@@ -126,6 +126,8 @@ class ExternalAgent:
             if (topic, typename) not in self._pubs:
                 self._pubs[(topic, typename)] = pub = self.node.publisher(topic, typename)
                 new.append((topic, typename, pub))
+        if not new:
+            return
         subscribed = self._stack_subscriptions()
         deadline = time.perf_counter() + self.spec.startup_timeout_s
         for topic, typename, pub in new:

@@ -59,7 +59,9 @@ class Publisher:
 
     def __init__(self, node: Node, topic: str, typename: str, entity_id: int) -> None:
         self.typename, self.key = typename, ros2.topic_key(node.name.domain_id, topic, typename)
-        self._pub = node.session.declare_publisher(self.key)
+        # express: sent at once rather than batched (a batch waits up to a millisecond); one
+        # priority for all, so a tick's messages still arrive in the order they were put
+        self._pub = node.session.declare_publisher(self.key, express=True)
         self._gid = ros2.gid(node.name.session_id, entity_id)
         self._seq = 0
         self._token = node.session.liveliness().declare_token(ros2.entity_token(

@@ -11,6 +11,7 @@ import hashlib
 import struct
 from dataclasses import dataclass
 from enum import Enum
+from functools import cache
 
 from kartci.logs.types import typestore
 
@@ -34,6 +35,7 @@ def dds_type_name(typename: str) -> str:
     return f"{package}::{kind}::dds_::{name}_"
 
 
+@cache
 def type_hash(typename: str) -> str:
     """The RIHS01 hash (REP 2011) of a message definition in kartci's type store."""
     return str(typestore().hash_rihs01(typename))

@@ -140,14 +140,16 @@ def _cmdline(proc: Path) -> bytes:
         return b""
 
 
-def test_the_example_stack_gives_byte_identical_metrics(tmp_path: Path) -> None:
+def test_the_example_stack_gives_byte_identical_metrics(tmp_path: Path,
+                                                       baselines: Path) -> None:
     """Two lockstep runs of the shipped scenario (shortened to one lap) with the example
     program: the same metrics, byte for byte, and the kart really drove."""
     metrics = []
     for k in range(2):
         out = tmp_path / f"o{k}"
         p = kartci("run", "external_pure_pursuit", "--set", "duration_s=16", "--set",
-                   "criteria={}", "--out", out, "--no-strict", cwd=ROOT)
+                   "criteria={}", "--out", out, "--baselines", baselines, "--no-strict",
+                   cwd=ROOT)
         assert p.returncode == 0, p.stdout + p.stderr
         metrics.append((out / "external_pure_pursuit" / "metrics.json").read_bytes())
     assert metrics[0] == metrics[1]

@@ -88,7 +88,7 @@ def main() -> None:
     keep.append(s.liveliness().declare_token(
         f"@ros2_lv/0/{zid}/0/11/MS/%/%/listener/%{NS}%odom/nav_msgs::msg::dds_::Odometry_/"
         f"{ODOM_KEY.rsplit('/', 1)[1]}/{QOS}"))
-    pub = s.declare_publisher(CMD_KEY)
+    pub = s.declare_publisher(CMD_KEY, express=True)
     keep.append(s.liveliness().declare_token(
         f"@ros2_lv/0/{zid}/0/12/MP/%/%/listener/%{NS}%ackermann_cmd/{ACK_TYPE}/{ACK_HASH}/{QOS}"))
     gid = bytes(range(16))
