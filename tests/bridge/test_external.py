@@ -109,6 +109,8 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
         "late": external(2.0, [*driver, "--delay-s", "0.3"], **quick),
         "dead": external(2.0, ["{python}", "-c", "import sys; print('no such stack', "
                                                  "file=sys.stderr); sys.exit(4)"]),
+        "slow": external(0.2, [*driver, "--delay-s", "0.3"], tick_timeout_s=0.2,
+                         max_late_in_row=100),
         "ok": ok})
     out = tmp_path / "out"
     p = kartci("run", "-j", "2", "--out", out, "--no-strict", cwd=proj)
@@ -116,6 +118,10 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
     assert "Traceback" not in p.stdout + p.stderr
     summary = json.loads((out / "summary.json").read_text())["scenarios"]
     assert summary["ok"]["status"] == "new"
+    # late but within max_late_in_row: every tick (0 to 0.2 s) counted late, the run finishes
+    assert summary["slow"]["status"] == "new"
+    assert [m.data for m in messages(out / "slow" / "run.mcap",
+                                     "/kart0/bridge/late_commands")] == list(range(1, 12))
     errors = {n: summary[n]["error"] for n in ("crash", "hang", "late", "dead")}
     assert all(summary[n]["status"] == "error" for n in errors)
     assert "exited with code 3 at t=0.500 s" in errors["crash"]
@@ -131,6 +137,31 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
     left = [p for p in Path("/proc").iterdir() if p.name.isdigit() and str(DRIVER).encode()
             in _cmdline(p)] if sys.platform == "linux" else []
     assert left == []
+
+
+def messages(log: Path, topic: str) -> list[Any]:
+    """The decoded messages of one topic of a run log."""
+    from mcap.reader import make_reader
+
+    from kartci.logs.types import typestore
+
+    with log.open("rb") as f:
+        return [typestore().deserialize_cdr(m.data, s.name)
+                for s, _, m in make_reader(f).iter_messages(topics=[topic])]
+
+
+def test_paced_mode_runs_at_its_real_time_factor(tmp_path: Path, baselines: Path) -> None:
+    """Paced: sim time is held to 2x wall clock (1 s of sim takes at least 0.5 s), the stack's
+    latest commands drive the kart."""
+    proj = project(tmp_path, {"paced": external(
+        1.0, ["{python}", str(DRIVER), "--connect", "{endpoint}"], mode="paced",
+        real_time_factor=2.0)})
+    out = tmp_path / "out"
+    p = kartci("run", "--out", out, "--baselines", baselines, "--no-strict", cwd=proj)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert json.loads((out / "paced" / "run.json").read_text())["wall_s"] >= 0.5
+    cmds = messages(out / "paced" / "run.mcap", "/kart0/ackermann_cmd")
+    assert len(cmds) > 10 and max(c.drive.speed for c in cmds) > 3.0
 
 
 def _cmdline(proc: Path) -> bytes:
