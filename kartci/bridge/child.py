@@ -3,15 +3,25 @@ goes to files in the run folder, and its last lines into any error about it."""
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import subprocess
+import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from kartci.errors import SpecError
 
 TAIL_LINES = 8
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    """In the child before exec (Linux): SIGTERM when kartci's process dies, even by SIGKILL,
+    so a killed run leaves no stack behind."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 class Child:
@@ -27,7 +37,8 @@ class Child:
             try:
                 self.proc = subprocess.Popen(self.argv, cwd=cwd, env={**os.environ, **env},
                                              stdin=subprocess.DEVNULL, stdout=out, stderr=err,
-                                             start_new_session=True)
+                                             start_new_session=True,
+                                             preexec_fn=_die_with_parent)
             except OSError as e:
                 raise SpecError(f"external controller: cannot start {self.argv[0]!r} "
                                 f"({e.strerror or e})") from e

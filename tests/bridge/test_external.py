@@ -109,6 +109,9 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
         "late": external(2.0, [*driver, "--delay-s", "0.3"], **quick),
         "dead": external(2.0, ["{python}", "-c", "import sys; print('no such stack', "
                                                  "file=sys.stderr); sys.exit(4)"]),
+        "missing": external(2.0, ["/nonexistent/stack"]),
+        "silent": external(2.0, ["{python}", "-c", "import time; time.sleep(60)"],
+                           startup_timeout_s=0.5),
         "slow": external(0.2, [*driver, "--delay-s", "0.3"], tick_timeout_s=0.2,
                          max_late_in_row=100),
         "ok": ok})
@@ -122,7 +125,7 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
     assert summary["slow"]["status"] == "new"
     assert [m.data for m in messages(out / "slow" / "run.mcap",
                                      "/kart0/bridge/late_commands")] == list(range(1, 12))
-    errors = {n: summary[n]["error"] for n in ("crash", "hang", "late", "dead")}
+    errors = {n: summary[n]["error"] for n in ("crash", "hang", "late", "dead", "silent")}
     assert all(summary[n]["status"] == "error" for n in errors)
     assert "exited with code 3 at t=0.500 s" in errors["crash"]
     assert "crashing on purpose at t=0.50 s" in errors["crash"]
@@ -130,6 +133,9 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
     assert "hanging on purpose" in errors["hang"]
     assert "no command within 0.2 s for 3 ticks in a row" in errors["late"]
     assert "no such stack" in errors["dead"] and "exited with code 4" in errors["dead"]
+    assert "within 0.5 s the stack declared no subscription to /clock" in errors["silent"]
+    assert summary["missing"]["status"] == "error"
+    assert "cannot start '/nonexistent/stack'" in summary["missing"]["error"]
     for name in errors:  # the program's output is kept beside the error
         assert (out / name / "kart0.external.stderr.log").exists()
     assert "no such stack" in (out / "report.html").read_text()
@@ -146,7 +152,7 @@ def messages(log: Path, topic: str) -> list[Any]:
     from kartci.logs.types import typestore
 
     with log.open("rb") as f:
-        return [typestore().deserialize_cdr(m.data, s.name)
+        return [typestore().deserialize_cdr(m.data, s.name if s else "")
                 for s, _, m in make_reader(f).iter_messages(topics=[topic])]
 
 
