@@ -22,7 +22,8 @@ from kartci.spec import load_scenario
 ECHO = Path(__file__).resolve().parents[1] / "tests" / "bridge" / "zenoh_listener.py"
 
 
-def external_run(duration_s: float, out: Path, echo: bool = False) -> tuple[list[float], float]:
+def external_run(duration_s: float, out: Path,
+                 echo: bool = False) -> tuple[list[float], list[float], float]:
     """Every control tick's bridge step (ms) and the run's real-time factor; `echo`: the
     stack is the tests' minimal zenoh-only answerer (replies inside its network callback)
     instead of the example driver."""
@@ -32,6 +33,7 @@ def external_run(duration_s: float, out: Path, echo: bool = False) -> tuple[list
                     f'"{out / "echo.json"}", "kart0"]')
     spec = load_scenario("external_pure_pursuit", sets)
     ticks_ms: list[float] = []
+    publish_ms: list[float] = []
     t0 = time.perf_counter()
     with Session(spec, out / "run.mcap") as session:
         r = session.reset()  # the first tick includes the stack's start-up: not counted
@@ -45,10 +47,18 @@ def external_run(duration_s: float, out: Path, echo: bool = False) -> tuple[list
             return got
 
         agent.step = timed
+        publish = agent._publish  # serialising and putting the tick's messages, alone
+
+        def timed_publish(t_ns: int) -> None:
+            t = time.perf_counter()
+            publish(t_ns)
+            publish_ms.append((time.perf_counter() - t) * 1e3)
+
+        agent._publish = timed_publish
         while not r.done:
             r = session.step()
         sim_s = session.info().sim_time_s
-    return ticks_ms, sim_s / (time.perf_counter() - t0)
+    return ticks_ms, publish_ms, sim_s / (time.perf_counter() - t0)
 
 
 def inprocess_rtf(duration_s: float, out: Path) -> float:
@@ -73,10 +83,12 @@ def main() -> None:
     parser.add_argument("--duration-s", type=float, default=35.0)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        echo, _ = external_run(args.duration_s, Path(tmp), echo=True)
+        echo, pub, _ = external_run(args.duration_s, Path(tmp), echo=True)
         print(f"bridge round trip per control tick, minimal answering stack: {stats(echo)}")
-        ticks, rtf = external_run(args.duration_s, Path(tmp))
+        print(f"  of which serialising and putting the tick's messages: {stats(pub)}")
+        ticks, pub, rtf = external_run(args.duration_s, Path(tmp))
         print(f"bridge round trip per control tick, example pure-pursuit stack: {stats(ticks)}")
+        print(f"  of which serialising and putting the tick's messages: {stats(pub)}")
         print(f"external_pure_pursuit ({args.duration_s:g} s sim, lockstep): real-time factor "
               f"{rtf:.2f} (includes the stack's start-up)")
         print(f"kart_joy_driver (in-process driver, same hall): real-time factor "
