@@ -43,6 +43,13 @@ def child_env(endpoint: str, domain_id: int, namespace: str) -> dict[str, str]:
             "KARTCI_NAMESPACE": namespace}
 
 
+def substitute(text: str, values: dict[str, str]) -> str:
+    """`{name}` placeholders replaced; any other brace (JSON in an argument) left alone."""
+    for key, value in values.items():
+        text = text.replace(f"{{{key}}}", value)
+    return text
+
+
 class ExternalAgent:
     """The bridge for one agent: a Zenoh node, the stack's process, the lockstep."""
 
@@ -90,10 +97,11 @@ class ExternalAgent:
         root = project.current().root
         values = {"python": sys.executable, "endpoint": self.endpoint, "root": str(root),
                   "domain_id": str(self.spec.domain_id), "namespace": self.name}
-        argv = [a.format(**values) for a in self.spec.command]
+        argv = [substitute(a, values) for a in self.spec.command]
         cwd = root / self.spec.cwd if self.spec.cwd else root
         out = run_dir or Path(tempfile.mkdtemp(prefix="kartci-external-"))
-        env = {**child_env(self.endpoint, self.spec.domain_id, self.name), **self.spec.env}
+        env = {**child_env(self.endpoint, self.spec.domain_id, self.name),
+               **{k: substitute(v, values) for k, v in self.spec.env.items()}}
         return Child(argv, cwd, env, out, f"{self.name}.external")
 
     def on_message(self, topic: str, message: Any) -> None:

@@ -69,3 +69,11 @@ def test_joy_goes_through_the_mapping_and_twist_needs_no_stamp() -> None:
         assert cmd.header.stamp.nanosec == 60_000_000
     finally:
         a.close()
+
+
+def test_placeholders_are_replaced_and_other_braces_kept() -> None:
+    from kartci.bridge.agent import substitute
+
+    values = {"endpoint": "tcp/127.0.0.1:7447", "namespace": "kart0"}
+    assert substitute("--connect={endpoint}", values) == "--connect=tcp/127.0.0.1:7447"
+    assert substitute('{"ns": "{namespace}", "x": {}}', values) == '{"ns": "kart0", "x": {}}'
