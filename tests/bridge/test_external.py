@@ -125,6 +125,8 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
     assert summary["slow"]["status"] == "new"
     assert [m.data for m in messages(out / "slow" / "run.mcap",
                                      "/kart0/bridge/late_commands")] == list(range(1, 12))
+    timing = json.loads((out / "slow" / "metrics.json").read_text())["timing"]
+    assert timing["late_commands"]["value"] == 11
     errors = {n: summary[n]["error"] for n in ("crash", "hang", "late", "dead", "silent")}
     assert all(summary[n]["status"] == "error" for n in errors)
     assert "exited with code 3 at t=0.500 s" in errors["crash"]
