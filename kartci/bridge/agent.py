@@ -70,7 +70,7 @@ class ExternalAgent:
         self._latest: dict[str, Any] = {}
         self.child: Child | None = None
         self.inbox = Inbox()
-        session, self.endpoint = open_listening()
+        session, self.endpoint = open_listening(spec.port)
         self.node = Node(session, spec.domain_id, spec.node_name)
         try:
             self.clock = self.node.publisher("/clock", CLOCK)

@@ -41,17 +41,17 @@ def peer_config(listen: list[str], connect: list[str]) -> zenoh.Config:
     return conf
 
 
-def open_listening(attempts: int = 5) -> tuple[zenoh.Session, str]:
-    """A session listening on `tcp/127.0.0.1:<free port>`, and that endpoint (a port taken
-    between the probe and the bind is retried)."""
+def open_listening(port: int | None = None, attempts: int = 5) -> tuple[zenoh.Session, str]:
+    """A session listening on `tcp/127.0.0.1:<port>` (default a free port), and that endpoint
+    (a free port taken between the probe and the bind is retried)."""
     last: Exception | None = None
-    for _ in range(attempts):
-        endpoint = f"tcp/{LOOPBACK}:{free_port()}"
+    for _ in range(attempts if port is None else 1):
+        endpoint = f"tcp/{LOOPBACK}:{port or free_port()}"
         try:
             return zenoh.open(peer_config([endpoint], [])), endpoint
         except zenoh.ZError as err:  # the port was taken meanwhile
             last = err
-    raise RunError(f"bridge: cannot listen on a loopback port ({last})")
+    raise RunError(f"bridge: cannot listen on tcp/{LOOPBACK}:{port or '<free port>'} ({last})")
 
 
 class Publisher:

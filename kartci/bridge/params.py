@@ -65,9 +65,12 @@ class ExternalController(ControllerParams):
     startup_timeout_s: float = Field(20.0, gt=0.0, description="wall-clock time the stack has "
                                      "to declare its subscription to /clock and its command "
                                      "publishers")
+    port: int | None = Field(None, ge=1, le=65535, description="loopback TCP port the "
+                             "bridge listens on (tcp/127.0.0.1:<port>); default a free one per "
+                             "run. Fix it for a stack you start yourself (no `command`)")
     command: tuple[str, ...] = Field((), description="program kartci starts for the run "
-                                     "(empty: the stack is started by someone else and told "
-                                     "the endpoint); `{python}` is kartci's Python, "
+                                     "(empty: start the stack yourself, connecting to "
+                                     "`port`); `{python}` is kartci's Python, "
                                      "`{endpoint}` the bridge's Zenoh endpoint, `{root}` the "
                                      "project folder, `{domain_id}` the domain")
     cwd: str | None = Field(None, description="its working directory, relative to the project "

@@ -6,6 +6,7 @@ scenario only; the example stack's runs are byte-identical."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -199,3 +200,27 @@ def test_the_example_stack_gives_byte_identical_metrics(tmp_path: Path,
     assert values["laps_completed"]["value"] == 1
     assert values["collisions"]["value"] == 0
     assert values["mean_speed_mps"]["value"] > 3.5
+
+
+def test_a_stack_started_by_hand_connects_to_a_fixed_port(tmp_path: Path,
+                                                          baselines: Path) -> None:
+    """No `command`: the user starts the stack, told the port; kartci waits for it."""
+    import subprocess
+
+    from kartci.bridge.link import free_port
+
+    port = free_port()
+    proj = project(tmp_path, {"by_hand": external(0.5, [], port=port)})
+    seen = tmp_path / "seen.json"
+    stack = subprocess.Popen([sys.executable, str(LISTENER), str(seen), "kart0"],
+                             env={**os.environ,
+                                  "KARTCI_ZENOH_ENDPOINT": f"tcp/127.0.0.1:{port}"})
+    try:
+        p = kartci("run", "--out", tmp_path / "out", "--baselines", baselines, "--no-strict",
+                   cwd=proj)
+    finally:
+        stack.terminate()
+        stack.wait(10)
+    assert p.returncode == 0, p.stdout + p.stderr
+    stamps = [c["stamp"] for c in json.loads(seen.read_text())["clock"]]
+    assert stamps == [k * 20_000_000 for k in range(26)]
