@@ -77,7 +77,8 @@ def run(
     part = parse_shard(shard) if shard else None
     proj = project.current()
     selected = names or [p.stem for p in proj.own_scenarios()
-                         if "tool" not in load_scenario(p.stem).tags]
+                         if "tool" not in (spec := load_scenario(p.stem)).tags
+                         and not spec.sweep]
     if not selected:
         where = ", ".join(str(p) for p in proj.scenarios)
         raise SpecError(f"no scenarios to run: none in {where}; name one (`kartci list` shows "
