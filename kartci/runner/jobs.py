@@ -114,6 +114,13 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     return jobs
 
 
+def default_suite(paths: list[Path]) -> list[str]:
+    """The scenarios a plain `kartci run` runs: all but `tool` ones and grids (a scenario with
+    its own sweep), which run by name."""
+    return [p.stem for p in paths
+            if "tool" not in (spec := load_scenario(p.stem)).tags and not spec.sweep]
+
+
 def _variant(overrides: list[str], point: list[tuple[str, str]]) -> str:
     """The label suffix of a run that is not the scenario as written: a sweep point, or a world
     or track given with `--set` (a run on another track is judged against that track's own
