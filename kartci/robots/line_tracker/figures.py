@@ -31,12 +31,14 @@ def _name(panel: Panel, value: float) -> str:
     return f"{NAMES.get(panel.varies, panel.varies)} {value:g}{UNITS.get(panel.varies, '')}"
 
 
-def responses(panel: Panel, band_m: float = 0.008) -> str:
-    """Sensor offset over time, one curve per value of the varied parameter (Figs. 7.1.2-4)."""
+def responses(panel: Panel, band_m: float = 0.008, t_max_s: float = 6.0) -> str:
+    """Sensor offset over time, one curve per value of the varied parameter (Figs. 7.1.2-4),
+    over the first `t_max_s` (the releases settle within it from Kp 50 up)."""
     fig, ax = plt.subplots(figsize=(6.0, 3.4))
     for c in sorted(panel.curves, key=lambda c: c.point.get(panel.varies, 0.0)):
         ax.plot(c.t_s, 1000 * c.offset_m, lw=1.1, label=_name(panel, c.point[panel.varies]))
     ax.axhline(0.0, color="black", lw=0.6)
+    ax.set_xlim(0.0, t_max_s)
     ax.set_ylim(-1000 * band_m, 1000 * band_m)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("sensor offset from the line [mm]")

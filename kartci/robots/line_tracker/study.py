@@ -25,7 +25,7 @@ class Curve:
     """One run's sensor offset over time (and, on a circle, over the angle travelled)."""
 
     label: str
-    point: dict[str, float]  # the sweep point: dotted key -> value
+    point: dict[str, float]  # kp, period, v1 (and radius) as run, by dotted key
     t_s: np.ndarray
     offset_m: np.ndarray
     angle_deg: np.ndarray  # angle travelled round a circle's centre; empty on a straight
@@ -69,7 +69,12 @@ def curve(folder: Path) -> Curve:
     if isinstance(course, CircleCourse):
         a = np.unwrap(np.arctan2(tr["y"] - course.center_m[1], tr["x"] - course.center_m[0]))
         angle = np.degrees(a - a[0])
-    return Curve(folder.name, point_of(folder.name), tr["t"].to_numpy(),
+    ctrl = scenario.agents[agent].controller
+    point = {key: float(getattr(ctrl, name)) for key, name in
+             ((KP, "kp"), (TS, "period_s"), (V1, "v1_mps")) if hasattr(ctrl, name)}
+    if isinstance(course, CircleCourse):
+        point[RADIUS] = course.radius_m
+    return Curve(folder.name, {**point, **point_of(folder.name)}, tr["t"].to_numpy(),
                  tr["offset"].to_numpy(), angle)
 
 
