@@ -62,11 +62,10 @@ def run(
     from kartci import project
     from kartci.report.progress import ProgressView
     from kartci.runner import expand, parse_shard, run_jobs
-    from kartci.runner.jobs import default_suite
     from kartci.runner import shard as share
+    from kartci.runner.jobs import default_suite
     from kartci.runner.merge import write_marker
     from kartci.runner.outdir import clear_reports, locked, write_manifest
-    from kartci.spec import load_scenario
 
     out = out_dir(out, "latest")
     if jobs is not None and jobs < 1:

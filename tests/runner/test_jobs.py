@@ -15,7 +15,7 @@ def test_a_grid_scenario_expands_into_its_points_each_with_its_label() -> None:
     assert ("line_circle_grid@agents.lt0.controller.period_s=0.04,world.course.radius_m=0.45"
             in labels)
     job = next(j for j in jobs if j.label.endswith("period_s=0.1,world.course.radius_m=0.5"))
-    assert job.spec.agents["lt0"].controller.period_s == 0.1  # type: ignore[attr-defined]
+    assert job.spec.agents["lt0"].controller.period_s == 0.1
     assert job.spec.world.course.radius_m == 0.5  # type: ignore[attr-defined]
 
 

@@ -75,7 +75,7 @@ def test_a_model_from_a_folder_with_keys_replaced() -> None:
     model = spec.agents["lt0"].model
     assert model.wheel_time_constant_s == 0.0  # type: ignore[attr-defined]
     assert model.wheel_radius_m == 0.035  # type: ignore[attr-defined]  # from params.yaml
-    assert Path(model.urdf).is_file()  # type: ignore[attr-defined]
+    assert Path(model.urdf).is_file()
 
 
 def test_a_model_from_an_unknown_folder_names_it(tmp_path: Path) -> None:
