@@ -4,18 +4,18 @@ real-time factor of `external_pure_pursuit` (the example stack, a separate proce
 lockstep), beside the in-process driver of the same track (`kart_joy_driver`) for scale.
 Prints figures; asserts nothing.
 
-    .venv/bin/python benchmarks/bench_bridge.py [--duration-s 35]
+    .venv/bin/python benchmarks/bench_bridge.py [--duration-s 35] [--json OUT.json]
 """
 
 from __future__ import annotations
 
 import argparse
-import statistics
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
+from kartci.bench import Better, Figure, Record
 from kartci.sim import Session, simulate
 from kartci.spec import load_scenario
 
@@ -69,30 +69,39 @@ def inprocess_rtf(duration_s: float, out: Path) -> float:
     return info.sim_time_s / (time.perf_counter() - t0)
 
 
-def stats(ticks_ms: list[float]) -> str:
-    """Median, p95 and max of the ticks."""
-    t = sorted(ticks_ms)
-    p95 = t[min(len(t) - 1, round(0.95 * len(t)))]
-    return (f"{len(t)} ticks (odom + /clock out, AckermannDriveStamped back, loopback): "
-            f"median {statistics.median(t):.3f} ms, p95 {p95:.3f} ms, max {t[-1]:.3f} ms")
+def stats(fig: Figure) -> str:
+    """Count, median, p95 and max of a figure's ticks."""
+    return (f"{len(fig.samples)} ticks: median {fig.median:.3f} ms, p95 {fig.p95:.3f} ms, "
+            f"max {max(fig.samples):.3f} ms")
 
 
 def main() -> None:
-    """Run both and print the figures."""
+    """Run both stacks and the in-process reference; print the figures (and write JSON)."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration-s", type=float, default=35.0)
+    parser.add_argument("--json", type=Path, help="also write the figures to this file "
+                        "(compare two with `kartci bench compare`)")
     args = parser.parse_args()
+    record = Record("bench_bridge")
+    what = "odom + /clock out, AckermannDriveStamped back, loopback"
     with tempfile.TemporaryDirectory() as tmp:
-        echo, pub, _ = external_run(args.duration_s, Path(tmp), echo=True)
-        print(f"bridge round trip per control tick, minimal answering stack: {stats(echo)}")
-        print(f"  of which serialising and putting the tick's messages: {stats(pub)}")
-        ticks, pub, rtf = external_run(args.duration_s, Path(tmp))
-        print(f"bridge round trip per control tick, example pure-pursuit stack: {stats(ticks)}")
-        print(f"  of which serialising and putting the tick's messages: {stats(pub)}")
+        for label, echo in (("minimal answering stack", True), ("example pure-pursuit stack",
+                                                                False)):
+            ticks, pub, rtf = external_run(args.duration_s, Path(tmp), echo=echo)
+            t = record.add(f"round trip per tick, {label}", "ms", ticks, note=what)
+            p = record.add(f"serialise and put per tick, {label}", "ms", pub)
+            print(f"bridge round trip per control tick ({what}), {label}: {stats(t)}")
+            print(f"  of which serialising and putting the tick's messages: {stats(p)}")
+        record.add("external_pure_pursuit RTF", "x", [rtf], Better.HIGHER,
+                   note="lockstep, includes the stack's start-up")
         print(f"external_pure_pursuit ({args.duration_s:g} s sim, lockstep): real-time factor "
               f"{rtf:.2f} (includes the stack's start-up)")
-        print(f"kart_joy_driver (in-process driver, same hall): real-time factor "
-              f"{inprocess_rtf(args.duration_s, Path(tmp)):.2f}")
+        ref = inprocess_rtf(args.duration_s, Path(tmp))
+        record.add("kart_joy_driver RTF", "x", [ref], Better.HIGHER,
+                   note="in-process driver, same hall")
+        print(f"kart_joy_driver (in-process driver, same hall): real-time factor {ref:.2f}")
+    if args.json:
+        record.save(args.json)
 
 
 if __name__ == "__main__":
