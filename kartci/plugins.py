@@ -15,6 +15,7 @@ import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from kartci.agents.base import Agent
@@ -63,6 +64,7 @@ class AgentContext:
     name: str
     model: RobotParams
     others: tuple[str, ...] = ()  # the other agents of the scenario (their topics: /<name>/...)
+    run_dir: Path | None = None  # where the run's files go (a controller's own output files)
 
 
 @dataclass(frozen=True)

@@ -35,6 +35,9 @@ class Agent(Protocol):
                                       velocity=np.array([3.0 + turn, 3.0 - turn])))]
     ```
 
+    An agent that holds resources (a process, a socket) may also have a `close()`: it is
+    called once when the run ends, however it ends.
+
     Attributes:
         period_s: Control period, s: `step` runs every `period_s`, which must be a whole
             multiple of the scenario's `physics.dt_s`.

@@ -10,6 +10,7 @@ from kartci.agents.params import (
                       ManualController,
                       ScriptController,
 )
+from kartci.bridge.params import ExternalController
 from kartci.mpcc.params import MpccController
 from kartci.plugins import Controller, lazy
 
@@ -27,3 +28,6 @@ JOY_DRIVER = Controller("joy_driver", JoyDriverController, lazy("kartci.agents.k
                         KART, "a scripted human: pure pursuit expressed as joystick messages")
 MPCC = Controller("mpcc", MpccController, lazy("kartci.agents.mpcc:MpccAgent"), KART,
                   "model predictive contouring control (CasADi / Ipopt)")
+EXTERNAL = Controller("external", ExternalController, lazy("kartci.bridge.agent:ExternalAgent"),
+                      KART, "a separate program (a ROS 2 stack) closed loop over Zenoh, "
+                      "rmw_zenoh conventions, in lockstep with sim time")

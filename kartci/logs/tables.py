@@ -45,6 +45,7 @@ FLATTENERS: dict[str, Callable[[Any], Row]] = {
     "kartci_msgs/msg/LineControllerState": _fields("distance_estimate_m", "u2", "integral",
                                                    "sonar_stop"),
     "std_msgs/msg/String": _fields("data"),
+    "std_msgs/msg/UInt32": _fields("data"),  # counters (the bridge's late_commands)
     "sensor_msgs/msg/Joy": lambda m: {"axes": m.axes.tolist(), "buttons": m.buttons.tolist()},
     "kartci_msgs/msg/Collision": lambda m: {"other": m.other, "impulse_ns": m.impulse_ns,
                                             "duration_s": m.duration_s, "x": m.position.x,

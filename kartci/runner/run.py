@@ -89,6 +89,7 @@ def run_one(scenario: Scenario, out: Path,
         run = _run_staged(scenario, stage, folder, on_progress, agents)
         _commit(stage, folder)
     except BaseException as err:
+        keep_outputs(stage, folder)
         mark_failed(folder, scenario.name, failure_text(err), err)
         raise
     finally:
@@ -122,8 +123,16 @@ def _commit(stage: Path, folder: Path) -> None:
     leaves the folder marked."""
     for name in (LOG_NAME, "metrics.json", "run.json"):
         os.replace(stage / name, folder / name)
+    keep_outputs(stage, folder)
     (folder / TRACEBACK_NAME).unlink(missing_ok=True)
     (folder / ERROR_NAME).unlink(missing_ok=True)
+
+
+def keep_outputs(stage: Path, folder: Path) -> None:
+    """Controllers' own output files (an external program's stdout and stderr, `*.log`) go to
+    the scenario folder whether the run passed or failed: a failed run's are the evidence."""
+    for path in stage.glob("*.log"):
+        os.replace(path, folder / path.name)
 
 
 def input_warnings(scenario: Scenario) -> list[str]:

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -139,9 +139,11 @@ def make_world(scenario: Scenario) -> SimWorld:
     return world
 
 
-def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None) -> SimWorld:
+def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None,
+                run_dir: Path | None = None) -> SimWorld:
     """The scenario's world with its robots and their agents in it (the caller closes it).
-    An agent in `agents` (checked, see `check_agents`) replaces that agent's controller."""
+    An agent in `agents` (checked, see `check_agents`) replaces that agent's controller;
+    `run_dir` is where controllers may write their own files (None: nowhere)."""
     dt = scenario.physics.dt_s
     odom_every = round(1.0 / scenario.physics.odom_rate_hz / dt)
     rng = np.random.default_rng(scenario.seed)
@@ -152,15 +154,31 @@ def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None) -
             agent = given.get(name)
             if agent is None:
                 ctx = AgentContext(name, spec.model,
-                                   tuple(n for n in scenario.agents if n != name))
+                                   tuple(n for n in scenario.agents if n != name), run_dir)
                 agent = plugins.CONTROLLERS.get(spec.controller.type).build(spec.controller, ctx)
-            robot_kind = plugins.ROBOTS.get(spec.model.kind)
-            world.robots.append(robot_kind.factory(
-                RobotContext(name, spec, world, agent, dt, odom_every, rng)))
+            try:
+                robot_kind = plugins.ROBOTS.get(spec.model.kind)
+                world.robots.append(robot_kind.factory(
+                    RobotContext(name, spec, world, agent, dt, odom_every, rng)))
+            except BaseException:
+                close_agents([agent])
+                raise
     except BaseException:
-        world.close()
+        try:
+            close_agents(r.agent for r in world.robots)
+        finally:
+            world.close()
         raise
     return world
+
+
+def close_agents(agents: Iterable[object]) -> None:
+    """Let agents that hold resources (an external program, a network session) release them:
+    an agent's optional `close()` is called when its run ends, however it ends."""
+    for agent in agents:
+        closer = getattr(agent, "close", None)
+        if callable(closer):
+            closer()
 
 
 class Bus:
@@ -266,7 +284,8 @@ class Session:
                               "make a new one")
         self._started = True
         try:
-            self._world = build_world(self.scenario, self.agents)
+            self._world = build_world(self.scenario, self.agents,
+                                      self.log_path.parent if self.log_path else None)
             robots = self._world.robots
             if self.log_path is not None:
                 self._log = McapLogWriter(self.log_path)
@@ -354,8 +373,11 @@ class Session:
                     self._log.close(ok=ok)
         finally:
             if self._world is not None:
-                self._world.close()
-                self._world = None
+                try:
+                    close_agents(r.agent for r in self._world.robots)
+                finally:
+                    self._world.close()
+                    self._world = None
 
     def __enter__(self) -> Session:
         """The session itself; leaving the block closes it."""

@@ -1,0 +1,75 @@
+"""The external program of a run: started with the run, watched, stopped with it; its output
+goes to files in the run folder, and its last lines into any error about it."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import subprocess
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from kartci.errors import SpecError
+
+TAIL_LINES = 8
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    """In the child before exec (Linux): SIGTERM when kartci's process dies, even by SIGKILL,
+    so a killed run leaves no stack behind."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+class Child:
+    """A started program; `stop()` ends it (and its process group)."""
+
+    def __init__(self, argv: Sequence[str], cwd: Path, env: Mapping[str, str],
+                 out_dir: Path, stem: str) -> None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        self.stdout_path = out_dir / f"{stem}.stdout.log"
+        self.stderr_path = out_dir / f"{stem}.stderr.log"
+        self.argv = list(argv)
+        with self.stdout_path.open("wb") as out, self.stderr_path.open("wb") as err:
+            try:
+                self.proc = subprocess.Popen(self.argv, cwd=cwd, env={**os.environ, **env},
+                                             stdin=subprocess.DEVNULL, stdout=out, stderr=err,
+                                             start_new_session=True,
+                                             preexec_fn=_die_with_parent)
+            except OSError as e:
+                raise SpecError(f"external controller: cannot start {self.argv[0]!r} "
+                                f"({e.strerror or e})") from e
+
+    def exited(self) -> int | None:
+        """Its exit code once it has ended, else None."""
+        return self.proc.poll()
+
+    def tail(self) -> str:
+        """Its last lines of stderr and stdout, for an error message."""
+        parts = []
+        for path in (self.stderr_path, self.stdout_path):
+            try:
+                lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+            except OSError:
+                continue
+            if lines:
+                parts.append(f"{path.name}: " + " | ".join(lines[-TAIL_LINES:]))
+        return "; ".join(parts) or "no output"
+
+    def stop(self, timeout_s: float) -> None:
+        """SIGTERM to its process group, SIGKILL after `timeout_s`; waits for it."""
+        if self.proc.poll() is not None:
+            return
+        for sig, wait_s in ((signal.SIGTERM, timeout_s), (signal.SIGKILL, 5.0)):
+            try:
+                os.killpg(self.proc.pid, sig)
+            except ProcessLookupError:
+                return
+            try:
+                self.proc.wait(wait_s)
+                return
+            except subprocess.TimeoutExpired:
+                continue

@@ -1,0 +1,151 @@
+"""One run's Zenoh session as a ROS 2 node: publishers and subscriptions with rmw_zenoh's keys,
+attachments and liveliness tokens.
+
+Isolation: the session is a peer that listens on a free loopback port of its own, with multicast
+and gossip scouting off and no router, so nothing but the run's own stack (told the port) can
+reach it; `-j N` runs are separate networks.
+"""
+
+from __future__ import annotations
+
+import json
+import socket
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import zenoh
+
+from kartci.bridge import ros2
+from kartci.errors import RunError
+
+LOOPBACK = "127.0.0.1"
+
+
+def free_port() -> int:
+    """A TCP port on the loopback that nothing listens on right now."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((LOOPBACK, 0))
+        return int(s.getsockname()[1])
+
+
+def peer_config(listen: list[str], connect: list[str]) -> zenoh.Config:
+    """A peer on loopback endpoints only: no multicast, no gossip, no router, no timestamps."""
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"peer"')
+    conf.insert_json5("listen/endpoints", json.dumps(listen))
+    conf.insert_json5("connect/endpoints", json.dumps(connect))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    conf.insert_json5("scouting/gossip/enabled", "false")
+    return conf
+
+
+def open_listening(port: int | None = None, attempts: int = 5) -> tuple[zenoh.Session, str]:
+    """A session listening on `tcp/127.0.0.1:<port>` (default a free port), and that endpoint
+    (a free port taken between the probe and the bind is retried)."""
+    last: Exception | None = None
+    for _ in range(attempts if port is None else 1):
+        endpoint = f"tcp/{LOOPBACK}:{port or free_port()}"
+        try:
+            return zenoh.open(peer_config([endpoint], [])), endpoint
+        except zenoh.ZError as err:  # the port was taken meanwhile
+            last = err
+    raise RunError(f"bridge: cannot listen on tcp/{LOOPBACK}:{port or '<free port>'} ({last})")
+
+
+class Publisher:
+    """A ROS 2 publisher: CDR payloads with rmw_zenoh's attachment, and its `MP` token."""
+
+    def __init__(self, node: Node, topic: str, typename: str, entity_id: int) -> None:
+        self.typename, self.key = typename, ros2.topic_key(node.name.domain_id, topic, typename)
+        # express: sent at once rather than batched (a batch waits up to a millisecond); one
+        # priority for all, so a tick's messages still arrive in the order they were put
+        self._pub = node.session.declare_publisher(self.key, express=True)
+        self._gid = ros2.gid(node.name.session_id, entity_id)
+        self._seq = 0
+        self._token = node.session.liveliness().declare_token(ros2.entity_token(
+            node.name, entity_id, ros2.EntityKind.PUBLISHER, topic, typename))
+
+    def matched(self) -> bool:
+        """Whether a subscriber's declaration has reached this publisher (until then a put
+        may go nowhere)."""
+        status: Any = self._pub.matching_status  # a MatchingStatus; the stub says bool
+        return bool(status.matching)
+
+    def put(self, payload: bytes) -> None:
+        """Publish one serialised message (sequence numbers from 1, wall-clock source stamp)."""
+        self._seq += 1
+        self._pub.put(payload, attachment=ros2.attachment(self._seq, time.time_ns(), self._gid))
+
+
+class Node:
+    """A ROS 2 node named `name` on its own Zenoh session (closed with `close()`)."""
+
+    def __init__(self, session: zenoh.Session, domain_id: int, name: str) -> None:
+        self.session = session
+        self.name = ros2.NodeName(domain_id, str(session.zid()), 0, name)
+        self._entities: list[Any] = [session.liveliness().declare_token(
+            ros2.node_token(self.name))]
+        self._next_id = 10  # rmw_zenoh numbers a node's entities after its own id
+
+    def _entity_id(self) -> int:
+        self._next_id += 1
+        return self._next_id
+
+    def publisher(self, topic: str, typename: str) -> Publisher:
+        """Declare a publisher (and its token) on a fully qualified topic."""
+        pub = Publisher(self, topic, typename, self._entity_id())
+        self._entities.append(pub)
+        return pub
+
+    def subscription(self, topic: str, typename: str,
+                     on_payload: Callable[[bytes], None]) -> None:
+        """Declare a subscription (and its token); `on_payload` gets each CDR payload, on a
+        Zenoh thread."""
+        key = ros2.topic_key(self.name.domain_id, topic, typename)
+        def take(sample: zenoh.Sample) -> None:
+            on_payload(sample.payload.to_bytes())
+
+        # indirect=False: called on the network thread, so samples keep their order
+        sub = self.session.declare_subscriber(key, zenoh.handlers.Callback(take, indirect=False))
+        token = self.session.liveliness().declare_token(ros2.entity_token(
+            self.name, self._entity_id(), ros2.EntityKind.SUBSCRIPTION, topic, typename))
+        self._entities += [sub, token]
+
+    def watch_tokens(self, on_token: Callable[[str], None]) -> None:
+        """Call `on_token(key)` for every liveliness token of the domain, present or new."""
+        sub = self.session.liveliness().declare_subscriber(
+            f"{ros2.LIVELINESS_PREFIX}/{self.name.domain_id}/**",
+            lambda sample: on_token(str(sample.key_expr))
+            if sample.kind == zenoh.SampleKind.PUT else None, history=True)
+        self._entities.append(sub)
+
+    def close(self) -> None:
+        """Close the session (its tokens vanish with it)."""
+        self.session.close()  # type: ignore[no-untyped-call]
+
+
+class Inbox:
+    """Messages from Zenoh threads, waited for by the simulation thread."""
+
+    def __init__(self) -> None:
+        self._cond = threading.Condition()
+        self._items: list[tuple[str, bytes]] = []
+
+    def push(self, topic: str, payload: bytes) -> None:
+        """Add one payload (called on a Zenoh thread)."""
+        with self._cond:
+            self._items.append((topic, payload))
+            self._cond.notify_all()
+
+    def take(self) -> list[tuple[str, bytes]]:
+        """Everything received so far, oldest first."""
+        with self._cond:
+            out, self._items = self._items, []
+        return out
+
+    def wait(self, timeout_s: float) -> bool:
+        """Wait until something is there (True) or the time is up (False)."""
+        with self._cond:
+            return self._cond.wait_for(lambda: bool(self._items), timeout=max(timeout_s, 0.0))

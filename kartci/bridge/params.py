@@ -1,0 +1,81 @@
+"""Parameters of `controller: {type: external}`: a team's own stack, closed loop over Zenoh."""
+
+from __future__ import annotations
+
+from enum import Enum
+from typing import Literal
+
+from pydantic import Field
+
+from kartci.spec.models import ControllerParams, Frozen
+
+COMMAND_TYPES = {  # what the bridge takes back, and the robot topic each is applied on
+    "ackermann_msgs/msg/AckermannDriveStamped": "ackermann_cmd",
+    "geometry_msgs/msg/Twist": "cmd_vel",
+    "geometry_msgs/msg/TwistStamped": "cmd_vel",
+    "sensor_msgs/msg/Joy": "joy",
+    "kartci_msgs/msg/KartCommand": "cmd",
+}
+CommandType = Literal["ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/Twist",
+                      "geometry_msgs/msg/TwistStamped", "sensor_msgs/msg/Joy",
+                      "kartci_msgs/msg/KartCommand"]
+
+
+class Mode(Enum):
+    """How sim time and the stack meet."""
+
+    LOCKSTEP = "lockstep"  # every control tick waits for the stack's answer: deterministic
+    PACED = "paced"  # sim time runs at a real-time factor; the latest command is used
+
+
+class CommandTopic(Frozen):
+    """One command topic the stack publishes and the bridge applies to the robot."""
+
+    topic: str = Field(description="topic the stack publishes on; relative names are in the "
+                       "agent's namespace (`ackermann_cmd` is `/<agent>/ackermann_cmd`)")
+    type: CommandType = Field(description="its message type")
+
+
+class ExternalController(ControllerParams):
+    """A separate program (a ROS 2 stack on rmw_zenoh, or anything speaking its conventions)
+    that reads the robot's sensors and `/clock` and answers with commands."""
+
+    type: Literal["external"] = Field("external", description="controller type: an external "
+                                      "stack over Zenoh (rmw_zenoh conventions)")
+    period_s: float = Field(0.02, gt=0.0, description="control period, s: /clock is published "
+                            "and a command awaited every period (a whole multiple of "
+                            "physics.dt_s)")
+    publish: tuple[str, ...] = Field(("odom", "/kartci/track"), description="topics sent to "
+                                     "the stack (besides /clock), as the robot publishes them: "
+                                     "odom, imu, joint_states, velodyne_points, /tf, ...")
+    commands: tuple[CommandTopic, ...] = Field(
+        (CommandTopic(topic="ackermann_cmd", type="ackermann_msgs/msg/AckermannDriveStamped"),),
+        min_length=1, description="topics the stack answers on")
+    mapping: str = Field("ps4", description="joystick mapping for sensor_msgs/Joy commands")
+    domain_id: int = Field(0, ge=0, le=232, description="ROS_DOMAIN_ID used in key "
+                           "expressions (isolation comes from the run's private link)")
+    node_name: str = Field("kartci", description="the bridge's ROS 2 node name")
+    mode: Mode = Field(Mode.LOCKSTEP, description="lockstep (wait for every tick's answer, "
+                       "deterministic) or paced (run at real_time_factor, not deterministic)")
+    real_time_factor: float = Field(1.0, gt=0.0, description="paced mode: sim s per wall s")
+    tick_timeout_s: float = Field(1.0, gt=0.0, description="lockstep: wall-clock deadline for "
+                                  "one tick's answer; a miss is a late_commands event")
+    max_late_in_row: int = Field(5, ge=1, description="this many late ticks in a row end the "
+                                 "run as an error")
+    startup_timeout_s: float = Field(20.0, gt=0.0, description="wall-clock time the stack has "
+                                     "to declare its subscription to /clock and its command "
+                                     "publishers")
+    port: int | None = Field(None, ge=1, le=65535, description="loopback TCP port the "
+                             "bridge listens on (tcp/127.0.0.1:<port>); default a free one per "
+                             "run. Fix it for a stack you start yourself (no `command`)")
+    command: tuple[str, ...] = Field((), description="program kartci starts for the run "
+                                     "(empty: start the stack yourself, connecting to "
+                                     "`port`); `{python}` is kartci's Python, "
+                                     "`{endpoint}` the bridge's Zenoh endpoint, `{root}` the "
+                                     "project folder, `{domain_id}` the domain")
+    cwd: str | None = Field(None, description="its working directory, relative to the project "
+                            "folder (default: the project folder)")
+    env: dict[str, str] = Field(default_factory=dict, description="extra environment "
+                                "variables for it")
+    stop_timeout_s: float = Field(3.0, gt=0.0, description="time it has to exit after SIGTERM "
+                                  "before it is killed")
