@@ -89,7 +89,10 @@ class Ros2Node:
 
     def publisher(self, topic: str, typename: str) -> Callable[[Any], None]:
         """A function that publishes a message with rmw_zenoh's attachment; an `MP` token."""
-        pub = self.session.declare_publisher(self.key(topic, typename), express=True)
+        # BLOCK: never drop a command under load (zenoh's default drops when a queue is full,
+        # and kartci, in lockstep, would wait for the lost answer until its deadline)
+        pub = self.session.declare_publisher(self.key(topic, typename), express=True,
+                                             congestion_control=zenoh.CongestionControl.BLOCK)
         gid = hashlib.sha256(f"{self.zid}/{self._token('MP', topic, typename)}".encode()
                              ).digest()[:16]
         seq = [0]

@@ -60,8 +60,13 @@ class Publisher:
     def __init__(self, node: Node, topic: str, typename: str, entity_id: int) -> None:
         self.typename, self.key = typename, ros2.topic_key(node.name.domain_id, topic, typename)
         # express: sent at once rather than batched (a batch waits up to a millisecond); one
-        # priority for all, so a tick's messages still arrive in the order they were put
-        self._pub = node.session.declare_publisher(self.key, express=True)
+        # priority for all, so a tick's messages still arrive in the order they were put;
+        # BLOCK, not zenoh's default DROP: under load a full queue dropped a /clock or a
+        # sensor message, the tick then timed out and the run lost its determinism (rmw_zenoh
+        # also blocks for reliable KEEP_ALL publishers)
+        self._pub = node.session.declare_publisher(
+            self.key, express=True, congestion_control=zenoh.CongestionControl.BLOCK,
+            reliability=zenoh.Reliability.RELIABLE)
         self._gid = ros2.gid(node.name.session_id, entity_id)
         self._seq = 0
         self._token = node.session.liveliness().declare_token(ros2.entity_token(
