@@ -11,6 +11,7 @@ import typer
 from kartci.cli.common import (
     BaselinesOpt,
     OutOpt,
+    SetOpt,
     StrictOpt,
     app,
     baselines_dir,
@@ -43,4 +44,38 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "score", [result.name])
+        finish([result], out)
+
+
+@app.command("simreal")
+def simreal_cmd(
+    log: LogArg,
+    profile: ProfileOpt = None,
+    scenario: Annotated[str | None, typer.Option(
+        help="Scenario whose world and robot are simulated (default: the profile's, else "
+             "kart_simreal for a go-kart, diffdrive_simreal for a differential drive).")] = None,
+    window_s: Annotated[float, typer.Option(
+        "--window-s", min=0.05, help="Re-start the sim from the log's state every this many "
+             "seconds.")] = 2.0,
+    set_: SetOpt = None,
+    out: OutOpt = None,
+    baselines: BaselinesOpt = None,
+    strict: StrictOpt = None,
+) -> None:
+    """Replay a log's commands into the simulated robot from the log's state, over the whole
+    log and in windows re-started every --window-s, and report the divergence: APE / RPE (as
+    evo), per-signal residuals (x, y, yaw, speed, yaw rate), both paths overlaid; judged
+    against baselines/<profile>_simreal.json and the scenario's criteria like a run."""
+    from kartci.realdata.score import simreal_log
+    from kartci.runner.gate import require_baselines
+    from kartci.runner.outdir import clear_reports, locked, write_manifest
+
+    out = out_dir(out, "simreal")
+    with locked(out):
+        clear_reports(out)
+        base = baselines_dir(baselines)
+        result = simreal_log(log, profile, scenario, set_ or [], window_s, out, base)
+        if strict_mode(strict):
+            result = require_baselines(result, out, base)
+        write_manifest(out, "simreal", [result.name])
         finish([result], out)

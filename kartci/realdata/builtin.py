@@ -10,6 +10,8 @@ from pydantic import Field
 
 from kartci.errors import SpecError
 from kartci.plugins import Controller, MetricSet, RobotKind, WorldKind, lazy
+from kartci.realdata.divergence import DEFS as SIMREAL_DEFS
+from kartci.realdata.divergence import SimrealParams, simreal_metrics
 from kartci.realdata.motion import (
     LOCALIZATION_DEFS,
     MOTION_DEFS,
@@ -61,3 +63,5 @@ MOTION = MetricSet("motion", {**MOTION_DEFS, **TRACK_DEFS}, motion_metrics, None
 LOCALIZATION = MetricSet("localization", LOCALIZATION_DEFS, localization_metrics,
                          LocalizationParams, (),
                          "APE and RPE of a pose estimate against the odometry, as evo")
+SIMREAL = MetricSet("simreal", SIMREAL_DEFS, simreal_metrics, SimrealParams, (),
+                    "divergence of the simulated robot from a log it replayed (kartci simreal)")

@@ -272,6 +272,22 @@ class KartRobot(RobotBase):
         """Never: a kart drives until the scenario's duration is up."""
         return False
 
+    def reinitialise(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
+                     yaw_rate_radps: float) -> None:
+        """Continue from a recorded state (kartci simreal's windows): pose and motion of the
+        body, wheels rolling at that speed, the motor reference at it; the steering column keeps
+        its angle and the next command sets the rest."""
+        m = self.model
+        self.body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
+        half = abs(m.wheel_xy_m[0][1])
+        self.body.spin(self.body.wheels, [(v_mps - yaw_rate_radps * half) / m.rear_wheel_radius_m,
+                                          (v_mps + yaw_rate_radps * half) / m.rear_wheel_radius_m,
+                                          v_mps / m.front_wheel_radius_m,
+                                          v_mps / m.front_wheel_radius_m])
+        self.body.v_ref = v_mps
+        self._target, self._imu_prev = None, None
+        self.contacts.clear()
+
 
 def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     q = [0.0, 0.0, 0.0, math.cos(angle / 2)]
