@@ -85,23 +85,20 @@ def trajectory(t: np.ndarray, states: np.ndarray) -> Any:
     """A planar state series as a Trajectory (z = 0, yaw about z)."""
     from kartci.metrics.trajectory import Trajectory
 
-    half = states[:, 2] / 2
-    quat = np.column_stack([np.zeros(len(t)), np.zeros(len(t)), np.sin(half), np.cos(half)])
-    xyz = np.column_stack([states[:, 0], states[:, 1], np.zeros(len(t))])
-    return Trajectory(t, xyz, quat)
+    return Trajectory.planar(t, states[:, 0], states[:, 1], states[:, 2])
 
 
 def divergence(t: np.ndarray, real_w: np.ndarray, sim_w: np.ndarray, t_whole: np.ndarray,
                real_whole: np.ndarray, sim_whole: np.ndarray) -> dict[str, float]:
     """The divergence metrics (see DEFS) of a windowed and a whole-log sim run."""
-    from kartci.metrics.trajectory import DeltaUnit, ape, rpe
+    from kartci.metrics.trajectory import DeltaUnit, TrajectoryError, ape, rpe
 
     win = ape(trajectory(t, real_w), trajectory(t, sim_w))
     whole_ref, whole_sim = trajectory(t_whole, real_whole), trajectory(t_whole, sim_whole)
     whole = ape(whole_ref, whole_sim)
     try:
         rel = rpe(whole_ref, whole_sim, 1.0, DeltaUnit.METERS).rmse
-    except Exception:  # a log shorter than a metre has no pose pair a metre apart
+    except TrajectoryError:  # a log shorter than a metre has no pose pair a metre apart
         rel = math.nan
     res = residuals(real_w, sim_w)
     out = {"simreal_ape_window_rmse_m": win.rmse, "simreal_ape_window_max_m": win.max,

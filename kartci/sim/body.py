@@ -98,3 +98,17 @@ class Base:
         for j, w in zip(joints, speeds_radps, strict=True):
             angle = pb.getJointState(self.body, j, physicsClientId=self.client)[0]
             pb.resetJointState(self.body, j, angle, w, physicsClientId=self.client)
+
+    def rolling_radius(self, link: int, default_m: float) -> float:
+        """A wheel's radius as its collision shape has it (sphere or cylinder), m; `default_m`
+        for any other shape. A model parameter of the same name may differ on purpose (the
+        radius a motor controller believes in)."""
+        shapes = pb.getCollisionShapeData(self.body, link, physicsClientId=self.client)
+        if not shapes:
+            return default_m
+        geom, dims = shapes[0][2], shapes[0][3]
+        if geom == pb.GEOM_SPHERE:
+            return float(dims[0])
+        if geom == pb.GEOM_CYLINDER:
+            return float(dims[1])
+        return default_m
