@@ -79,3 +79,42 @@ def simreal_cmd(
             result = require_baselines(result, out, base)
         write_manifest(out, "simreal", [result.name])
         finish([result], out)
+
+
+@app.command("calibrate")
+def calibrate_cmd(
+    log: LogArg,
+    params: Annotated[list[str], typer.Option(
+        "--params", help="A parameter to fit: model.NAME (the robot's model) or a full dotted "
+        "path, optionally =LO:HI bounds (default: half to twice its value). Repeat.")],
+    profile: ProfileOpt = None,
+    scenario: Annotated[str | None, typer.Option(
+        help="Scenario whose world and robot are fitted (as for simreal).")] = None,
+    window_s: Annotated[float, typer.Option("--window-s", min=0.05,
+                                            help="Window of the divergence, s.")] = 2.0,
+    set_: SetOpt = None,
+    out: OutOpt = None,
+) -> None:
+    """Fit model parameters to a log by minimising the windowed sim-vs-log divergence
+    (scipy.optimize.least_squares, trust-region reflective, bounded); prints the values with 95 %
+    intervals and the divergence before and after, writes OUT/calibration.json and
+    OUT/overlay.yaml (the values as dotted keys for --set)."""
+    from rich.table import Table
+
+    from kartci.cli.common import out_console
+    from kartci.realdata.calibrate import calibrate_log
+
+    out = out_dir(out, "calibrate")
+    fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out)
+    table = Table("parameter", "start", "fitted", "95 % interval",
+                  title=f"calibration ({fit.evaluations} evaluations, {fit.method})",
+                  title_justify="left")
+    for p, v, c in zip(fit.params, fit.values, fit.ci95, strict=True):
+        table.add_row(p.path, f"{p.start:.6g}", f"{v:.6g}", f"+- {c:.3g}")
+    out_console.print(table)
+    div = Table("divergence", "before", "after", title_justify="left")
+    for name, before in fit.before.items():
+        div.add_row(name, f"{before:.4g}", f"{fit.after[name]:.4g}")
+    out_console.print(div)
+    out_console.print(f"wrote {out / 'calibration.json'} and {out / 'overlay.yaml'}",
+                      highlight=False)
