@@ -14,6 +14,8 @@ import numpy as np
 
 from kartci.logs import McapLogWriter, header, messages, msg, open_log
 from kartci.logs.types import for_writing
+from kartci.realdata.plant import diff_drive
+from kartci.realdata.profile import CommandRole
 from kartci.sim.session import Session
 from kartci.spec import load_scenario
 
@@ -21,6 +23,7 @@ from kartci.spec import load_scenario
 # speed loop, the steering rate and the speed scale (kart)
 KART_STEPS = ((1.0, 3.0, 0.0), (0.8, 5.0, 0.25), (0.8, 5.0, -0.25), (0.7, 2.5, 0.3),
               (0.9, 6.0, -0.15), (0.6, 3.5, 0.3), (0.8, 5.5, 0.0), (0.7, 2.0, -0.3))
+BASE = CommandRole(topic="cmd_vel")  # the base controller's kinematics: the line tracker's
 # (hold time s, forward m/s, turn rad/s): a differential drive
 DIFF_STEPS = ((1.0, 0.15, 0.0), (0.8, 0.25, 1.0), (0.8, 0.1, -1.5), (0.9, 0.3, 0.5),
               (0.7, 0.2, -0.8))
@@ -52,10 +55,11 @@ class Exciter:
     def step(self, t_ns: int) -> list[tuple[str, Any]]:
         """The command at this tick."""
         a, b = self.command(t_ns * 1e-9)
-        if self.diff:
+        if self.diff:  # the Twist, and the wheel speeds a base controller makes of it
             vec = "geometry_msgs/msg/Vector3"
-            return [("cmd_vel", msg("geometry_msgs/msg/Twist", linear=msg(vec, x=a, y=0.0, z=0.0),
-                                    angular=msg(vec, x=0.0, y=0.0, z=b)))]
+            twist = msg("geometry_msgs/msg/Twist", linear=msg(vec, x=a, y=0.0, z=0.0),
+                        angular=msg(vec, x=0.0, y=0.0, z=b))
+            return [("cmd_vel", twist), *diff_drive(BASE)("cmd_vel", twist, t_ns)]
         drive = msg("ackermann_msgs/msg/AckermannDrive", steering_angle=b,
                     steering_angle_velocity=0.0, speed=a, acceleration=0.0, jerk=0.0)
         return [("ackermann_cmd", msg("ackermann_msgs/msg/AckermannDriveStamped",
