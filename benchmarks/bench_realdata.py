@@ -11,11 +11,13 @@ import argparse
 import statistics
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from kartci.bench import Better, Record
 from kartci.realdata.score import score_log, simreal_log
 from kartci.realdata.synthetic import synthetic_log
+from kartci.results import ScenarioResult
 
 PROFILE = ("name: bench_kart\npose: {topic: /kart0/odom}\n"
            "commands: {topic: /kart0/ackermann_cmd}\nrobot: {kind: gokart}\n")
@@ -34,9 +36,10 @@ def main() -> None:
         log = synthetic_log("kart_simreal", [], LOG_S, folder / "kart60.mcap")
         profile = folder / "bench_kart.yaml"
         profile.write_text(PROFILE, encoding="utf-8")
-        runs = {"score": lambda out: score_log(log, profile, out, folder),
-                "simreal": lambda out: simreal_log(log, profile, None, [], args.window_s, out,
-                                                   folder)}
+        runs: dict[str, Callable[[Path], ScenarioResult]] = {
+            "score": lambda out: score_log(log, profile, out, folder),
+            "simreal": lambda out: simreal_log(log, profile, None, [], args.window_s, out,
+                                               folder)}
         print(f"{'command':10s} {'median':>12s} {'p95 (slowest)':>14s}  log s per wall s")
         for name, run in runs.items():
             samples = []
@@ -51,7 +54,7 @@ def main() -> None:
             print(f"{name:10s} {statistics.median(samples):12.1f} {slow:14.1f}  "
                   f"{', '.join(f'{s:.1f}' for s in samples)}")
     if args.json:
-        record.write(args.json)
+        record.save(args.json)
 
 if __name__ == "__main__":
     main()

@@ -20,6 +20,7 @@ from kartci.logs.types import for_writing
 from kartci.metrics import recorded_scenario
 from kartci.plugins import AgentContext
 from kartci.realdata.builtin import RecordedRobot
+from kartci.spec.models import RobotParams
 
 
 def lookup(name: str) -> Any:
@@ -34,7 +35,8 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
     """The agent `name` for the log's robot `namespace` (default: the run log's first agent),
     with the log's recorded parameters when the log's scenario used the same type."""
     kind = lookup(name)
-    params, model = None, RecordedRobot()
+    params = None
+    model: RobotParams = RecordedRobot()
     try:
         scenario = recorded_scenario(tables(log, ["/kartci/scenario"]), log)
     except LogError:

@@ -22,7 +22,7 @@ from kartci.runner.run import (
 from kartci.verdict import write_json_atomic
 
 
-def write_result(folder: Path, name: str, make_log: Callable[[Path], None],
+def write_result(folder: Path, name: str, make_log: Callable[[Path], object],
                  facts: dict[str, Any]) -> None:
     """`make_log(path)` writes the run log; it is scored into metrics.json and, with `facts`
     as run.json, moved into `folder`."""

@@ -22,7 +22,7 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path) 
     profile, info = resolve_profile(log, profile_path)
     types = {role: i.msgtype for role, i in info.items()}
     folder = out / profile.name
-    write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst) and None,
+    write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst),
                  {"imported_from": str(log.resolve()), "profile": profile.name})
     return evaluate(folder, baselines)
 
@@ -40,8 +40,7 @@ def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
     name = f"{profile.name}_simreal"
     t0 = time.perf_counter()
     write_result(out / name, name,
-                 lambda dst: simreal.simreal_log(log, profile, types, setup, window_s, dst)
-                 and None,
+                 lambda dst: simreal.simreal_log(log, profile, types, setup, window_s, dst),
                  {"imported_from": str(log.resolve()), "profile": profile.name,
                   "scenario": setup.scenario.name, "overrides": list(setup.overrides),
                   "window_s": window_s})

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
+from helpers import ROOT, kartci
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
@@ -16,7 +17,6 @@ from kartci.realdata.profile import load_profile, resolve_profile
 from kartci.realdata.score import score_log
 from kartci.runner.run import rescore
 from kartci.verdict import Status
-from helpers import ROOT, kartci
 
 PROFILES = ROOT / "profiles"
 
