@@ -94,11 +94,18 @@ def calibrate_cmd(
                                             help="Window of the divergence, s.")] = 2.0,
     set_: SetOpt = None,
     out: OutOpt = None,
+    mpcc: Annotated[bool, typer.Option(
+        "--mpcc", help="Fit the MPCC's own prediction model instead (LOG: a kartci run log of a "
+        "simulated kart; --params: fields of its vehicle model, e.g. steer_gain, "
+        "mass_per_yaw_inertia_per_m2); writes OUT/mpcc_fit.json.")] = False,
 ) -> None:
     """Fit model parameters to a log by minimising the windowed sim-vs-log divergence
     (scipy.optimize.least_squares, trust-region reflective, bounded); prints the values with 95 %
     intervals and the divergence before and after, writes OUT/calibration.json and
     OUT/overlay.yaml (the values as dotted keys for --set)."""
+    if mpcc:
+        _fit_mpcc(log, params, out_dir(out, "calibrate"))
+        return
     from rich.table import Table
 
     from kartci.cli.common import out_console
@@ -118,3 +125,31 @@ def calibrate_cmd(
     out_console.print(div)
     out_console.print(f"wrote {out / 'calibration.json'} and {out / 'overlay.yaml'}",
                       highlight=False)
+
+
+def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
+    import json
+
+    from kartci.atomic import write_text_atomic
+    from kartci.cli.common import out_console
+    from kartci.logs import tables
+    from kartci.metrics import recorded_scenario
+    from kartci.mpcc.params import MpccVehicle
+    from kartci.realdata.mpcc_fit import fit_mpcc, lateral_data
+
+    scenario = recorded_scenario(tables(log, ["/kartci/scenario"]), log)
+    agent = next(iter(scenario.agents))
+    vehicle = MpccVehicle()
+    fit = fit_mpcc(lateral_data(log, agent, vehicle), vehicle, names)
+    out.mkdir(parents=True, exist_ok=True)
+    doc = {"log": str(log), "agent": agent, "params": dict(zip(fit.names, fit.values,
+                                                                strict=True)),
+           "start": dict(zip(fit.names, fit.start, strict=True)),
+           "rms_before": {"vy_mps": fit.rms_before[0], "yaw_rate_radps": fit.rms_before[1]},
+           "rms_after": {"vy_mps": fit.rms_after[0], "yaw_rate_radps": fit.rms_after[1]}}
+    write_text_atomic(out / "mpcc_fit.json", json.dumps(doc, indent=2) + "\n")
+    for name, start, value in zip(fit.names, fit.start, fit.values, strict=True):
+        out_console.print(f"{name}: {start:g} -> {value:.6g}", highlight=False)
+    out_console.print(f"prediction RMS (vy m/s, yaw rate rad/s): {fit.rms_before[0]:.4g}, "
+                      f"{fit.rms_before[1]:.4g} -> {fit.rms_after[0]:.4g}, "
+                      f"{fit.rms_after[1]:.4g}; wrote {out / 'mpcc_fit.json'}", highlight=False)
