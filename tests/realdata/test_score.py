@@ -7,6 +7,8 @@ import json
 from pathlib import Path
 
 import pytest
+
+import kartci as kartci_api
 from helpers import ROOT, kartci
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
@@ -152,9 +154,8 @@ def test_a_run_log_scored_through_a_profile_gets_the_runs_own_track_metrics(
     """A simulated kart run on the hall track, scored as a foreign log with a profile naming
     the same track: progress, cross-track error and speeds equal the run's own metrics."""
     run = tmp_path / "run"
-    r = kartci("run", "kart_wall", "--set", "duration_s=3", "--set", "criteria={}", "--out", run,
-               "--baselines", tmp_path)
-    assert r.returncode == 0, r.stderr
+    kartci_api.run("kart_wall", overrides=["duration_s=3", "criteria={}"], out=run,
+                   baselines=tmp_path)
     profile = tmp_path / "hall.yaml"
     track = ROOT / "kartci" / "data" / "worlds" / "winti" / "track.csv"
     profile.write_text(f"name: hall\npose: {{topic: /kart0/odom}}\ntrack: {track}\n",
