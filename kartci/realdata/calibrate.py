@@ -27,7 +27,7 @@ from kartci.realdata.divergence import divergence, residuals, run_whole, run_win
 from kartci.realdata.drive import Drive
 from kartci.realdata.plant import Plant
 from kartci.realdata.profile import Profile
-from kartci.realdata.simreal import SimSetup, sim_setup
+from kartci.realdata.simreal import SimSetup, check_commands, sim_setup
 
 WEIGHTS = np.array([1.0, 1.0, 1.0, 0.2, 0.2])  # x m, y m, yaw m/rad, speed s, yaw rate m s/rad
 
@@ -210,6 +210,7 @@ def calibrate_log(log: Path, profile_path: Path | None, scenario: str | None,
     profile, info = resolve_profile(log, profile_path)
     types = {role: i.msgtype for role, i in info.items()}
     setup = sim_setup(profile, scenario, overrides)
+    check_commands(setup, profile, types)
     params = parse_params(setup, names)
     with tempfile.TemporaryDirectory() as tmp:
         imported = Path(tmp) / "imported.mcap"

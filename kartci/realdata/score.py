@@ -37,6 +37,7 @@ def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
     profile, info = resolve_profile(log, profile_path)
     types = {role: i.msgtype for role, i in info.items()}
     setup = simreal.sim_setup(profile, scenario, overrides)
+    simreal.check_commands(setup, profile, types)
     name = f"{profile.name}_simreal"
     t0 = time.perf_counter()
     write_result(out / name, name,

@@ -61,6 +61,22 @@ def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str]) 
     return SimSetup(spec, tuple(sets), convert)
 
 
+TWIST = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
+KART_COMMANDS = (*TWIST, "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")
+
+
+def check_commands(setup: SimSetup, profile: Profile, types: dict[str, str]) -> None:
+    """The log's commands must be a kind the simulated robot is driven by: Twist for a
+    differential drive; Twist, Ackermann or KartCommand for the kart (Joy goes through
+    `kartci replay` and its joystick mapping instead)."""
+    kind = next(iter(setup.scenario.agents.values())).model.kind
+    usable = TWIST if kind in DIFF_DRIVE_KINDS else KART_COMMANDS
+    got = types.get("commands")
+    if got not in usable:
+        raise SpecError(f"profile {profile.name}: commands are {got}; a {kind} is replayed from "
+                        f"{' or '.join(usable)}")
+
+
 def simulate(setup: SimSetup, drive: Drive, window_s: float) -> dict[str, Any]:
     """The windowed and the whole-log sim runs: {"windows": (t, states), "whole": ...}."""
     plant = Plant(setup.scenario, drive, setup.convert)
