@@ -92,11 +92,11 @@ class LineTrackerRobot(RobotBase):
                      yaw_rate_radps: float) -> None:
         """Continue from a recorded state (kartci simreal's windows): pose and motion of the
         body, wheels and their lagged speed targets rolling at that speed."""
-        m = self.body.model
-        self.body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
-        half = m.wheel_separation_m / 2
-        wheels = [(v_mps - yaw_rate_radps * half) / m.wheel_radius_m,
-                  (v_mps + yaw_rate_radps * half) / m.wheel_radius_m]
+        body = self.body
+        body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
+        half = body.urdf_separation_m / 2
+        wheels = [(v_mps - yaw_rate_radps * half) / body.urdf_radius_m,
+                  (v_mps + yaw_rate_radps * half) / body.urdf_radius_m]
         self.body.spin(self.body.wheels, wheels)
         self.body.actual_target = np.array(wheels)
 
