@@ -7,10 +7,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
-import kartci as kartci_api
 from helpers import QUICK, kartci
 
+import kartci as kartci_api
 from kartci.errors import SpecError
 from kartci.realdata.openloop import open_loop
 

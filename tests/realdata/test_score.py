@@ -7,12 +7,11 @@ import json
 from pathlib import Path
 
 import pytest
-
-import kartci as kartci_api
 from helpers import ROOT, kartci
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
+import kartci as kartci_api
 from kartci.errors import SpecError
 from kartci.logs import extract, messages
 from kartci.realdata.profile import load_profile, resolve_profile

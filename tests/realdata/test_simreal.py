@@ -6,10 +6,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from conftest import changed
 from helpers import kartci
-
-import pytest
 
 from kartci.errors import SpecError
 from kartci.realdata.calibrate import Objective, parse_params
