@@ -69,5 +69,5 @@ def test_simreal_command_writes_a_judged_report(kart_logs: dict[float, Path], ka
 
 def test_unknown_parameter_is_refused(kart_profile: Path) -> None:
     setup = sim_setup(load_profile(kart_profile), None, [])
-    with pytest.raises(SpecError, match="model.nope: no such key"):
+    with pytest.raises(SpecError, match=r"model\.nope: no such key"):
         parse_params(setup, ["model.nope"])
