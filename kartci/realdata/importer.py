@@ -108,6 +108,8 @@ def _destinations(profile: Profile, types: dict[str, str]) -> dict[str, str]:
         out[profile.imu.topic] = f"/{ns}/imu"
     if profile.lidar is not None:
         out[profile.lidar.topic] = f"/{ns}/{LIDAR_TOPIC[types['lidar']]}"
+    if profile.collisions is not None:
+        out[profile.collisions.topic] = f"/{ns}/collision"
     return out
 
 

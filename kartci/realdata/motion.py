@@ -26,7 +26,7 @@ MOTION_DEFS = {
                                     "largest yaw rate (odometry twist)"),
 }
 TRACK_DEFS = {n: DEFS[n] for n in ("laps_completed", "lap_times_s", "best_lap_s",
-                                    "progress_m", "cross_track_rms_m")}
+                                    "progress_m", "cross_track_rms_m", "collisions")}
 LOCALIZATION_DEFS = {
     "ape_rmse_m": MetricDef("m", Direction.LOWER, 0.01, 0.1, "absolute pose error of the "
                             "estimate, translation RMSE after time association (evo_ape)"),
@@ -55,6 +55,11 @@ def motion_metrics(ctx: ScoreContext, params: Any) -> list[Metric]:
     table = ctx.tables.get(TRACK_TOPIC)
     if table is not None and not table.empty:
         out += _track_metrics(odom, str(table["data"].iloc[0]))
+    collisions = ctx.table("collision")
+    if collisions is not None:  # recorded: each one an event, as a run's
+        events = [{"time_s": round(float(t - odom["t"].iloc[0]), 4), "other": str(o)}
+                  for t, o in zip(collisions["t"], collisions["other"], strict=True)]
+        out.append(_m("collisions", len(events), TRACK_DEFS, events=events))
     return out
 
 

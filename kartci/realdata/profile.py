@@ -24,6 +24,7 @@ COMMAND_TYPES = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/
                  "kartci_msgs/msg/KartCommand")
 IMU_TYPES = ("sensor_msgs/msg/Imu",)
 LIDAR_TYPES = ("sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2")
+COLLISION_TYPES = ("kartci_msgs/msg/Collision",)
 
 
 class TopicRole(Frozen):
@@ -60,6 +61,8 @@ class Profile(Frozen):
                                          "TwistStamped, AckermannDriveStamped, Joy, KartCommand")
     imu: TopicRole | None = Field(None, description="sensor_msgs/Imu")
     lidar: TopicRole | None = Field(None, description="LaserScan or PointCloud2")
+    collisions: TopicRole | None = Field(None, description="recorded collisions "
+                                         "(kartci_msgs/Collision): counted as `collisions`")
     robot: dict[str, Any] | None = Field(None, description="the robot for simreal/calibrate: "
                                          "{kind: NAME, ...params}; default: the scenario's")
     scenario: str | None = Field(None, description="scenario whose world and robot simreal "
@@ -73,7 +76,8 @@ class Profile(Frozen):
         for name, role, types in (("estimate", self.estimate, POSE_TYPES),
                                   ("commands", self.commands, COMMAND_TYPES),
                                   ("imu", self.imu, IMU_TYPES),
-                                  ("lidar", self.lidar, LIDAR_TYPES)):
+                                  ("lidar", self.lidar, LIDAR_TYPES),
+                                  ("collisions", self.collisions, COLLISION_TYPES)):
             if role is not None:
                 out[name] = (role, types)
         return out

@@ -150,19 +150,20 @@ def test_localization_error_of_an_estimate(bags: Path, tmp_path: Path) -> None:
 
 def test_a_run_log_scored_through_a_profile_gets_the_runs_own_track_metrics(
         tmp_path: Path) -> None:
-    """A simulated kart run on the hall track, scored as a foreign log with a profile naming
-    the same track: progress, cross-track error and speeds equal the run's own metrics."""
+    """A simulated kart run on the hall track into its wall, scored as a foreign log with a
+    profile naming the same track and the collision topic: progress, cross-track error, speeds
+    and collisions equal the run's own metrics."""
     run = tmp_path / "run"
-    kartci_api.run("kart_wall", overrides=["duration_s=3", "criteria={}"], out=run,
-                   baselines=tmp_path)
+    kartci_api.run("kart_wall", out=run, baselines=tmp_path)
     profile = tmp_path / "hall.yaml"
     track = ROOT / "kartci" / "data" / "worlds" / "winti" / "track.csv"
-    profile.write_text(f"name: hall\npose: {{topic: /kart0/odom}}\ntrack: {track}\n",
-                       encoding="utf-8")
+    profile.write_text(f"name: hall\npose: {{topic: /kart0/odom}}\ntrack: {track}\n"
+                       "collisions: {topic: /kart0/collision}\n", encoding="utf-8")
     out = tmp_path / "out"
     assert score_log(run / "kart_wall" / "run.mcap", profile, out, tmp_path).error is None
     own, scored = _metrics(run, "kart_wall"), _metrics(out, "hall")
     for name in ("progress_m", "cross_track_rms_m", "mean_speed_mps", "max_speed_mps",
-                 "laps_completed"):
+                 "laps_completed", "collisions"):
         assert scored[name] == own[name], name
-    assert scored["progress_m"] > 3
+    assert scored["progress_m"] > 3 and scored["collisions"] >= 1
+
