@@ -123,10 +123,12 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
     if profile.estimate is not None:
         pose_roles[profile.estimate.topic] = "estimate"
     other: list[tuple[str, int, Any]] = []
+    frames = {role.topic: role.frame_id for role, _ in profile.roles().values()
+              if role.frame_id is not None}
     with open_log(log) as reader:
         store = for_writing(reader.typestore)
         for topic, t_ns, m in reader.messages([*pose_roles, *copy]):
-            _check_frame(log, profile, topic, m)
+            _check_frame(log, frames, topic, m)
             if topic in pose_roles:
                 poses[pose_roles[topic]].append((t_ns, m))
             else:
@@ -151,13 +153,12 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
     return scenario
 
 
-def _check_frame(log: Path, profile: Profile, topic: str, m: Any) -> None:
-    for role, _ in profile.roles().values():
-        if role.topic == topic and role.frame_id is not None:
-            got = getattr(getattr(m, "header", None), "frame_id", None)
-            if got is not None and got.lstrip("/") != role.frame_id.lstrip("/"):
-                raise LogError(f"{log}: {topic} is in frame '{got}', the profile expects "
-                               f"'{role.frame_id}'")
+def _check_frame(log: Path, frames: dict[str, str], topic: str, m: Any) -> None:
+    """A message's header frame must be the one its role names (when it names one)."""
+    want = frames.get(topic)
+    got = getattr(getattr(m, "header", None), "frame_id", None)
+    if want is not None and got is not None and got.lstrip("/") != want.lstrip("/"):
+        raise LogError(f"{log}: {topic} is in frame '{got}', the profile expects '{want}'")
 
 
 def _read(path: str) -> str:

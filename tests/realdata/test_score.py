@@ -12,7 +12,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 import kartci as kartci_api
-from kartci.errors import SpecError
+from kartci.errors import LogError, SpecError
 from kartci.logs import extract, messages
 from kartci.realdata.profile import load_profile, resolve_profile
 from kartci.realdata.score import score_log
@@ -167,3 +167,11 @@ def test_a_run_log_scored_through_a_profile_gets_the_runs_own_track_metrics(
         assert scored[name] == own[name], name
     assert scored["progress_m"] > 3 and scored["collisions"] >= 1
 
+
+
+def test_a_pose_in_another_frame_than_the_profile_says_is_refused(bags: Path,
+                                                                  tmp_path: Path) -> None:
+    profile = tmp_path / "tb.yaml"
+    profile.write_text("name: tb\npose: {topic: /odom, frame_id: map}\n", encoding="utf-8")
+    with pytest.raises(LogError, match="/odom is in frame 'odom', the profile expects 'map'"):
+        score_log(bags / "turtlebot3_gazebo_cmd_odom_scan.bag", profile, tmp_path / "o", tmp_path)
