@@ -43,7 +43,8 @@ def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
         f"({profile.name})", "world": world,
         "agents": {profile.agent: {"model": {"kind": "recorded"},
                                    "controller": {"type": "recorded"}}},
-        "duration_s": min(max(duration_s, 1e-3), MAX_DURATION_S), "metrics": metrics})
+        "duration_s": min(max(duration_s, 1e-3), MAX_DURATION_S), "metrics": metrics,
+        "criteria": {k: c.model_dump() for k, c in profile.criteria.items()}})
 
 
 def _xyzq(m: Any) -> tuple[float, float, float, Any]:

@@ -15,7 +15,7 @@ from pydantic import Field, ValidationError
 
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
-from kartci.spec.models import Frozen
+from kartci.spec.models import Criterion, Frozen
 
 POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",
               "geometry_msgs/msg/PoseWithCovarianceStamped")
@@ -69,6 +69,9 @@ class Profile(Frozen):
                                  "uses (default: by robot kind)")
     track: str | None = Field(None, description="TUMFTM track CSV the log was driven on "
                               "(relative to the profile file): laps, lap times, cross-track")
+    criteria: dict[str, Criterion] = Field({}, description="pass criteria on the scored "
+                                           "metrics (simreal's divergence among them), as a "
+                                           "scenario's: a failed one fails the log (exit 1)")
 
     def roles(self) -> dict[str, tuple[TopicRole, tuple[str, ...]]]:
         """Every topic the profile names, with the message types its role accepts."""

@@ -175,3 +175,14 @@ def test_a_pose_in_another_frame_than_the_profile_says_is_refused(bags: Path,
     profile.write_text("name: tb\npose: {topic: /odom, frame_id: map}\n", encoding="utf-8")
     with pytest.raises(LogError, match="/odom is in frame 'odom', the profile expects 'map'"):
         score_log(bags / "turtlebot3_gazebo_cmd_odom_scan.bag", profile, tmp_path / "o", tmp_path)
+
+
+def test_criteria_of_the_profile_gate_the_log(bags: Path, tmp_path: Path) -> None:
+    profile = tmp_path / "fast.yaml"
+    profile.write_text("name: fast\npose: {topic: /jackal_velocity_controller/odom}\n"
+                       "criteria: {max_speed_mps: {max: 1.0}, duration_s: {min: 60}}\n",
+                       encoding="utf-8")
+    result = score_log(bags / "jackal_imu_odom.bag", profile, tmp_path / "o", tmp_path)
+    verdict = {c.name: c.ok for c in result.criteria}
+    assert verdict == {"max_speed_mps": False, "duration_s": True}  # it reaches 1.99 m/s
+    assert result.status is Status.FAILED
