@@ -133,7 +133,9 @@ def test_localization_error_of_an_estimate(bags: Path, tmp_path: Path) -> None:
     extract(bags / "jackal_imu_odom.bag", ["/jackal_velocity_controller/odom"], src)
     log = tmp_path / "with_estimate.mcap"
     with McapLogWriter(log) as w:
-        for topic, t_ns, m in messages(src):
+        for i, (topic, t_ns, m) in enumerate(messages(src)):
+            if i == 500:  # 10 s of it
+                break
             w.write(topic, m, t_ns)
             m.pose.pose.position.x += 0.3
             w.write("/ekf/odom", m, t_ns)
