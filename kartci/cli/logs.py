@@ -42,10 +42,26 @@ def replay(
     out: OutOpt = None,
     baselines: BaselinesOpt = None,
     strict: StrictOpt = None,
+    open_loop: Annotated[bool, typer.Option(
+        "--open-loop", help="Feed the log's recorded inputs to the registered agent named by "
+        "--agent (no simulation), record its outputs in OUT/openloop.mcap and compare them with "
+        "--reference (default: the outputs recorded in LOG); exit 1 when they differ.")] = False,
+    ns: Annotated[str | None, typer.Option(
+        "--ns", help="Open loop: the robot's namespace in the log (default: a run log's first "
+        "agent).")] = None,
+    reference: Annotated[Path | None, typer.Option(
+        help="Open loop: the log whose outputs are the reference.")] = None,
+    tolerance: Annotated[list[str] | None, typer.Option(
+        help="Open loop: FIELD=TOL or TOPIC:FIELD=TOL, a dotted message field compared within "
+        "TOL instead of exactly (repeat).")] = None,
 ) -> None:
     """Run a scenario with a recorded input stream driving one kart: sensor_msgs/Joy through a
     joystick mapping (the manual agent), or AckermannDriveStamped / Twist / TwistStamped
-    commands. Log time is re-based so the first message is at sim time 0."""
+    commands. Log time is re-based so the first message is at sim time 0. With --open-loop,
+    feed a log's sensor topics to a registered agent instead and gate on its outputs."""
+    if open_loop:
+        _open_loop(log, agent, ns, reference, tolerance or [], out_dir(out, "openloop"))
+        return
     from kartci.agents.joy import check_pad, load_mapping
     from kartci.agents.kart import JOY
     from kartci.agents.params import CommandsController, ManualController
@@ -117,3 +133,31 @@ def extract(
 
     n = copy_topics(log, topic, out)
     out_console.print(f"wrote {out}: {n} messages", highlight=False)
+
+
+def _open_loop(log: Path, agent: str | None, ns: str | None, reference: Path | None,
+               tolerance: list[str], out: Path) -> None:
+    from kartci.realdata.openloop import open_loop
+
+    if agent is None:
+        raise SpecError("--open-loop needs --agent NAME: a registered controller or node")
+    tols: dict[str, float] = {}
+    for item in tolerance:
+        key, _, value = item.rpartition("=")
+        try:
+            tols[key] = float(value)
+        except ValueError as err:
+            raise SpecError(f"--tolerance {item}: expected FIELD=TOL with a number") from err
+    results = open_loop(log, agent, ns, reference, tols, out)
+    bad = 0
+    for r in results:
+        worst = ", ".join(f"{k} by {v:.3g}" for k, v in sorted(r.worst.items()))
+        ok = r.differing == 0 and not r.note
+        bad += not ok
+        text = (f"{'✅' if ok else '❌'} {r.topic}: {r.compared} messages compared, "
+                f"{r.differing} differ" + (f" ({worst})" if worst else "")
+                + (f"; {r.note}" if r.note else ""))
+        out_console.print(text, highlight=False, markup=False)
+    out_console.print(f"outputs: {out / 'openloop.mcap'}  (exit {1 if bad else 0})",
+                      highlight=False)
+    raise typer.Exit(1 if bad else 0)

@@ -30,20 +30,25 @@ def kart_track(track: Track, odom: pd.DataFrame) -> pd.DataFrame:
                          "s_total": total, "yaw": odom["yaw"].to_numpy()})
 
 
+def lap_crossings(t: np.ndarray, total: np.ndarray, length_m: float) -> list[float]:
+    """Times (s) at which the unwrapped progress `total` (m) passes each whole lap."""
+    crossings = []
+    for lap in range(1, int(max(total.max(), 0) // length_m) + 1):
+        i = int(np.argmax(total >= lap * length_m))
+        # interpolate the crossing time between samples
+        a, b = total[i - 1], total[i]
+        frac = (lap * length_m - a) / (b - a) if b != a else 0.0
+        crossings.append(float(t[i - 1] + frac * (t[i] - t[i - 1])))
+    return crossings
+
+
 def kart_metrics(scenario: Scenario, agent: str, track: Track, tr: pd.DataFrame,
                  collisions: pd.DataFrame | None) -> list[Metric]:
     """Lap, collision and track metrics from the agent's `kart_track` path."""
     model = scenario.agents[agent].model
     assert isinstance(model, GokartModel)
     t, total = tr["t"].to_numpy(), tr["s_total"].to_numpy()
-    crossings = []
-    for lap in range(1, int(max(total.max(), 0) // track.length_m) + 1):
-        i = int(np.argmax(total >= lap * track.length_m))
-        # interpolate the crossing time between samples
-        a, b = total[i - 1], total[i]
-        frac = (lap * track.length_m - a) / (b - a) if b != a else 0.0
-        crossings.append(float(t[i - 1] + frac * (t[i] - t[i - 1])))
-    laps = np.diff([0.0, *crossings])
+    laps = np.diff([0.0, *lap_crossings(t, total, track.length_m)])
     lap_list = [round(float(x), 4) for x in laps]
 
     wheels = np.asarray(model.wheel_xy_m)

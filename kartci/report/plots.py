@@ -140,7 +140,8 @@ def wheel_speeds(p: Plots) -> str:
     ax.set_xlabel("sim time [s]")
     ax.set_ylabel("wheel speed [rad/s]")
     ax.set_title("wheel speeds: measured (solid) and commanded (dotted)")
-    ax.legend(loc="best", fontsize=7, ncol=2)
+    if ax.get_legend_handles_labels()[0]:  # an imported log may have no wheel speeds
+        ax.legend(loc="best", fontsize=7, ncol=2)
     return _svg(fig)
 
 

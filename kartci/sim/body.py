@@ -77,3 +77,38 @@ class Base:
         rot = st.rotation
         rel_pos, rel_rot = self.frames[name]
         return np.asarray(st.xyz) + rot @ rel_pos, rot @ rel_rot
+
+    def place(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
+              yaw_rate_radps: float) -> None:
+        """Put base_link at (x, y, yaw) on the plane, keeping its height, moving forward at
+        `v_mps` and turning at `yaw_rate_radps`: a sim re-initialised from a recorded state
+        (kartci simreal's windows)."""
+        c = self.client
+        z = self.state().xyz[2]
+        quat = pb.getQuaternionFromEuler([0.0, 0.0, yaw_rad])
+        self.reset_pose(np.array([x_m, y_m, z]), quat)
+        off = rotation(quat) @ self._com_offset
+        w = np.array([0.0, 0.0, yaw_rate_radps])
+        lin = np.array([v_mps * math.cos(yaw_rad), v_mps * math.sin(yaw_rad), 0.0])
+        pb.resetBaseVelocity(self.body, (lin + np.cross(w, off)).tolist(), w.tolist(),
+                             physicsClientId=c)
+
+    def spin(self, joints: list[int], speeds_radps: list[float]) -> None:
+        """Set joints turning at these speeds (rad/s), keeping their angles."""
+        for j, w in zip(joints, speeds_radps, strict=True):
+            angle = pb.getJointState(self.body, j, physicsClientId=self.client)[0]
+            pb.resetJointState(self.body, j, angle, w, physicsClientId=self.client)
+
+    def rolling_radius(self, link: int, default_m: float) -> float:
+        """A wheel's radius as its collision shape has it (sphere or cylinder), m; `default_m`
+        for any other shape. A model parameter of the same name may differ on purpose (the
+        radius a motor controller believes in)."""
+        shapes = pb.getCollisionShapeData(self.body, link, physicsClientId=self.client)
+        if not shapes:
+            return default_m
+        geom, dims = shapes[0][2], shapes[0][3]
+        if geom == pb.GEOM_SPHERE:
+            return float(dims[0])
+        if geom == pb.GEOM_CYLINDER:
+            return float(dims[1])
+        return default_m

@@ -272,6 +272,24 @@ class KartRobot(RobotBase):
         """Never: a kart drives until the scenario's duration is up."""
         return False
 
+    def reinitialise(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
+                     yaw_rate_radps: float) -> None:
+        """Continue from a recorded state (kartci simreal's windows): pose and motion of the
+        body, wheels rolling at that speed (on their collision radius), the motor reference at
+        the speed the motor controller then measures; the steering column keeps its angle and
+        the next command sets the rest."""
+        m, body = self.model, self.body
+        body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
+        half = abs(m.wheel_xy_m[0][1])
+        defaults = (m.rear_wheel_radius_m,) * 2 + (m.front_wheel_radius_m,) * 2
+        radii = [body.rolling_radius(j, d) for j, d in zip(body.wheels, defaults, strict=True)]
+        spin = [(v_mps - yaw_rate_radps * half) / radii[0],
+                (v_mps + yaw_rate_radps * half) / radii[1], v_mps / radii[2], v_mps / radii[3]]
+        body.spin(body.wheels, spin)
+        body.v_ref = (spin[0] + spin[1]) / 2 * m.rear_wheel_radius_m
+        self._target, self._imu_prev = None, None
+        self.contacts.clear()
+
 
 def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     q = [0.0, 0.0, 0.0, math.cos(angle / 2)]

@@ -50,6 +50,11 @@ class LineTracker(Base):
             m.wheel_time_constant_s > 0) else 1.0
         self.target = np.zeros(2)  # commanded wheel speeds, rad/s (left, right)
         self.actual_target = np.zeros(2)  # after the first-order lag
+        left, right = (pb.getJointInfo(self.body, j, physicsClientId=client)[14][1]
+                       for j in self.wheels)
+        # the URDF's wheels; a model whose radius or separation differs moves as that robot
+        self.urdf_radius_m = self.rolling_radius(self.wheels[0], m.wheel_radius_m)
+        self.urdf_separation_m = abs(left - right)
         self._fresh = False  # a command not yet applied (set_velocity drive)
 
     def _wheel_inertia(self, m: LineTrackerModel) -> None:
@@ -62,8 +67,18 @@ class LineTracker(Base):
                                   physicsClientId=self.client)
 
     def command(self, left_radps: float, right_radps: float) -> None:
-        """New wheel-speed targets (rad/s: left, right), clamped at the motor's saturation speed."""
-        lim = self.model.wheel_speed_limit_radps
+        """New wheel-speed targets (rad/s: left, right), clamped at the motor's saturation speed.
+        When the model's wheel radius or separation differs from the URDF's, the targets are
+        those of the URDF's wheels that move the body as the model's wheels would (so both are
+        physical parameters, for calibration); equal, they are used as given."""
+        m, lim = self.model, self.model.wheel_speed_limit_radps
+        if (m.wheel_radius_m, m.wheel_separation_m) != (self.urdf_radius_m,
+                                                        self.urdf_separation_m):
+            v = m.wheel_radius_m * (right_radps + left_radps) / 2
+            w = m.wheel_radius_m * (right_radps - left_radps) / m.wheel_separation_m
+            half = self.urdf_separation_m / 2
+            left_radps = (v - w * half) / self.urdf_radius_m
+            right_radps = (v + w * half) / self.urdf_radius_m
         self.target = np.clip([left_radps, right_radps], -lim, lim)
         self._fresh = True
 

@@ -6,6 +6,8 @@ import math
 from collections import deque
 from typing import Any
 
+import numpy as np
+
 from kartci import geometry
 from kartci.errors import SpecError
 from kartci.logs import header, msg
@@ -106,6 +108,18 @@ class LineTrackerRobot(RobotBase):
 
     def finish(self, put: Put) -> None:
         """Nothing is left open at the end of a run."""
+
+    def reinitialise(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
+                     yaw_rate_radps: float) -> None:
+        """Continue from a recorded state (kartci simreal's windows): pose and motion of the
+        body, wheels and their lagged speed targets rolling at that speed."""
+        body = self.body
+        body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
+        half = body.urdf_separation_m / 2
+        wheels = [(v_mps - yaw_rate_radps * half) / body.urdf_radius_m,
+                  (v_mps + yaw_rate_radps * half) / body.urdf_radius_m]
+        self.body.spin(self.body.wheels, wheels)
+        self.body.actual_target = np.array(wheels)
 
     def done(self, k: int) -> bool:
         """Past the end of a straight course (checked at the odometry rate)."""

@@ -1,0 +1,155 @@
+"""`kartci score`, `simreal` and `calibrate`: logs from real robots (or other simulators)
+scored, compared with the simulation, and used to fit the simulation's parameters."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from kartci.cli.common import (
+    BaselinesOpt,
+    OutOpt,
+    SetOpt,
+    StrictOpt,
+    app,
+    baselines_dir,
+    finish,
+    out_dir,
+    strict_mode,
+)
+
+LogArg = Annotated[Path, typer.Argument(help="ROS 1 .bag, rosbag2 folder or .mcap file.")]
+ProfileOpt = Annotated[Path | None, typer.Option(
+    "--profile", "-p", help="Import profile (YAML: which topic is the pose, the commands, ...); "
+    "default: the log's only odometry/pose topic and its only command topic.")]
+
+
+@app.command("score")
+def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
+              baselines: BaselinesOpt = None, strict: StrictOpt = None) -> None:
+    """Score a recorded log with the same metric code as a run (duration, distance, speeds;
+    laps, lap times and cross-track error with a track; localization error with an estimate),
+    write the same reports and judge it against baselines/<profile name>.json."""
+    from kartci.realdata.score import score_log
+    from kartci.runner.gate import require_baselines
+    from kartci.runner.outdir import clear_reports, locked, write_manifest
+
+    out = out_dir(out, "score")
+    with locked(out):
+        clear_reports(out)
+        base = baselines_dir(baselines)
+        result = score_log(log, profile, out, base)
+        if strict_mode(strict):
+            result = require_baselines(result, out, base)
+        write_manifest(out, "score", [result.name])
+        finish([result], out)
+
+
+@app.command("simreal")
+def simreal_cmd(
+    log: LogArg,
+    profile: ProfileOpt = None,
+    scenario: Annotated[str | None, typer.Option(
+        help="Scenario whose world and robot are simulated (default: the profile's, else "
+             "kart_simreal for a go-kart, diffdrive_simreal for a differential drive).")] = None,
+    window_s: Annotated[float, typer.Option(
+        "--window-s", min=0.05, help="Re-start the sim from the log's state every this many "
+             "seconds.")] = 2.0,
+    set_: SetOpt = None,
+    out: OutOpt = None,
+    baselines: BaselinesOpt = None,
+    strict: StrictOpt = None,
+) -> None:
+    """Replay a log's commands into the simulated robot from the log's state, over the whole
+    log and in windows re-started every --window-s, and report the divergence: APE / RPE (as
+    evo), per-signal residuals (x, y, yaw, speed, yaw rate), both paths overlaid; judged
+    against baselines/<profile>_simreal.json and the scenario's criteria like a run."""
+    from kartci.realdata.score import simreal_log
+    from kartci.runner.gate import require_baselines
+    from kartci.runner.outdir import clear_reports, locked, write_manifest
+
+    out = out_dir(out, "simreal")
+    with locked(out):
+        clear_reports(out)
+        base = baselines_dir(baselines)
+        result = simreal_log(log, profile, scenario, set_ or [], window_s, out, base)
+        if strict_mode(strict):
+            result = require_baselines(result, out, base)
+        write_manifest(out, "simreal", [result.name])
+        finish([result], out)
+
+
+@app.command("calibrate")
+def calibrate_cmd(
+    log: LogArg,
+    params: Annotated[list[str], typer.Option(
+        "--params", help="A parameter to fit: model.NAME (the robot's model) or a full dotted "
+        "path, optionally =LO:HI bounds (default: half to twice its value). Repeat.")],
+    profile: ProfileOpt = None,
+    scenario: Annotated[str | None, typer.Option(
+        help="Scenario whose world and robot are fitted (as for simreal).")] = None,
+    window_s: Annotated[float, typer.Option("--window-s", min=0.05,
+                                            help="Window of the divergence, s.")] = 2.0,
+    set_: SetOpt = None,
+    out: OutOpt = None,
+    mpcc: Annotated[bool, typer.Option(
+        "--mpcc", help="Fit the MPCC's own prediction model instead (LOG: a kartci run log of a "
+        "simulated kart; --params: fields of its vehicle model, e.g. steer_gain, "
+        "mass_per_yaw_inertia_per_m2); writes OUT/mpcc_fit.json.")] = False,
+) -> None:
+    """Fit model parameters to a log by minimising the windowed sim-vs-log divergence
+    (scipy.optimize.least_squares, trust-region reflective, bounded); prints the values with 95 %
+    intervals and the divergence before and after, writes OUT/calibration.json and
+    OUT/overlay.yaml (the values as dotted keys for --set)."""
+    if mpcc:
+        _fit_mpcc(log, params, out_dir(out, "calibrate"))
+        return
+    from rich.table import Table
+
+    from kartci.cli.common import out_console
+    from kartci.realdata.calibrate import calibrate_log
+
+    out = out_dir(out, "calibrate")
+    fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out)
+    table = Table("parameter", "start", "fitted", "95 % interval",
+                  title=f"calibration ({fit.evaluations} evaluations, {fit.method})",
+                  title_justify="left")
+    for p, v, c in zip(fit.params, fit.values, fit.ci95, strict=True):
+        table.add_row(p.path, f"{p.start:.6g}", f"{v:.6g}", f"+- {c:.3g}")
+    out_console.print(table)
+    div = Table("divergence", "before", "after", title_justify="left")
+    for name, before in fit.before.items():
+        div.add_row(name, f"{before:.4g}", f"{fit.after[name]:.4g}")
+    out_console.print(div)
+    out_console.print(f"wrote {out / 'calibration.json'} and {out / 'overlay.yaml'}",
+                      highlight=False)
+
+
+def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
+    import json
+
+    from kartci.atomic import write_text_atomic
+    from kartci.cli.common import out_console
+    from kartci.logs import tables
+    from kartci.metrics import recorded_scenario
+    from kartci.mpcc.params import MpccVehicle
+    from kartci.realdata.mpcc_fit import fit_mpcc, lateral_data
+
+    scenario = recorded_scenario(tables(log, ["/kartci/scenario"]), log)
+    agent = next(iter(scenario.agents))
+    vehicle = MpccVehicle()
+    fit = fit_mpcc(lateral_data(log, agent, vehicle), vehicle, names)
+    out.mkdir(parents=True, exist_ok=True)
+    doc = {"log": str(log), "agent": agent, "params": dict(zip(fit.names, fit.values,
+                                                                strict=True)),
+           "start": dict(zip(fit.names, fit.start, strict=True)),
+           "rms_before": {"vy_mps": fit.rms_before[0], "yaw_rate_radps": fit.rms_before[1]},
+           "rms_after": {"vy_mps": fit.rms_after[0], "yaw_rate_radps": fit.rms_after[1]}}
+    write_text_atomic(out / "mpcc_fit.json", json.dumps(doc, indent=2) + "\n")
+    for name, start, value in zip(fit.names, fit.start, fit.values, strict=True):
+        out_console.print(f"{name}: {start:g} -> {value:.6g}", highlight=False)
+    out_console.print(f"prediction RMS (vy m/s, yaw rate rad/s): {fit.rms_before[0]:.4g}, "
+                      f"{fit.rms_before[1]:.4g} -> {fit.rms_after[0]:.4g}, "
+                      f"{fit.rms_after[1]:.4g}; wrote {out / 'mpcc_fit.json'}", highlight=False)

@@ -1,0 +1,169 @@
+"""Import a foreign log as a kartci run log: the profile's topics under the robot's namespace
+(`/<agent>/odom`, `/<agent>/estimate`, `/<agent>/cmd_vel`, ...), the track, and a recorded
+scenario saying what was imported. From there the same code scores, judges and reports it as a
+simulated run, and `kartci report OUT` re-scores it from that log alone."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from kartci.errors import LogError
+from kartci.logs import McapLogWriter, header, msg, open_log, stamp_ns
+from kartci.logs.types import for_writing, yaw_of
+from kartci.realdata.profile import Profile
+from kartci.spec import Scenario
+from kartci.track import TRACK_TOPIC
+
+# where each role's messages go, relative to the robot's namespace (commands by type)
+COMMAND_TOPIC = {"ackermann_msgs/msg/AckermannDriveStamped": "ackermann_cmd",
+                 "geometry_msgs/msg/TwistStamped": "cmd_vel", "geometry_msgs/msg/Twist": "cmd_vel",
+                 "sensor_msgs/msg/Joy": "joy", "kartci_msgs/msg/KartCommand": "cmd"}
+ROLE_TOPIC = {"pose": "odom", "estimate": "estimate", "imu": "imu"}
+LIDAR_TOPIC = {"sensor_msgs/msg/LaserScan": "scan",
+               "sensor_msgs/msg/PointCloud2": "velodyne_points"}
+MAX_DURATION_S = 3600.0  # a scenario's limit; longer logs are recorded as this long
+
+
+def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
+    """The scenario an imported log records: world and robot `recorded`, the profile's track,
+    the motion metrics and, with an estimate, the localization metrics."""
+    metrics: dict[str, Any] = {"motion": {}}
+    if profile.estimate is not None:
+        metrics["localization"] = {}
+    world: dict[str, Any] = {"kind": "recorded", "description": profile.description}
+    if profile.track is not None:
+        world["track"] = profile.track
+    return Scenario.model_validate({
+        "name": profile.name, "description": profile.description or f"imported log "
+        f"({profile.name})", "world": world,
+        "agents": {profile.agent: {"model": {"kind": "recorded"},
+                                   "controller": {"type": "recorded"}}},
+        "duration_s": min(max(duration_s, 1e-3), MAX_DURATION_S), "metrics": metrics,
+        "criteria": {k: c.model_dump() for k, c in profile.criteria.items()}})
+
+
+def _xyzq(m: Any) -> tuple[float, float, float, Any]:
+    """Position and orientation of an Odometry, PoseStamped or PoseWithCovarianceStamped."""
+    p = m.pose.pose if hasattr(m.pose, "pose") else m.pose
+    return p.position.x, p.position.y, p.position.z, p.orientation
+
+
+def _stamp(m: Any, t_ns: int) -> int:
+    hdr = getattr(m, "header", None)
+    t = stamp_ns(hdr) if hdr is not None else 0
+    return t if t > 0 else t_ns
+
+
+def odometry_of(poses: list[tuple[int, Any]], frame: str) -> Iterator[tuple[int, Any]]:
+    """nav_msgs/Odometry (ROS 2) for each pose message; the twist (in the body frame) is the
+    message's own for Odometry, else from finite differences of the poses."""
+    ts = np.array([_stamp(m, t) for t, m in poses], dtype=np.int64)
+    xyz = np.array([_xyzq(m)[:3] for _, m in poses], dtype=float)
+    yaw = np.unwrap([yaw_of(_xyzq(m)[3]) for _, m in poses])
+    t_s = (ts - ts[0]) * 1e-9
+    diff = len(poses) > 1 and float(t_s[-1]) > 0
+    vel = np.gradient(xyz, t_s, axis=0) if diff else np.zeros_like(xyz)
+    wz = np.gradient(yaw, t_s) if diff else np.zeros(len(poses))
+    for i, (t_log, m) in enumerate(poses):
+        x, y, z, q = _xyzq(m)
+        if m.__msgtype__ == "nav_msgs/msg/Odometry":
+            lin, ang = m.twist.twist.linear, m.twist.twist.angular
+            v = (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+        else:
+            c, s = math.cos(yaw[i]), math.sin(yaw[i])
+            v = (c * vel[i, 0] + s * vel[i, 1], -s * vel[i, 0] + c * vel[i, 1], vel[i, 2],
+                 0.0, 0.0, float(wz[i]))
+        yield t_log, _odom(int(ts[i]), frame, (x, y, z), (q.x, q.y, q.z, q.w), v)
+
+
+def _odom(t_ns: int, frame: str, xyz: tuple[float, float, float],
+          q: tuple[float, float, float, float], v: tuple[float, ...]) -> Any:
+    def vec(a: float, b: float, c: float) -> Any:
+        return msg("geometry_msgs/msg/Vector3", x=float(a), y=float(b), z=float(c))
+
+    pose = msg("geometry_msgs/msg/Pose",
+               position=msg("geometry_msgs/msg/Point", x=float(xyz[0]), y=float(xyz[1]),
+                            z=float(xyz[2])),
+               orientation=msg("geometry_msgs/msg/Quaternion", x=float(q[0]), y=float(q[1]),
+                               z=float(q[2]), w=float(q[3])))
+    twist = msg("geometry_msgs/msg/Twist", linear=vec(*v[:3]), angular=vec(*v[3:]))
+    zeros = np.zeros(36)
+    return msg("nav_msgs/msg/Odometry", header=header(t_ns, frame), child_frame_id="base_link",
+               pose=msg("geometry_msgs/msg/PoseWithCovariance", pose=pose, covariance=zeros),
+               twist=msg("geometry_msgs/msg/TwistWithCovariance", twist=twist,
+                         covariance=zeros))
+
+
+def _destinations(profile: Profile, types: dict[str, str]) -> dict[str, str]:
+    """Log topic -> topic in the imported log, for every role but pose and estimate."""
+    out: dict[str, str] = {}
+    ns = profile.agent
+    if profile.commands is not None:
+        out[profile.commands.topic] = f"/{ns}/{COMMAND_TOPIC[types['commands']]}"
+    if profile.imu is not None:
+        out[profile.imu.topic] = f"/{ns}/imu"
+    if profile.lidar is not None:
+        out[profile.lidar.topic] = f"/{ns}/{LIDAR_TOPIC[types['lidar']]}"
+    if profile.collisions is not None:
+        out[profile.collisions.topic] = f"/{ns}/collision"
+    return out
+
+
+def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Scenario:
+    """Write `dst` (a kartci run log) from `log` as the profile maps it; returns its scenario.
+    `types`: the message type of each role's topic (from `check_profile`)."""
+    ns = profile.agent
+    copy = _destinations(profile, types)
+    poses: dict[str, list[tuple[int, Any]]] = {"pose": [], "estimate": []}
+    pose_roles = {profile.pose.topic: "pose"}
+    if profile.estimate is not None:
+        pose_roles[profile.estimate.topic] = "estimate"
+    other: list[tuple[str, int, Any]] = []
+    frames = {role.topic: role.frame_id for role, _ in profile.roles().values()
+              if role.frame_id is not None}
+    with open_log(log) as reader:
+        store = for_writing(reader.typestore)
+        for topic, t_ns, m in reader.messages([*pose_roles, *copy]):
+            _check_frame(log, frames, topic, m)
+            if topic in pose_roles:
+                poses[pose_roles[topic]].append((t_ns, m))
+            else:
+                other.append((copy[topic], t_ns, m))
+    if not poses["pose"]:
+        raise LogError(f"{log}: {profile.pose.topic} holds no readable pose")
+    t0 = min(t for t, _ in poses["pose"])
+    t1 = max(t for t, _ in poses["pose"])
+    scenario = imported_scenario(profile, (t1 - t0) * 1e-9)
+    out: list[tuple[str, int, Any]] = [
+        ("/kartci/scenario", t0, msg("std_msgs/msg/String", data=scenario.model_dump_json()))]
+    if profile.track is not None:
+        out.append((TRACK_TOPIC, t0, msg("std_msgs/msg/String", data=_read(profile.track))))
+    for role, name in (("pose", "odom"), ("estimate", "estimate")):
+        if poses[role]:
+            out += [(f"/{ns}/{name}", t, m) for t, m in odometry_of(poses[role], "map")]
+    out += other
+    out.sort(key=lambda item: item[1])
+    with McapLogWriter(dst, store) as writer:
+        for topic, t_ns, m in out:
+            writer.write(topic, m, t_ns)
+    return scenario
+
+
+def _check_frame(log: Path, frames: dict[str, str], topic: str, m: Any) -> None:
+    """A message's header frame must be the one its role names (when it names one)."""
+    want = frames.get(topic)
+    got = getattr(getattr(m, "header", None), "frame_id", None)
+    if want is not None and got is not None and got.lstrip("/") != want.lstrip("/"):
+        raise LogError(f"{log}: {topic} is in frame '{got}', the profile expects '{want}'")
+
+
+def _read(path: str) -> str:
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except OSError as err:
+        raise LogError(f"{path}: cannot read the track ({err.strerror or err})") from err

@@ -1,0 +1,135 @@
+"""Fit the MPCC's own prediction model (kartci.mpcc.model) to a kart's log, so its steering
+gain and yaw inertia come from data instead of by hand.
+
+The lateral part of the model is fitted: vy and yaw rate r, integrated (RK4, the log's step)
+over windows of `window_s` from the recorded values, with the recorded forward speed and mean
+front-wheel angle as inputs, against the recorded vy and r (both at the centre of gravity).
+Method: scipy.optimize.least_squares, trust-region reflective, parameters scaled by their
+start values and bounded to a third .. three times them."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from kartci.errors import LogError, SpecError
+from kartci.logs import tables
+from kartci.mpcc.params import MpccVehicle
+
+STEER_JOINTS = ("front_left_wheel_steer_joint.position", "front_right_wheel_steer_joint.position")
+
+
+@dataclass(frozen=True)
+class Lateral:
+    """Recorded lateral motion at the centre of gravity: t (s), vx, vy (m/s), r (rad/s), and
+    the mean front-wheel angle delta (rad), on the odometry's samples."""
+
+    t: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    r: np.ndarray
+    delta: np.ndarray
+
+
+def lateral_data(run_log: Path, agent: str, vehicle: MpccVehicle) -> Lateral:
+    """The lateral motion of a kart run log (odometry and the steer joints' angles)."""
+    t = tables(run_log, [f"/{agent}/odom", f"/{agent}/joint_states"])
+    odom, joints = t.get(f"/{agent}/odom"), t.get(f"/{agent}/joint_states")
+    if odom is None or joints is None or not set(STEER_JOINTS) <= set(joints.columns):
+        raise LogError(f"{run_log}: needs /{agent}/odom and the kart's steer joints on "
+                       f"/{agent}/joint_states")
+    ts = odom["t"].to_numpy(float)
+    delta = np.interp(ts, joints["t"].to_numpy(float),
+                      joints[list(STEER_JOINTS)].to_numpy(float).mean(axis=1))
+    r = odom["wz"].to_numpy(float)
+    return Lateral(ts - ts[0], odom["vx"].to_numpy(float),
+                   odom["vy"].to_numpy(float) + r * vehicle.cog_x_m, r, delta)
+
+
+def _step_function(vehicle: MpccVehicle, names: Sequence[str], h: float) -> Any:
+    """One RK4 step of (vy, r) with inputs vx, delta and the fitted parameters p."""
+    import casadi as ca
+
+    from kartci.mpcc.model import DELTA, NU, NX, PSI, VX, VY, R, continuous
+
+    p = ca.SX.sym("p", len(names))
+    v = SimpleNamespace(**vehicle.model_dump())
+    for i, name in enumerate(names):
+        setattr(v, name, p[i])
+    vy, r, vx, delta = (ca.SX.sym(n) for n in ("vy", "r", "vx", "delta"))
+
+    def f(vy_: Any, r_: Any) -> Any:
+        x = ca.SX.zeros(NX)
+        x[VX], x[VY], x[R], x[DELTA], x[PSI] = vx, vy_, r_, delta, 0
+        dx = continuous(x, ca.SX.zeros(NU), v)  # type: ignore[arg-type]  # symbols for fields
+        return dx[VY], dx[R]
+
+    k1 = f(vy, r)
+    k2 = f(vy + h / 2 * k1[0], r + h / 2 * k1[1])
+    k3 = f(vy + h / 2 * k2[0], r + h / 2 * k2[1])
+    k4 = f(vy + h * k3[0], r + h * k3[1])
+    out = ca.vertcat(vy + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]),
+                     r + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]))
+    return ca.Function("step", [vy, r, vx, delta, p], [out])
+
+
+def predict(data: Lateral, vehicle: MpccVehicle, names: Sequence[str], values: Sequence[float],
+            window_s: float) -> np.ndarray:
+    """(vy, r) predicted at every sample, each window started from the recorded values."""
+    h = float(np.median(np.diff(data.t)))
+    step = _step_function(vehicle, names, h)
+    per_window = max(1, round(window_s / h))
+    out = np.empty((len(data.t), 2))
+    p = np.asarray(values, float)
+    for i in range(len(data.t)):
+        if i % per_window == 0:
+            state = np.array([data.vy[i], data.r[i]])
+        else:
+            state = np.asarray(step(state[0], state[1], data.vx[i - 1], data.delta[i - 1], p)
+                               ).ravel()
+        out[i] = state
+    return out
+
+
+@dataclass(frozen=True)
+class MpccFit:
+    """Fitted values and the yaw-rate / vy prediction RMS before and after."""
+
+    names: tuple[str, ...]
+    start: tuple[float, ...]
+    values: tuple[float, ...]
+    rms_before: tuple[float, float]  # vy m/s, r rad/s
+    rms_after: tuple[float, float]
+
+
+def fit_mpcc(data: Lateral, vehicle: MpccVehicle, names: Sequence[str],
+             window_s: float = 0.5) -> MpccFit:
+    """Fit the named MpccVehicle fields to the recorded lateral motion."""
+    from scipy.optimize import least_squares
+
+    fields = MpccVehicle.model_fields
+    unknown = [n for n in names if n not in fields]
+    if unknown:
+        raise SpecError(f"--params {unknown[0]}: not a field of the MPCC's vehicle model "
+                        f"({', '.join(fields)})")
+    start = np.array([float(getattr(vehicle, n)) for n in names])
+    measured = np.column_stack([data.vy, data.r])
+
+    def residual(scaled: np.ndarray) -> np.ndarray:
+        return np.asarray((predict(data, vehicle, names, scaled * start, window_s)
+                           - measured).ravel())
+
+    result = least_squares(residual, np.ones(len(names)), bounds=(1 / 3, 3.0), method="trf",
+                           diff_step=1e-3, xtol=1e-6)
+
+    def rms(scaled: np.ndarray) -> tuple[float, float]:
+        err = residual(scaled).reshape(-1, 2)
+        return float(np.sqrt(np.mean(err[:, 0] ** 2))), float(np.sqrt(np.mean(err[:, 1] ** 2)))
+
+    return MpccFit(tuple(names), tuple(start.tolist()), tuple((result.x * start).tolist()),
+                   rms(np.ones(len(names))), rms(result.x))

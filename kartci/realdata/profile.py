@@ -1,0 +1,150 @@
+"""Import profiles: which topics of a foreign log play which of kartci's roles.
+
+A profile is a small YAML file (see `profiles/`): the robot's pose or odometry (the reference),
+optionally a pose estimate to judge against it, the command stream, IMU and lidar, the robot
+kind with its parameters (for `simreal` and `calibrate`) and the track, if there is one."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import Field, ValidationError
+
+from kartci.errors import SpecError
+from kartci.logs import TopicInfo, topics
+from kartci.spec.models import Criterion, Frozen
+
+POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",
+              "geometry_msgs/msg/PoseWithCovarianceStamped")
+COMMAND_TYPES = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",
+                 "geometry_msgs/msg/Twist", "sensor_msgs/msg/Joy",
+                 "kartci_msgs/msg/KartCommand")
+IMU_TYPES = ("sensor_msgs/msg/Imu",)
+LIDAR_TYPES = ("sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2")
+COLLISION_TYPES = ("kartci_msgs/msg/Collision",)
+
+
+class TopicRole(Frozen):
+    """One topic of the log and the frame its data is in (checked when given)."""
+
+    topic: str = Field(description="the topic's name in the log")
+    frame_id: str | None = Field(None, description="expected header frame_id; none: any")
+
+
+class CommandRole(TopicRole):
+    """The command stream and how the real robot turned it into actuation."""
+
+    mapping: str = Field("ps4", description="joystick mapping, for sensor_msgs/Joy commands")
+    wheel_radius_m: float = Field(0.035, gt=0.0, description="wheel radius the real robot's "
+                                  "base controller converts Twist to wheel speeds with, m "
+                                  "(differential drive)")
+    wheel_separation_m: float = Field(0.15, gt=0.0, description="wheel separation the real "
+                                      "robot's base controller uses, m (differential drive)")
+
+
+class Profile(Frozen):
+    """How a foreign log maps onto kartci's roles."""
+
+    name: str = Field(pattern=r"^[a-z0-9_]+$", description="name of the scored result folder "
+                      "and its baseline")
+    description: str = Field("", description="one line about the log")
+    agent: str = Field("robot", pattern=r"^[a-z0-9_]+$", description="the robot's namespace "
+                       "in the imported run log")
+    pose: TopicRole = Field(description="the reference pose: nav_msgs/Odometry, PoseStamped or "
+                            "PoseWithCovarianceStamped")
+    estimate: TopicRole | None = Field(None, description="a pose estimate judged against the "
+                                       "reference (localization error)")
+    commands: CommandRole | None = Field(None, description="the command stream: Twist, "
+                                         "TwistStamped, AckermannDriveStamped, Joy, KartCommand")
+    imu: TopicRole | None = Field(None, description="sensor_msgs/Imu")
+    lidar: TopicRole | None = Field(None, description="LaserScan or PointCloud2")
+    collisions: TopicRole | None = Field(None, description="recorded collisions "
+                                         "(kartci_msgs/Collision): counted as `collisions`")
+    robot: dict[str, Any] | None = Field(None, description="the robot for simreal/calibrate: "
+                                         "{kind: NAME, ...params}; default: the scenario's")
+    scenario: str | None = Field(None, description="scenario whose world and robot simreal "
+                                 "uses (default: by robot kind)")
+    track: str | None = Field(None, description="TUMFTM track CSV the log was driven on "
+                              "(relative to the profile file): laps, lap times, cross-track")
+    criteria: dict[str, Criterion] = Field({}, description="pass criteria on the scored "
+                                           "metrics (simreal's divergence among them), as a "
+                                           "scenario's: a failed one fails the log (exit 1)")
+
+    def roles(self) -> dict[str, tuple[TopicRole, tuple[str, ...]]]:
+        """Every topic the profile names, with the message types its role accepts."""
+        out: dict[str, tuple[TopicRole, tuple[str, ...]]] = {"pose": (self.pose, POSE_TYPES)}
+        for name, role, types in (("estimate", self.estimate, POSE_TYPES),
+                                  ("commands", self.commands, COMMAND_TYPES),
+                                  ("imu", self.imu, IMU_TYPES),
+                                  ("lidar", self.lidar, LIDAR_TYPES),
+                                  ("collisions", self.collisions, COLLISION_TYPES)):
+            if role is not None:
+                out[name] = (role, types)
+        return out
+
+
+def load_profile(path: Path) -> Profile:
+    """A profile file, validated; a SpecError naming the file and the key otherwise."""
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as err:
+        raise SpecError(f"{path}: cannot read the profile ({err.strerror or err})") from err
+    except yaml.YAMLError as err:
+        raise SpecError(f"{path}: not valid YAML ({' '.join(str(err).split())})") from err
+    if not isinstance(data, dict):
+        raise SpecError(f"{path}: a profile is a mapping of roles to topics")
+    data.setdefault("name", re.sub(r"[^a-z0-9_]", "_", path.stem.lower()))
+    try:
+        profile = Profile.model_validate(data)
+    except ValidationError as err:
+        first = err.errors()[0]
+        where = ".".join(str(p) for p in first["loc"]) or "(top)"
+        raise SpecError(f"{path}: {where}: {first['msg']}") from err
+    if profile.track is not None and not Path(profile.track).is_absolute():
+        profile = profile.model_copy(update={"track": str((path.parent / profile.track)
+                                                          .resolve())})
+    return profile
+
+
+def auto_profile(log: Path, info: list[TopicInfo]) -> Profile:
+    """A profile guessed from the log: its only pose/odometry topic, its only command topic."""
+    name = re.sub(r"[^a-z0-9_]", "_", log.name.split(".")[0].lower()) or "log"
+    poses = [i for i in info if i.msgtype in POSE_TYPES and i.count > 0]
+    if len(poses) != 1:
+        listed = ", ".join(f"{i.topic} ({i.msgtype}, {i.count})" for i in info) or "none"
+        what = "no pose or odometry topic" if not poses else "several pose topics"
+        raise SpecError(f"{log}: {what} with messages (topics: {listed}); "
+                        "name the pose in a profile (--profile)")
+    cmds = [i for i in info if i.msgtype in COMMAND_TYPES and i.count > 0]
+    return Profile(name=name, pose=TopicRole(topic=poses[0].topic),
+                   commands=CommandRole(topic=cmds[0].topic) if len(cmds) == 1 else None)
+
+
+def check_profile(log: Path, profile: Profile) -> dict[str, TopicInfo]:
+    """The log's topic for every role of the profile; a SpecError naming the first role whose
+    topic is missing, empty or of a type that role cannot use."""
+    info = {i.topic: i for i in topics(log)}
+    listed = ", ".join(f"{i.topic} ({i.msgtype}, {i.count})" for i in info.values()) or "none"
+    out: dict[str, TopicInfo] = {}
+    for name, (role, types) in profile.roles().items():
+        found = info.get(role.topic)
+        if found is None:
+            raise SpecError(f"{log}: profile {profile.name}: {name} topic {role.topic} is not in "
+                            f"the log (topics: {listed})")
+        if found.msgtype not in types:
+            raise SpecError(f"{log}: profile {profile.name}: {name} topic {role.topic} is "
+                            f"{found.msgtype}; a {name} topic is one of {', '.join(types)}")
+        if found.count == 0:
+            raise SpecError(f"{log}: profile {profile.name}: {name} topic {role.topic} has no "
+                            "messages")
+        out[name] = found
+    return out
+
+
+def resolve_profile(log: Path, path: Path | None) -> tuple[Profile, dict[str, TopicInfo]]:
+    """The profile (from its file, else guessed from the log) and the log's topic per role."""
+    profile = load_profile(path) if path is not None else auto_profile(log, topics(log))
+    return profile, check_profile(log, profile)

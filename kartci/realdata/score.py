@@ -1,0 +1,50 @@
+"""`kartci score` and `kartci simreal`: a foreign log imported as a run log (see importer), with
+the sim's runs beside it for simreal, then scored, judged against its baseline and reported
+exactly as a simulated run is."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from kartci.realdata.importer import import_log
+from kartci.realdata.profile import resolve_profile
+from kartci.realdata.runlog import write_result
+from kartci.results import ScenarioResult
+from kartci.runner.run import evaluate
+
+
+def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path) -> ScenarioResult:
+    """Import `log` into OUT/<profile name>/run.mcap, compute metrics.json from it and judge it
+    against `baselines/<profile name>.json`. Bad input (profile, missing topics) raises before
+    anything is written."""
+    profile, info = resolve_profile(log, profile_path)
+    types = {role: i.msgtype for role, i in info.items()}
+    folder = out / profile.name
+    write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst),
+                 {"imported_from": str(log.resolve()), "profile": profile.name})
+    return evaluate(folder, baselines)
+
+
+def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
+                overrides: Sequence[str], window_s: float, out: Path,
+                baselines: Path) -> ScenarioResult:
+    """The log's commands replayed into the sim (whole and windowed) into
+    OUT/<profile name>_simreal/, scored for divergence and judged like a run."""
+    from kartci.realdata import simreal
+
+    profile, info = resolve_profile(log, profile_path)
+    types = {role: i.msgtype for role, i in info.items()}
+    setup = simreal.sim_setup(profile, scenario, overrides)
+    simreal.check_commands(setup, profile, types)
+    name = f"{profile.name}_simreal"
+    t0 = time.perf_counter()
+    write_result(out / name, name,
+                 lambda dst: simreal.simreal_log(log, profile, types, setup, window_s, dst),
+                 {"imported_from": str(log.resolve()), "profile": profile.name,
+                  "scenario": setup.scenario.name, "overrides": list(setup.overrides),
+                  "window_s": window_s})
+    result = evaluate(out / name, baselines)
+    result.run["wall_s"] = round(time.perf_counter() - t0, 3)
+    return result

@@ -1,0 +1,138 @@
+"""`kartci simreal`: a log's commands replayed into the simulated robot, whole and in windows,
+recorded next to the log's own odometry in one run log, scored and reported like a run."""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from kartci.errors import SpecError
+from kartci.logs import McapLogWriter, messages, open_log
+from kartci.logs.types import for_writing
+from kartci.realdata.divergence import SIM_WHOLE, SIM_WINDOWS, run_whole, run_windows
+from kartci.realdata.drive import Drive, read_drive
+from kartci.realdata.importer import _odom, import_log, imported_scenario
+from kartci.realdata.plant import Converter, Plant, as_recorded, diff_drive
+from kartci.realdata.profile import Profile
+from kartci.spec import Scenario, load_scenario
+
+DEFAULT_SCENARIO = {"gokart": "kart_simreal", "line_tracker": "diffdrive_simreal"}
+DIFF_DRIVE_KINDS = ("line_tracker",)  # robot kinds that take wheel speeds, not Twist
+
+
+@dataclass(frozen=True)
+class SimSetup:
+    """The scenario simulated against a log, its overrides and the command conversion."""
+
+    scenario: Scenario
+    overrides: tuple[str, ...]
+    convert: Converter
+
+
+def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str]) -> SimSetup:
+    """The scenario to simulate (given, else the profile's, else by the profile's robot kind),
+    with the profile's robot parameters and then `overrides` (`--set`, calibrated values)."""
+    kind = (profile.robot or {}).get("kind")
+    name = scenario or profile.scenario or DEFAULT_SCENARIO.get(str(kind))
+    if name is None:
+        raise SpecError(f"profile {profile.name}: no scenario to simulate the log in; give "
+                        "--scenario or the profile's `robot: {kind: ...}` or `scenario:`")
+    base = load_scenario(name)
+    if len(base.agents) != 1:
+        raise SpecError(f"scenario {base.name}: simreal needs exactly one agent")
+    agent = next(iter(base.agents))
+    if kind is not None and kind != base.agents[agent].model.kind:
+        raise SpecError(f"profile {profile.name}: robot kind {kind} but scenario {base.name} "
+                        f"simulates {base.agents[agent].model.kind}")
+    sets = [f"agents.{agent}.model.{key}={json.dumps(value)}"
+            for key, value in (profile.robot or {}).items() if key != "kind"]
+    sets += list(overrides)
+    spec = load_scenario(name, sets)
+    model_kind = spec.agents[agent].model.kind
+    if profile.commands is None:
+        raise SpecError(f"profile {profile.name}: names no commands topic to replay")
+    convert = diff_drive(profile.commands) if model_kind in DIFF_DRIVE_KINDS else as_recorded
+    return SimSetup(spec, tuple(sets), convert)
+
+
+TWIST = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
+KART_COMMANDS = (*TWIST, "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")
+
+
+def check_commands(setup: SimSetup, profile: Profile, types: dict[str, str]) -> None:
+    """The log's commands must be a kind the simulated robot is driven by: Twist for a
+    differential drive; Twist, Ackermann or KartCommand for the kart (Joy goes through
+    `kartci replay` and its joystick mapping instead)."""
+    kind = next(iter(setup.scenario.agents.values())).model.kind
+    usable = TWIST if kind in DIFF_DRIVE_KINDS else KART_COMMANDS
+    got = types.get("commands")
+    if got not in usable:
+        raise SpecError(f"profile {profile.name}: commands are {got}; a {kind} is replayed from "
+                        f"{' or '.join(usable)}")
+
+
+def simulate(setup: SimSetup, drive: Drive, window_s: float) -> dict[str, Any]:
+    """The windowed and the whole-log sim runs: {"windows": (t, states), "whole": ...}."""
+    plant = Plant(setup.scenario, drive, setup.convert)
+    try:
+        return {"windows": run_windows(plant, drive, window_s), "whole": run_whole(plant, drive)}
+    finally:
+        plant.close()
+
+
+def simreal_log(log: Path, profile: Profile, types: dict[str, str], setup: SimSetup,
+                window_s: float, dst: Path) -> Scenario:
+    """Write `dst`: the imported log plus the sim's odometry (windowed and whole), and a
+    recorded scenario whose `simreal` metrics score the divergence."""
+    with tempfile.TemporaryDirectory() as tmp:
+        imported = Path(tmp) / "imported.mcap"
+        import_log(log, profile, types, imported)
+        drive = read_drive(imported, profile.agent)
+        runs = simulate(setup, drive, window_s)
+        scenario = _scenario(profile, drive, setup, window_s)
+        _write(imported, dst, scenario, profile.agent, drive, runs)
+    return scenario
+
+
+def _scenario(profile: Profile, drive: Drive, setup: SimSetup, window_s: float) -> Scenario:
+    base = imported_scenario(profile, drive.duration_s)
+    data = base.model_dump(mode="json")
+    data["name"] = f"{profile.name}_simreal"
+    data["description"] = f"sim vs log: {setup.scenario.name} driven by {profile.name}'s commands"
+    data["metrics"]["simreal"] = {"window_s": window_s, "scenario": setup.scenario.name,
+                                  "overrides": list(setup.overrides)}
+    return Scenario.model_validate(data)
+
+
+def _write(imported: Path, dst: Path, scenario: Scenario, agent: str, drive: Drive,
+           runs: dict[str, Any]) -> None:
+    from kartci.logs import msg
+
+    with open_log(imported) as reader:
+        store = for_writing(reader.typestore)
+    with McapLogWriter(dst, store) as out:
+        for topic, t_ns, m in messages(imported):
+            if topic == "/kartci/scenario":
+                m = msg("std_msgs/msg/String", data=scenario.model_dump_json())
+            out.write(topic, m, t_ns)
+        stamp0 = _first_stamp(imported, agent)
+        for name, topic in (("windows", SIM_WINDOWS), ("whole", SIM_WHOLE)):
+            t, states = runs[name]
+            for ti, s in zip(t, states, strict=True):
+                t_ns = stamp0 + round(float(ti) * 1e9)
+                quat = (0.0, 0.0, float(np.sin(s[2] / 2)), float(np.cos(s[2] / 2)))
+                out.write(f"/{agent}/{topic}", _odom(t_ns, "map", (s[0], s[1], 0.0), quat,
+                                                      (s[3], s[4], 0.0, 0.0, 0.0, s[5])),
+                          t_ns)
+
+
+def _first_stamp(imported: Path, agent: str) -> int:
+    for _, _, m in messages(imported, [f"/{agent}/odom"]):
+        return int(m.header.stamp.sec) * 1_000_000_000 + int(m.header.stamp.nanosec)
+    return 0

@@ -1,0 +1,39 @@
+"""kartci calibrate recovers three perturbed kart parameters from a synthetic "real" log."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from conftest import KART, TRUTH
+
+from kartci.errors import SpecError
+from kartci.realdata.calibrate import calibrate_log, parse_params
+from kartci.realdata.profile import load_profile
+from kartci.realdata.simreal import sim_setup
+
+
+def test_calibrate_recovers_three_kart_parameters(kart_logs: dict[float, Path],
+                                                  kart_profile: Path, tmp_path: Path) -> None:
+    names = [f"model.{k}" for k in TRUTH]
+    fit = calibrate_log(kart_logs[1.0], kart_profile, None, [], names, 2.0, tmp_path)
+    for (key, truth), value in zip(TRUTH.items(), fit.values, strict=True):
+        assert value == pytest.approx(truth, rel=0.05), key
+    before = fit.before["simreal_ape_window_rmse_m"]
+    after = fit.after["simreal_ape_window_rmse_m"]
+    assert after < 0.35 * before  # stated in the README: below 35 % of before
+    doc = json.loads((tmp_path / "calibration.json").read_text(encoding="utf-8"))
+    assert doc["params"][f"{KART}.speed_gain_per_s"]["value"] == fit.values[0]
+    overlay = (tmp_path / "overlay.yaml").read_text(encoding="utf-8")
+    assert f"{KART}.steering_rate_radps: {fit.values[1]!r}" in overlay
+
+
+def test_params_are_checked(kart_profile: Path) -> None:
+    setup = sim_setup(load_profile(kart_profile), None, [])
+    (p,) = parse_params(setup, ["model.speed_gain_per_s=1:3"])
+    assert (p.path, p.start, p.lo, p.hi) == (f"{KART}.speed_gain_per_s", 2.0, 1.0, 3.0)
+    with pytest.raises(SpecError, match="must hold the start value"):
+        parse_params(setup, ["model.speed_gain_per_s=3:4"])
+    with pytest.raises(SpecError, match="is not a number"):
+        parse_params(setup, ["model.steering"])
