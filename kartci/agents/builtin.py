@@ -10,8 +10,9 @@ from kartci.agents.params import (
                       ManualController,
                       ScriptController,
 )
+from kartci.localization.params import LocalizationParams
 from kartci.mpcc.params import MpccController
-from kartci.plugins import Controller, lazy
+from kartci.plugins import Controller, Node, lazy
 
 KART = ("gokart",)
 
@@ -27,3 +28,8 @@ JOY_DRIVER = Controller("joy_driver", JoyDriverController, lazy("kartci.agents.k
                         KART, "a scripted human: pure pursuit expressed as joystick messages")
 MPCC = Controller("mpcc", MpccController, lazy("kartci.agents.mpcc:MpccAgent"), KART,
                   "model predictive contouring control (CasADi / Ipopt)")
+
+LOCALIZATION = Node("localization", LocalizationParams,
+                    lazy("kartci.localization.node:LocalizationNode"), KART,
+                    "lidar registration to the map (small_gicp) fused with wheels and gyro "
+                    "(planar EKF): localization/odom, tf, deskewed cloud")

@@ -11,6 +11,7 @@ from kartci.cli import (  # noqa: F401  (importing a command module registers it
     baseline,
     init,
     logs,
+    maps,
     results,
     run,
     scenarios,
