@@ -69,8 +69,8 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
 def plugins() -> None:
     """List the registered controllers, nodes, robots, worlds and metrics.
 
-    Controllers, nodes, robot kinds, world kinds and metric sets (what a scenario can name), each with
-    its one-line description and the module it comes from."""
+    Controllers, nodes, robot kinds, world kinds and metric sets (what a scenario can name), each
+    with its one-line description and the module it comes from."""
     from kartci.plugins import catalogue
 
     table = Table("kind", "name", "description", "from", box=None)

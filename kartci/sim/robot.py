@@ -15,6 +15,7 @@ import numpy as np
 from kartci.agents.base import Agent
 from kartci.spec.models import AgentSpec, Pose2D, WorldParams
 
+
 class Put(Protocol):
     """Publish one message: (topic, message, t ns). `record=False` hands it to the agents and
     nodes that read the topic without writing it to the log (every lidar scan feeds a

@@ -1,6 +1,6 @@
 """Step one of scenario validation: the registered type names (`world.kind`, `model.kind`,
-`controller.type`, the keys of `nodes` and of `metrics`) pick each part's own parameter model, which then
-validates that part. A problem is a `ParamsError` that knows where in the file it is."""
+`controller.type`, the keys of `nodes` and of `metrics`) pick each part's own parameter model,
+which then validates that part. A problem is a `ParamsError` that knows where in the file it is."""
 
 from __future__ import annotations
 
