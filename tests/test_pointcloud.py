@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from helpers import kartci
+
 from kartci.errors import LogError
 from kartci.pointcloud import read_ply, voxel_downsample, write_ply
 

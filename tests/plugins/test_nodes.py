@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
+from helpers import kartci
 
 from kartci import plugins
 from kartci.errors import SpecError
@@ -13,7 +14,6 @@ from kartci.logs import msg
 from kartci.plugins import AgentContext, Node, NodeParams
 from kartci.sim.session import Session
 from kartci.spec import load_scenario
-from helpers import kartci
 
 
 class CountParams(NodeParams):

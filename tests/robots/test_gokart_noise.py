@@ -10,10 +10,6 @@ from kartci.robots.gokart.noise import ImuBias, WheelSlip, dropout
 from kartci.robots.gokart.params import ImuSpec, LidarSpec, WheelSpec
 
 
-def _untouched(rng: np.random.Generator, state: dict[str, object]) -> bool:
-    return rng.bit_generator.state == state
-
-
 def test_errors_that_are_off_draw_nothing() -> None:
     rng = np.random.default_rng(3)
     state = rng.bit_generator.state
@@ -22,7 +18,7 @@ def test_errors_that_are_off_draw_nothing() -> None:
     assert WheelSlip(WheelSpec(), rng, 0.02, 4).apply([1.0, 2.0]) == [1.0, 2.0]
     ranges = np.ones((16, 10))
     assert dropout(ranges, LidarSpec(), rng) is ranges
-    assert _untouched(rng, state)
+    assert rng.bit_generator.state == state
 
 
 def test_imu_bias_is_constant_plus_a_random_walk() -> None:

@@ -16,6 +16,7 @@ from kartci.localization.node import map_path
 from kartci.localization.registration import MapMatcher, pose_matrix
 from kartci.robots.gokart.noise import distorted_scan
 from kartci.sim import lidar
+from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
 from kartci.sim.hall import blocks
 from kartci.spec.load import load_world
@@ -25,7 +26,7 @@ VLP16 = lidar.MODELS["vlp16"]
 AZ = VLP16.azimuths(10.0)
 
 
-def _hall() -> tuple[list[lidar.Block], float]:
+def _hall() -> tuple[list[Block], float]:
     world, _ = load_world("winti/hall")
     assert isinstance(world, HallWorld)
     return blocks(world), world.wall_height_m
@@ -84,12 +85,12 @@ def test_ekf_learns_the_gyro_bias_from_registrations() -> None:
     """A gyro reading 0.02 rad/s too high at standstill and a registration saying the heading
     stays 0: the bias state converges to 0.02 rad/s."""
     f = _ekf()
-    R = np.diag([0.01**2, 0.01**2, 0.003**2])
+    r = np.diag([0.01**2, 0.01**2, 0.003**2])
     for _ in range(300):  # 30 s: 10 predictions per registration
         for _ in range(10):
             f.predict(0.0, 0.02, 0.01)
-        assert f.mahalanobis2(np.zeros(3), R) < 100
-        f.update(np.zeros(3), R)
+        assert f.mahalanobis2(np.zeros(3), r) < 100
+        f.update(np.zeros(3), r)
     assert f.s[3] == pytest.approx(0.02, abs=0.002)
     assert abs(f.s[2]) < 0.005
 
