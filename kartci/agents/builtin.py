@@ -12,6 +12,7 @@ from kartci.agents.params import (
 )
 from kartci.localization.params import LocalizationParams
 from kartci.mpcc.params import MpccController
+from kartci.perception.params import DetectorParams
 from kartci.plugins import Controller, Node, lazy
 
 KART = ("gokart",)
@@ -33,3 +34,7 @@ LOCALIZATION = Node("localization", LocalizationParams,
                     lazy("kartci.localization.node:LocalizationNode"), KART,
                     "lidar registration to the map (small_gicp) fused with wheels and gyro "
                     "(planar EKF): localization/odom, tf, deskewed cloud")
+OBSTACLE_DETECTOR = Node("obstacle_detector", DetectorParams,
+                         lazy("kartci.perception.node:ObstacleDetector"), KART,
+                         "lidar obstacles: map and ground removal, clusters, boxes, tracks, "
+                         "static or dynamic (vision_msgs/Detection3DArray, markers)")

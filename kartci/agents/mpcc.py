@@ -33,9 +33,10 @@ class MpccAgent:
         self.mpcc: Mpcc | None = None
         self.static: list[Obstacle] = []
         self._boxes: list[tuple[float, float, float]] = []  # centre x, y and radius, m
-        self.others = {f"/{name}/odom": name for name in ctx.others}
-        self.inputs = (TRACK_TOPIC, OBSTACLES_TOPIC, spec.state_topic, "joint_states",
-                       *self.others)
+        perceive = spec.obstacles_from == "perception"
+        self.others = {} if perceive else {f"/{name}/odom": name for name in ctx.others}
+        seen = (spec.detections_topic,) if perceive else (OBSTACLES_TOPIC, *self.others)
+        self.inputs = (TRACK_TOPIC, spec.state_topic, "joint_states", *seen)
         self._state: np.ndarray | None = None  # [X, Y, psi, vx, vy, r] of the CoG
         self._delta = 0.0
         self._accel = 0.0
@@ -55,6 +56,12 @@ class MpccAgent:
             self._boxes = [(float(m.pose.position.x), float(m.pose.position.y),
                             0.5 * math.hypot(float(m.scale.x), float(m.scale.y)))
                            for m in message.markers]
+            self._place_obstacles()
+            return
+        if topic == self.spec.detections_topic:  # perception: every detection as a box
+            self._boxes = [(float(d.bbox.center.position.x), float(d.bbox.center.position.y),
+                            0.5 * math.hypot(float(d.bbox.size.x), float(d.bbox.size.y)))
+                           for d in message.detections]
             self._place_obstacles()
             return
         if topic == "joint_states":

@@ -6,6 +6,8 @@ from typing import Any
 
 from kartci.metrics import ScoreContext, recorded_track
 from kartci.metrics.base import DEFS, Metric
+from kartci.metrics.detection import DEFS as DETECTION_DEFS
+from kartci.metrics.detection import DetectionMetricsParams, detection_metrics
 from kartci.metrics.kart import kart_metrics, kart_track
 from kartci.metrics.line import line_metrics
 from kartci.metrics.localization import DEFS as LOCALIZATION_DEFS
@@ -68,3 +70,7 @@ LOCALIZATION = MetricSet(
     "localization", LOCALIZATION_DEFS, localization_metrics, LocalizationMetricsParams, (),
     "localization estimate vs ground truth: APE / RPE (evo's conventions), convergence from "
     "the initial guess, divergence events")
+DETECTION = MetricSet(
+    "detection", DETECTION_DEFS, detection_metrics, DetectionMetricsParams, (),
+    "obstacle detections vs ground-truth boxes: recall within range, precision, position "
+    "error, static/dynamic accuracy, latency")

@@ -73,7 +73,12 @@ def _trajectory(ctx: ScoreContext, topic: str) -> Trajectory:
 
 
 def localization_metrics(ctx: ScoreContext, params: LocalizationMetricsParams) -> list[Metric]:
-    """APE, RPE, convergence and divergence of one agent's localization."""
+    """APE, RPE, convergence and divergence of one agent's localization (none for an agent
+    that runs no localization node and publishes no estimate)."""
+    table = ctx.table(params.topic)
+    if (table is None or table.empty) and "localization" not in ctx.scenario.agents[
+            ctx.agent].nodes:
+        return []
     ref, est = associate(_trajectory(ctx, params.reference_topic),
                          _trajectory(ctx, params.topic), params.max_diff_s)
     err = ape_errors(ref, est)
