@@ -48,7 +48,8 @@ class LocalizationNode:
         self.mount = np.array([0.0, 0.0, spec.sensor_height_m])  # velodyne_link in base_link
         self.z_m = 0.0  # base_link's height, from registration
         self.matcher = MapMatcher.from_file(map_path(spec.map), spec.map_voxel_m, spec.method,
-                                            spec.max_correspondence_m, spec.max_iterations)
+                                            spec.max_correspondence_m, spec.max_iterations,
+                                            spec.vgicp_voxel_m)
         self.ekf: PlanarEkf | None = None
         self.dead_reckoning = np.zeros(3)  # odom -> base_link: wheels and gyro only
         self.v_mps = self.w_radps = 0.0

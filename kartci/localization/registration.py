@@ -2,9 +2,11 @@
 covariances, KdTree), each scan is thinned and aligned from the filter's prediction.
 
 small_gicp over kiss-icp: kiss-icp is a scan-to-local-map odometry pipeline (its own adaptive
-threshold and local map), not a registration against a prior map; small_gicp aligns a scan to
-any target we give it, in a few ms per VLP-16 scan on one thread (benchmarks/localization.py
-measures it)."""
+threshold and local map, ~11 ms per scan here), not a registration against a prior map;
+small_gicp aligns a scan to any target we give it. Its VGICP (map as voxel Gaussians) runs in
+~9 ms per VLP-16 scan on one core with ~2 cm error per scan, GICP in ~30 ms with ~1 cm
+(benchmarks/bench_localization.py); the filter smooths the difference away, so VGICP is the
+default."""
 
 from __future__ import annotations
 
@@ -41,20 +43,27 @@ class MapMatcher:
     """A map, ready to register scans against."""
 
     def __init__(self, map_xyz: Array, voxel_m: float, method: str,
-                 max_correspondence_m: float, max_iterations: int) -> None:
-        """Preprocess the map (thin, covariances, KdTree): once per run."""
+                 max_correspondence_m: float, max_iterations: int,
+                 vgicp_voxel_m: float = 1.0) -> None:
+        """Preprocess the map (thin, covariances, KdTree; for VGICP voxel Gaussians): once per
+        run."""
         if len(map_xyz) < 10:
             raise SpecError(f"the map has {len(map_xyz)} points: too few to register against")
         self.target, self.tree = small_gicp.preprocess_points(
             np.ascontiguousarray(map_xyz, dtype=np.float64), downsampling_resolution=voxel_m,
             num_threads=1)
+        self.voxels = None
+        if method == "VGICP":
+            self.voxels = small_gicp.GaussianVoxelMap(vgicp_voxel_m)
+            self.voxels.insert(self.target)
         self.method, self.max_corr, self.iters = method, max_correspondence_m, max_iterations
 
     @classmethod
     def from_file(cls, path: Path, voxel_m: float, method: str, max_correspondence_m: float,
-                  max_iterations: int) -> MapMatcher:
+                  max_iterations: int, vgicp_voxel_m: float = 1.0) -> MapMatcher:
         """A map from a PLY file (see `kartci map`)."""
-        return cls(read_ply(path), voxel_m, method, max_correspondence_m, max_iterations)
+        return cls(read_ply(path), voxel_m, method, max_correspondence_m, max_iterations,
+                   vgicp_voxel_m)
 
     def align(self, scan_xyz: Array, voxel_m: float, guess: Array) -> Match:
         """Register a scan (N, 3, sensor frame) from the guess (4x4 map <- sensor)."""
@@ -64,10 +73,15 @@ class MapMatcher:
         n = source.size()
         if n < 10:
             return Match(guess, False, 0.0, 0)
-        r = small_gicp.align(self.target, source, self.tree, guess,
-                             registration_type=self.method,
-                             max_correspondence_distance=self.max_corr, num_threads=1,
-                             max_iterations=self.iters)
+        if self.voxels is not None:
+            r = small_gicp.align(self.voxels, source, guess,
+                                 max_correspondence_distance=self.max_corr, num_threads=1,
+                                 max_iterations=self.iters)
+        else:
+            r = small_gicp.align(self.target, source, self.tree, guess,
+                                 registration_type=self.method,
+                                 max_correspondence_distance=self.max_corr, num_threads=1,
+                                 max_iterations=self.iters)
         return Match(np.asarray(r.T_target_source), bool(r.converged), r.num_inliers / n,
                      int(r.iterations))
 

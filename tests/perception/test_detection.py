@@ -37,11 +37,11 @@ def test_a_box_gets_its_centre_size_and_heading() -> None:
 def test_map_floor_and_ceiling_points_go_obstacles_stay() -> None:
     wall = np.column_stack([np.linspace(0, 10, 200), np.zeros(200), np.full(200, 1.0)])
     mask = MapMask(wall, 0.12, 2.2)
-    scan = np.concatenate([wall + (0.0, 0.05, 0.0),  # the wall again, 5 cm off: the map
+    scan = np.concatenate([wall + np.array([0.0, 0.05, 0.0]),  # the wall, 5 cm off: the map
                            np.column_stack([np.random.default_rng(0).uniform(0, 10, (300, 2)),
                                             np.full(300, 0.02)]),  # floor
                            _faces(5.0, 3.0, 0.5, 0.5, 0.0),  # an obstacle
-                           _faces(8.0, 3.0, 0.5, 0.5, 0.0) + (0.0, 0.0, 3.0)])  # ceiling
+                           _faces(8.0, 3.0, 0.5, 0.5, 0.0) + np.array([0.0, 0.0, 3.0])])
     pts = obstacle_points(scan, np.array([5.0, 1.0]), mask, 0.12, 2.2, 0.3, 25.0)
     found = clusters(pts, 0.5, 3)
     assert len(found) == 1
