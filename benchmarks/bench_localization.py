@@ -138,9 +138,9 @@ def main() -> None:
     print(f"{len(data)} VLP-16 scans, {statistics.median(len(d[0]) for d in data):.0f} points "
           "each (median)")
     variants: list[tuple[str, str, float, bool]] = [
-        ("localization VGICP 0.5 m (node default)", "VGICP", 0.5, True),
+        ("localization VGICP 0.5 m", "VGICP", 0.5, True),
         ("localization VGICP 0.3 m", "VGICP", 0.3, True),
-        ("localization GICP 0.3 m", "GICP", 0.3, True),
+        ("localization GICP 0.3 m (node default)", "GICP", 0.3, True),
         ("localization GICP 0.5 m", "GICP", 0.5, True),
         ("localization GICP 0.3 m, no floor", "GICP", 0.3, False),
         ("localization ICP 0.3 m", "ICP", 0.3, True),

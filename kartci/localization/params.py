@@ -45,12 +45,13 @@ class LocalizationParams(NodeParams):
     deskew: bool = Field(True, description="motion-compensate each scan with the filter's "
                          "twist before registration")
     method: Literal["GICP", "VGICP", "ICP", "PLANE_ICP"] = Field(
-        "VGICP", description="small_gicp registration type: VGICP (voxelized GICP, the "
-        "default: under 10 ms per VLP-16 scan on one core, ~2 cm per scan), GICP (~1 cm, "
-        "about 3x slower), ICP, PLANE_ICP; benchmarks/bench_localization.py measures them")
+        "GICP", description="small_gicp registration type: GICP (the default: ~1 cm per "
+        "VLP-16 scan, ~30 ms on one core), VGICP (voxelized: ~9 ms, ~2 cm, and it lost the "
+        "kart among unmapped boxes in perception_obstacles), ICP, PLANE_ICP; "
+        "benchmarks/bench_localization.py measures them")
     vgicp_voxel_m: float = Field(1.0, gt=0.0, description="voxel size of the map's Gaussians "
                                  "for VGICP, m")
-    scan_voxel_m: float = Field(0.5, gt=0.0, description="voxel size the scan is thinned to "
+    scan_voxel_m: float = Field(0.3, gt=0.0, description="voxel size the scan is thinned to "
                                 "before registration, m")
     map_voxel_m: float = Field(0.2, gt=0.0, description="voxel size the map is thinned to, m")
     max_correspondence_m: float = Field(1.0, gt=0.0, description="largest point pair "

@@ -5,8 +5,9 @@ small_gicp over kiss-icp: kiss-icp is a scan-to-local-map odometry pipeline (its
 threshold and local map, ~11 ms per scan here), not a registration against a prior map;
 small_gicp aligns a scan to any target we give it. Its VGICP (map as voxel Gaussians) runs in
 ~9 ms per VLP-16 scan on one core with ~2 cm error per scan, GICP in ~30 ms with ~1 cm
-(benchmarks/bench_localization.py); the filter smooths the difference away, so VGICP is the
-default."""
+(benchmarks/bench_localization.py). GICP is the default: with VGICP the estimate diverged
+among perception_obstacles' unmapped boxes (APE RMSE 0.11 m, a collision) and recovered from a
+kidnap in 1.3 s instead of 0.4 s; accuracy is what the scenarios judge, speed is a benchmark."""
 
 from __future__ import annotations
 
