@@ -12,11 +12,16 @@ from typing import Any
 
 def write_text_atomic(path: Path, text: str) -> None:
     """Write `text` (UTF-8) to `path` in one step; the temporary file goes on any failure."""
+    write_bytes_atomic(path, text.encode("utf-8"))
+
+
+def write_bytes_atomic(path: Path, data: bytes) -> None:
+    """Write `data` to `path` in one step; the temporary file goes on any failure."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
         os.chmod(tmp, 0o644)  # mkstemp makes 0600; these are shared, reviewable files
         os.replace(tmp, path)
     except BaseException:

@@ -1,11 +1,12 @@
 """Registries: every controller, robot kind, world kind and metric set, by name.
 
 A team adds its own the same way kartci's built-ins are added: an entry point in the groups
-`kartci.controllers`, `kartci.robots`, `kartci.worlds` and `kartci.metrics` whose object is a
-`Controller`, `RobotKind`, `WorldKind` or `MetricSet`, or a module named in the project's
-`plugins` list that calls `register(...)`. Scenarios name them (`controller: {type: NAME}`,
-`model: {kind: NAME}`, `world: {kind: NAME}`, `metrics: {NAME: {...}}`); each validates its own
-parameters with its own pydantic model.
+`kartci.controllers`, `kartci.nodes`, `kartci.robots`, `kartci.worlds` and `kartci.metrics` whose
+object is a `Controller`, `Node`, `RobotKind`, `WorldKind` or `MetricSet`, or a module named in
+the project's `plugins` list that calls `register(...)`. Scenarios name them
+(`controller: {type: NAME}`, `nodes: {NAME: {...}}`, `model: {kind: NAME}`,
+`world: {kind: NAME}`, `metrics: {NAME: {...}}`); each validates its own parameters with its own
+pydantic model.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from kartci.spec.models import (
     ControllerParams,
     Frozen,
     MetricParams,
+    NodeParams,
     RobotParams,
     WorldParams,
 )
@@ -44,6 +46,8 @@ __all__ = [
     "MetricDef",
     "MetricParams",
     "MetricSet",
+    "Node",
+    "NodeParams",
     "Registry",
     "RobotKind",
     "RobotParams",
@@ -81,6 +85,26 @@ class Controller:
         """The agent for one robot; a SpecError when the controller cannot drive its kind."""
         if self.robots and ctx.model.kind not in self.robots:
             raise SpecError(f"agent {ctx.name}: controller {self.name} drives "
+                            f"{' or '.join(self.robots)} robots, not {ctx.model.kind}")
+        return self.factory(params, ctx)
+
+
+@dataclass(frozen=True)
+class Node:
+    """A node type: a helper that runs beside a robot's controller (localization, a detector),
+    as an `Agent` in the robot's namespace, stepped before the controller at the same tick so
+    the controller reads its output. A scenario lists them: `agents.<name>.nodes: {NAME: {...}}`."""
+
+    name: str
+    params: type[NodeParams]
+    factory: Callable[[Any, AgentContext], Agent]
+    robots: tuple[str, ...] = ()  # robot kinds it runs on; empty: any
+    description: str = ""
+
+    def build(self, params: NodeParams, ctx: AgentContext) -> Agent:
+        """The node's agent for one robot; a SpecError when it cannot run on that kind."""
+        if self.robots and ctx.model.kind not in self.robots:
+            raise SpecError(f"agent {ctx.name}: node {self.name} runs on "
                             f"{' or '.join(self.robots)} robots, not {ctx.model.kind}")
         return self.factory(params, ctx)
 
@@ -135,7 +159,7 @@ def lazy(target: str) -> Callable[..., Any]:
     return call
 
 
-T = TypeVar("T", Controller, RobotKind, WorldKind, MetricSet)
+T = TypeVar("T", Controller, Node, RobotKind, WorldKind, MetricSet)
 
 
 @dataclass
@@ -181,20 +205,21 @@ class Registry(Generic[T]):
 
 
 CONTROLLERS: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
+NODES: Registry[Node] = Registry("kartci.nodes", "node", Node)
 ROBOTS: Registry[RobotKind] = Registry("kartci.robots", "robot kind", RobotKind)
 WORLDS: Registry[WorldKind] = Registry("kartci.worlds", "world kind", WorldKind)
 METRICS: Registry[MetricSet] = Registry("kartci.metrics", "metric set", MetricSet)
-REGISTRIES: tuple[Registry[Any], ...] = (CONTROLLERS, ROBOTS, WORLDS, METRICS)
+REGISTRIES: tuple[Registry[Any], ...] = (CONTROLLERS, NODES, ROBOTS, WORLDS, METRICS)
 
 
-def register(item: Controller | RobotKind | WorldKind | MetricSet) -> None:
+def register(item: Controller | Node | RobotKind | WorldKind | MetricSet) -> None:
     """Register a plugin from Python (a project plugin module, a test)."""
     for reg in REGISTRIES:
         if isinstance(item, reg.kind):
             reg.register(item, source=_caller_module())
             return
-    raise SpecError(f"cannot register {item!r}: not a Controller, RobotKind, WorldKind or "
-                    "MetricSet")
+    raise SpecError(f"cannot register {item!r}: not a Controller, Node, RobotKind, WorldKind "
+                    "or MetricSet")
 
 
 def _caller_module() -> str:
@@ -215,7 +240,7 @@ def _entry_point_source(ep: Any) -> str:
 class PluginInfo:
     """One registered plugin, as `kartci plugins` lists it."""
 
-    kind: str  # "controller", "robot kind", "world kind", "metric set"
+    kind: str  # "controller", "node", "robot kind", "world kind", "metric set"
     name: str
     description: str
     source: str  # the module that registered it (and the distribution, for entry points)

@@ -26,6 +26,10 @@ class Plots:
     obstacles: list[np.ndarray] = field(default_factory=list)  # (4, 2) box footprints, m
     horizons: dict[str, list[np.ndarray]] = field(default_factory=dict)  # agent -> MPCC plans
     solves: dict[str, pd.DataFrame] = field(default_factory=dict)  # agent -> t, solve_ms
+    # agent -> t, x, y (localization estimate), error_m (APE translation against the truth)
+    estimates: dict[str, pd.DataFrame] = field(default_factory=dict)
+    # agent -> detected boxes at a few moments: (4, 2) footprint, m, and whether dynamic
+    detections: dict[str, list[tuple[np.ndarray, bool]]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

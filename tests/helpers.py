@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout
 # Two short line-tracker runs, for tests of running many scenarios rather than one
@@ -22,3 +27,23 @@ def kartci(*args: str | Path, cwd: Path | None = None,
     return subprocess.run([sys.executable, "-m", "kartci.cli", *map(str, args)],
                           capture_output=True, text=True, cwd=cwd, timeout=300,
                           env={**base, **(env or {})})
+
+
+BIN = Path(sys.executable).parent
+
+
+def evo(tmp: Path, tool: str, *args: str) -> dict[str, float]:
+    """Run evo_ape / evo_rpe on tmp/ref.txt and tmp/est.txt; its saved statistics."""
+    exe = BIN / tool
+    if not exe.exists() and shutil.which(tool) is None:
+        pytest.skip(f"{tool} not installed (it comes with the dev extras: pip install -e '.[dev]')")
+    out = tmp / "res.zip"
+    out.unlink(missing_ok=True)
+    env = {**os.environ, "HOME": str(tmp), "MPLBACKEND": "Agg"}  # evo keeps settings in ~/.evo
+    proc = subprocess.run([str(exe if exe.exists() else tool), "tum", "ref.txt", "est.txt", *args,
+                           "--save_results", str(out), "--no_warnings"],
+                          cwd=tmp, env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    with zipfile.ZipFile(out) as z:
+        stats: dict[str, float] = json.loads(z.read("stats.json"))
+    return stats

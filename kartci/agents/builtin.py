@@ -11,8 +11,10 @@ from kartci.agents.params import (
                       ScriptController,
 )
 from kartci.bridge.params import ExternalController
+from kartci.localization.params import LocalizationParams
 from kartci.mpcc.params import MpccController
-from kartci.plugins import Controller, lazy
+from kartci.perception.params import DetectorParams
+from kartci.plugins import Controller, Node, lazy
 
 KART = ("gokart",)
 
@@ -31,3 +33,12 @@ MPCC = Controller("mpcc", MpccController, lazy("kartci.agents.mpcc:MpccAgent"), 
 EXTERNAL = Controller("external", ExternalController, lazy("kartci.bridge.agent:ExternalAgent"),
                       KART, "a separate program (a ROS 2 stack) closed loop over Zenoh, "
                       "rmw_zenoh conventions, in lockstep with sim time")
+
+LOCALIZATION = Node("localization", LocalizationParams,
+                    lazy("kartci.localization.node:LocalizationNode"), KART,
+                    "lidar registration to the map (small_gicp) fused with wheels and gyro "
+                    "(planar EKF): localization/odom, tf, deskewed cloud")
+OBSTACLE_DETECTOR = Node("obstacle_detector", DetectorParams,
+                         lazy("kartci.perception.node:ObstacleDetector"), KART,
+                         "lidar obstacles: map and ground removal, clusters, boxes, tracks, "
+                         "static or dynamic (vision_msgs/Detection3DArray, markers)")

@@ -33,14 +33,16 @@ class MpccAgent:
         self.mpcc: Mpcc | None = None
         self.static: list[Obstacle] = []
         self._boxes: list[tuple[float, float, float]] = []  # centre x, y and radius, m
-        self.others = {f"/{name}/odom": name for name in ctx.others}
-        self.inputs = (TRACK_TOPIC, OBSTACLES_TOPIC, spec.state_topic, "joint_states",
-                       *self.others)
+        perceive = spec.obstacles_from == "perception"
+        self.others = {} if perceive else {f"/{name}/odom": name for name in ctx.others}
+        seen = (spec.detections_topic,) if perceive else (OBSTACLES_TOPIC, *self.others)
+        self.inputs = (TRACK_TOPIC, spec.state_topic, "joint_states", *seen)
         self._state: np.ndarray | None = None  # [X, Y, psi, vx, vy, r] of the CoG
         self._delta = 0.0
         self._accel = 0.0
         self._s: float | None = None
         self._karts: dict[str, tuple[float, float, float, float]] = {}
+        self._tracks: dict[str, tuple[float, float, float]] = {}  # detection id -> t, x, y
 
     def on_message(self, topic: str, message: Any) -> None:
         """Build the solver on the track, place static obstacles (boxes as circles), follow the
@@ -57,6 +59,9 @@ class MpccAgent:
                            for m in message.markers]
             self._place_obstacles()
             return
+        if topic == self.spec.detections_topic:  # perception: static boxes, moving karts
+            self._perceived(message)
+            return
         if topic == "joint_states":
             names = list(message.name)
             if "steering_column" in names:
@@ -72,6 +77,26 @@ class MpccAgent:
             self._state = np.array([x, y, yaw, vx, vy, r])
         elif topic in self.others:
             self._karts[topic] = (x, y, yaw, vx)
+
+    def _perceived(self, message: Any) -> None:
+        """Detections: static ones as boxes; dynamic ones as other karts (their footprint, and
+        their speed from the track's displacement since its last detection)."""
+        t = message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec
+        boxes, karts, seen = [], {}, {}
+        for d in message.detections:
+            c, size = d.bbox.center, d.bbox.size
+            x, y = float(c.position.x), float(c.position.y)
+            if d.results and d.results[0].hypothesis.class_id == "dynamic":
+                last = self._tracks.get(d.id)
+                v, yaw = 0.0, yaw_of(d.results[0].pose.pose.orientation)
+                if last is not None and t > last[0]:
+                    v = math.hypot(x - last[1], y - last[2]) / (t - last[0])
+                seen[d.id] = (t, x, y)
+                karts[d.id] = (x, y, yaw, v)
+            else:
+                boxes.append((x, y, 0.5 * math.hypot(float(size.x), float(size.y))))
+        self._tracks, self._karts, self._boxes = seen, karts, boxes
+        self._place_obstacles()
 
     def _place_obstacles(self) -> None:
         if self.track is not None:

@@ -12,6 +12,7 @@ from kartci.cli import (  # noqa: F401  (importing a command module registers it
     bench,
     init,
     logs,
+    maps,
     realdata,
     results,
     run,

@@ -67,10 +67,10 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
 
 @app.command()
 def plugins() -> None:
-    """List the registered controllers, robots, worlds and metrics.
+    """List the registered controllers, nodes, robots, worlds and metrics.
 
-    Controllers, robot kinds, world kinds and metric sets (what a scenario can name), each with
-    its one-line description and the module it comes from."""
+    Controllers, nodes, robot kinds, world kinds and metric sets (what a scenario can name), each
+    with its one-line description and the module it comes from."""
     from kartci.plugins import catalogue
 
     table = Table("kind", "name", "description", "from", box=None)

@@ -6,8 +6,12 @@ from typing import Any
 
 from kartci.metrics import ScoreContext, recorded_track
 from kartci.metrics.base import DEFS, Metric
+from kartci.metrics.detection import DEFS as DETECTION_DEFS
+from kartci.metrics.detection import DetectionMetricsParams, detection_metrics
 from kartci.metrics.kart import kart_metrics, kart_track
 from kartci.metrics.line import line_metrics
+from kartci.metrics.localization import DEFS as LOCALIZATION_DEFS
+from kartci.metrics.localization import LocalizationMetricsParams, localization_metrics
 from kartci.metrics.race import kart_rects, race_metrics
 from kartci.plugins import MetricSet
 from kartci.spec.models import LineMetricsParams
@@ -62,3 +66,11 @@ RACE = MetricSet(
           "solve_ms_max"),
     _race, None, ("gokart",),
     "clearance to obstacles and other karts, overtakes, MPCC solver statistics")
+LOCALIZATION = MetricSet(
+    "localization", LOCALIZATION_DEFS, localization_metrics, LocalizationMetricsParams, (),
+    "localization estimate vs ground truth: APE / RPE (evo's conventions), convergence from "
+    "the initial guess, divergence events")
+DETECTION = MetricSet(
+    "detection", DETECTION_DEFS, detection_metrics, DetectionMetricsParams, (),
+    "obstacle detections vs ground-truth boxes: recall within range, precision, position "
+    "error, static/dynamic accuracy, latency")

@@ -72,7 +72,14 @@ class MpccController(ControllerParams):
     rk4_substeps: int = Field(2, ge=1, le=8, description="RK4 integration steps per horizon "
                               "step")
     state_topic: str = Field("odom", description="nav_msgs/Odometry topic the controller reads "
-                             "(relative: in the agent's namespace)")
+                             "(relative: in the agent's namespace); `localization/odom`: "
+                             "drive on the localization node's estimate")
+    obstacles_from: Literal["ground_truth", "perception"] = Field(
+        "ground_truth", description="where obstacles come from: `ground_truth` (the world's "
+        "boxes on /kartci/obstacles, other karts' odometry) or `perception` (the "
+        "obstacle_detector node's detections, static and moving)")
+    detections_topic: str = Field("obstacle_detector/detections", description="the "
+                                  "vision_msgs/Detection3DArray read with `perception`")
     max_speed_mps: float = Field(7.0, gt=0.0, description="speed limit, m/s (soft; REFERENCE.md: "
                                  "ETH MPCC limit 10 m/s)")
     max_accel_mps2: float = Field(3.0, gt=0.0, description="longitudinal acceleration limit, "

@@ -1,6 +1,7 @@
 """The registered pieces an imported log is described with: a world, a robot kind and a
 controller named `recorded` (the log's own robot drove; nothing here can be simulated), and the
-metric sets `motion` and `localization`, which any scenario can use too."""
+metric set `motion`, which any scenario can use too (an estimate is judged by the
+`localization` set)."""
 
 from __future__ import annotations
 
@@ -13,11 +14,8 @@ from kartci.plugins import Controller, MetricSet, RobotKind, WorldKind, lazy
 from kartci.realdata.divergence import DEFS as SIMREAL_DEFS
 from kartci.realdata.divergence import SimrealParams, simreal_metrics
 from kartci.realdata.motion import (
-    LOCALIZATION_DEFS,
     MOTION_DEFS,
     TRACK_DEFS,
-    LocalizationParams,
-    localization_metrics,
     motion_metrics,
 )
 from kartci.spec.models import ControllerParams, RobotParams, WorldParams
@@ -60,8 +58,5 @@ CONTROLLER = Controller("recorded", RecordedController, _not_simulated, (),
 MOTION = MetricSet("motion", {**MOTION_DEFS, **TRACK_DEFS}, motion_metrics, None, (),
                    "duration, distance, speeds, yaw rate of the odometry; laps, lap times, "
                    "progress and cross-track error when the log holds a track")
-LOCALIZATION = MetricSet("localization", LOCALIZATION_DEFS, localization_metrics,
-                         LocalizationParams, (),
-                         "APE and RPE of a pose estimate against the odometry, as evo")
 SIMREAL = MetricSet("simreal", SIMREAL_DEFS, simreal_metrics, SimrealParams, (),
                     "divergence of the simulated robot from a log it replayed (kartci simreal)")

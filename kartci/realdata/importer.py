@@ -34,7 +34,7 @@ def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
     the motion metrics and, with an estimate, the localization metrics."""
     metrics: dict[str, Any] = {"motion": {}}
     if profile.estimate is not None:
-        metrics["localization"] = {}
+        metrics["localization"] = {"topic": ROLE_TOPIC["estimate"]}
     world: dict[str, Any] = {"kind": "recorded", "description": profile.description}
     if profile.track is not None:
         world["track"] = profile.track

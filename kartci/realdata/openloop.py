@@ -23,11 +23,10 @@ from kartci.realdata.builtin import RecordedRobot
 from kartci.spec.models import RobotParams
 
 
-def lookup(name: str) -> Any:
-    """A registered controller, or node once kartci has a node registry, by name."""
-    nodes = getattr(plugins, "NODES", None)
-    if nodes is not None and name in nodes.names():
-        return nodes.get(name)
+def lookup(name: str) -> plugins.Node | plugins.Controller:
+    """A registered node (localization, detector, a team's own) or controller, by name."""
+    if name in plugins.NODES.names():
+        return plugins.NODES.get(name)
     return plugins.CONTROLLERS.get(name)
 
 
@@ -35,7 +34,7 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
     """The agent `name` for the log's robot `namespace` (default: the run log's first agent),
     with the log's recorded parameters when the log's scenario used the same type."""
     kind = lookup(name)
-    params = None
+    params: Any = None
     model: RobotParams = RecordedRobot()
     try:
         scenario = recorded_scenario(tables(log, ["/kartci/scenario"]), log)
@@ -48,10 +47,11 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
             model = spec.model
             if spec.controller.type == name:
                 params = spec.controller
+            params = spec.nodes.get(name, params)
     if namespace is None:
         raise SpecError(f"{log}: not a kartci run log; name the robot's namespace (--ns)")
     if params is None:
-        params = kind.params(type=name)
+        params = kind.params(type=name) if isinstance(kind, plugins.Controller) else kind.params()
     ctx = AgentContext(namespace, model, ())
     return kind.factory(params, ctx), namespace
 

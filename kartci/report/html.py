@@ -57,6 +57,8 @@ def _scenario(r: ScenarioResult, words: Wording) -> str:
             out += [figs.top_view(r.plots), figs.speed(r.plots), figs.wheel_speeds(r.plots)]
             if r.plots.solves:
                 out.append(figs.solve_times(r.plots))
+            if r.plots.estimates or r.plots.detections:
+                out += [figs.localization(r.plots), figs.localization_error(r.plots)]
         else:
             out += [figs.top_view(r.plots), figs.tracking_error(r.plots),
                     figs.wheel_speeds(r.plots)]

@@ -114,6 +114,37 @@ def solve_times(p: Plots) -> str:
     return _finish(fig, ax, "sim time [s]", "solve time [ms]", "MPCC solve time (wall clock)")
 
 
+def localization(p: Plots) -> str:
+    """Localization estimate over the true path on the track, with detected boxes (static blue,
+    dynamic orange, as in the seed's Fig. 6.4)."""
+    fig, ax = plt.subplots(figsize=(5.5, 4.0))
+    _track_outline(ax, p)
+    for agent, tr in p.tracks.items():
+        ax.plot(tr["x"], tr["y"], lw=2.5, color="lightgrey", label=f"{agent} truth")
+    for agent, est in p.estimates.items():
+        ax.plot(est["x"], est["y"], lw=0.8, label=f"{agent} estimate")
+    for i, box in enumerate(p.obstacles):
+        ax.plot(*_closed(box), color="saddlebrown", lw=1.5,
+                label="obstacles (truth)" if i == 0 else None)
+    for agent, boxes in p.detections.items():
+        shown: set[bool] = set()
+        for box, dynamic in boxes:
+            kind = "dynamic" if dynamic else "static"
+            ax.fill(*_closed(box), color="darkorange" if dynamic else "royalblue", alpha=0.5,
+                    zorder=5, label=None if dynamic in shown else f"{agent} detected {kind}")
+            shown.add(dynamic)
+    ax.set_aspect("equal", adjustable="datalim")
+    return _finish(fig, ax, "x [m]", "y [m]", "localization and detections")
+
+
+def localization_error(p: Plots) -> str:
+    """Position error of the localization estimate over sim time."""
+    fig, ax = plt.subplots(figsize=(5.5, 3.0))
+    for agent, est in p.estimates.items():
+        ax.plot(est["t"], est["error_m"] * 100, lw=0.8, label=agent)
+    return _finish(fig, ax, "sim time [s]", "position error [cm]", "localization error (APE)")
+
+
 def tracking_error(p: Plots, band_m: float = 0.008) -> str:
     """Cross-track error (mm) over sim time, with the line sensor's range `band_m` (m) and the
     unscored start-up transient shown."""

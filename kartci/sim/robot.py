@@ -7,7 +7,6 @@ world it lives in fulfils `SimWorld`. Topics a robot puts are relative to its na
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -16,7 +15,15 @@ import numpy as np
 from kartci.agents.base import Agent
 from kartci.spec.models import AgentSpec, Pose2D, WorldParams
 
-Put = Callable[[str, Any, int], None]  # (topic, message, t ns)
+
+class Put(Protocol):
+    """Publish one message: (topic, message, t ns). `record=False` hands it to the agents and
+    nodes that read the topic without writing it to the log (every lidar scan feeds a
+    localization, only every Nth is kept); unread, it is dropped."""
+
+    def __call__(self, topic: str, message: Any, t_ns: int, record: bool = True) -> None:
+        """Publish `message` on `topic` at sim time `t_ns`."""
+        ...
 
 
 class SimWorld(Protocol):

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import json
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -34,7 +34,7 @@ from kartci.logs import McapLogWriter, msg
 from kartci.plugins import AgentContext
 from kartci.project import did_you_mean
 from kartci.sim.messages import tf_message
-from kartci.sim.robot import Robot, RobotContext, SimWorld
+from kartci.sim.robot import Put, Robot, RobotContext, SimWorld
 from kartci.spec import Scenario
 
 SCENARIO_TOPIC = "/kartci/scenario"
@@ -139,6 +139,31 @@ def make_world(scenario: Scenario) -> SimWorld:
     return world
 
 
+@dataclass(frozen=True)
+class NodeRun:
+    """One node of a robot in the loop: its agent and its period in physics steps."""
+
+    name: str
+    agent: Agent
+    every: int
+
+
+def build_nodes(scenario: Scenario) -> dict[str, list[NodeRun]]:
+    """Each agent's nodes (`agents.<name>.nodes`), built from the node registry, in the order
+    the scenario lists them; they run in the robot's namespace before its controller."""
+    dt = scenario.physics.dt_s
+    out: dict[str, list[NodeRun]] = {}
+    for name, spec in scenario.agents.items():
+        ctx = AgentContext(name, spec.model, tuple(n for n in scenario.agents if n != name))
+        runs = []
+        for node, params in spec.nodes.items():
+            agent = check_agent(f"{name}.nodes.{node}",
+                                plugins.NODES.get(node).build(params, ctx), dt)
+            runs.append(NodeRun(node, agent, max(1, round(agent.period_s / dt))))
+        out[name] = runs
+    return out
+
+
 def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None,
                 run_dir: Path | None = None) -> SimWorld:
     """The scenario's world with its robots and their agents in it (the caller closes it).
@@ -185,30 +210,37 @@ class Bus:
     """Writes every message to the log (if any), hands it to the agents that read its topic and
     keeps it for the current step's result."""
 
-    def __init__(self, log: McapLogWriter | None, robots: list[Robot]) -> None:
-        """Route messages to the log and to the robots' agents, by the topics they read."""
+    def __init__(self, log: McapLogWriter | None, robots: list[Robot],
+                 nodes: Mapping[str, list[NodeRun]] | None = None) -> None:
+        """Route messages to the log and to the robots' agents and nodes, by the topics they
+        read."""
         self.log, self.count = log, 0
         self.pending: list[Message] = []
         # full topic -> the agents reading it, and the name each asked for it by
         self.readers: dict[str, list[tuple[Any, str]]] = {}
         for r in robots:
-            for want in r.agent.inputs:
-                full = want if want.startswith("/") else f"/{r.name}/{want}"
-                self.readers.setdefault(full, []).append((r.agent, want))
+            for agent in (*(n.agent for n in (nodes or {}).get(r.name, ())), r.agent):
+                for want in agent.inputs:
+                    full = want if want.startswith("/") else f"/{r.name}/{want}"
+                    self.readers.setdefault(full, []).append((agent, want))
 
-    def put(self, topic: str, m: Any, t_ns: int) -> None:
-        """Publish one message (absolute topic) at sim time `t_ns`."""
-        if self.log is not None:
+    def put(self, topic: str, m: Any, t_ns: int, record: bool = True) -> None:
+        """Publish one message (absolute topic) at sim time `t_ns`; `record=False`: only to
+        its readers, and not at all when nothing reads it."""
+        if not record and topic not in self.readers:
+            return
+        if self.log is not None and record:
             self.log.write(topic, m, t_ns)
         self.count += 1
         self.pending.append((topic, m))
         for agent, want in self.readers.get(topic, ()):
             agent.on_message(want, m)
 
-    def putter(self, namespace: str) -> Callable[[str, Any, int], None]:
+    def putter(self, namespace: str) -> Put:
         """`put` for one robot: relative topics go under `/<namespace>/`."""
-        def put(topic: str, m: Any, t_ns: int) -> None:
-            self.put(topic if topic.startswith("/") else f"/{namespace}/{topic}", m, t_ns)
+        def put(topic: str, message: Any, t_ns: int, record: bool = True) -> None:
+            self.put(topic if topic.startswith("/") else f"/{namespace}/{topic}", message,
+                     t_ns, record)
         return put
 
     def take(self) -> tuple[Message, ...]:
@@ -255,7 +287,8 @@ class Session:
         self._world: SimWorld | None = None
         self._log: McapLogWriter | None = None
         self._bus: Bus | None = None
-        self._puts: list[Callable[[str, Any, int], None]] = []
+        self._puts: list[Put] = []
+        self._nodes: dict[str, list[NodeRun]] = {}
         self._started = self._closed = self._failed = False
 
     @property
@@ -286,10 +319,11 @@ class Session:
         try:
             self._world = build_world(self.scenario, self.agents,
                                       self.log_path.parent if self.log_path else None)
+            self._nodes = build_nodes(self.scenario)
             robots = self._world.robots
             if self.log_path is not None:
                 self._log = McapLogWriter(self.log_path)
-            bus = self._bus = Bus(self._log, robots)
+            bus = self._bus = Bus(self._log, robots, self._nodes)
             self._puts = [bus.putter(r.name) for r in robots]
             bus.put(SCENARIO_TOPIC, msg("std_msgs/msg/String",
                                         data=self.scenario.model_dump_json()), 0)
@@ -334,6 +368,10 @@ class Session:
         k, t_ns = self.k, self.t_ns
         for r, put in zip(self.world.robots, self._puts, strict=True):
             r.sense(k, t_ns, put)
+            for node in self._nodes.get(r.name, ()):
+                if k % node.every == 0:
+                    for topic, m in node.agent.step(t_ns):
+                        put(topic, m, t_ns)
             if k % r.ctrl_every == 0:
                 for topic, m in r.agent.step(t_ns):
                     put(topic, m, t_ns)

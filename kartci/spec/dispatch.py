@@ -1,6 +1,6 @@
 """Step one of scenario validation: the registered type names (`world.kind`, `model.kind`,
-`controller.type`, the keys of `metrics`) pick each part's own parameter model, which then
-validates that part. A problem is a `ParamsError` that knows where in the file it is."""
+`controller.type`, the keys of `nodes` and of `metrics`) pick each part's own parameter model,
+which then validates that part. A problem is a `ParamsError` that knows where in the file it is."""
 
 from __future__ import annotations
 
@@ -129,4 +129,9 @@ def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
         if tag is not None:
             ctl = _named(plugins.CONTROLLERS, tag, (*loc, "controller", "type"))
             agent["controller"] = _validate(ctl.params, controller, (*loc, "controller"))
+    if isinstance(agent.get("nodes"), dict):
+        agent["nodes"] = {str(name): _validate(_named(plugins.NODES, str(name),
+                                                      (*loc, "nodes", str(name))).params,
+                                               params or {}, (*loc, "nodes", str(name)))
+                          for name, params in agent["nodes"].items()}
     return agent

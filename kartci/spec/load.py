@@ -15,7 +15,7 @@ from kartci import project
 from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
 from kartci.spec.dispatch import ParamsError, with_allowed_keys
-from kartci.spec.models import Scenario
+from kartci.spec.models import Scenario, WorldParams
 from kartci.spec.yamlio import clip, parse_value, preview, read_yaml
 
 
@@ -104,6 +104,20 @@ def _resolve_world(data: dict[str, Any], proj: project.Project) -> None:
         if not Path(track).is_absolute():
             with contextlib.suppress(SpecError):  # may be a command-line path: checked later
                 world["track"] = str(proj.world_file(track))
+
+
+def load_world(name: str) -> tuple[WorldParams, Path]:
+    """A world file by name on the project's search path (`winti/hall`), validated by its
+    world kind, and where the file is."""
+    from kartci.spec.dispatch import dispatch
+
+    proj = project.current()
+    path = proj.find_world(name)
+    data: dict[str, Any] = {"world": name}
+    _resolve_world(data, proj)
+    world = dispatch(data)["world"]
+    assert isinstance(world, WorldParams)  # dispatch validated it by its kind
+    return world, path
 
 
 def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path) -> None:

@@ -30,6 +30,14 @@ class ControllerParams(Frozen):
                             "physics.dt_s")
 
 
+class NodeParams(Frozen):
+    """Parameters of a node type (`agents.<name>.nodes: {NAME: {...}}`): localization, a
+    detector, anything that runs beside the controller in the robot's namespace."""
+
+    period_s: float = Field(0.02, gt=0.0, description="node period, s: a whole multiple of "
+                            "physics.dt_s")
+
+
 class RobotParams(Frozen):
     """Parameters of a robot kind (`model: {kind: NAME, ...}` or a model folder's params)."""
 
@@ -223,6 +231,9 @@ class AgentSpec(Frozen):
     start: Pose2D = Field(Pose2D(), description="start pose relative to the course start")
     sensors: SerializeAsAny[Frozen] = Field(
         default_factory=Frozen, description="the robot kind's sensors: {NAME: {...}}")
+    nodes: dict[str, SerializeAsAny[NodeParams]] = Field(
+        {}, description="nodes beside the controller (localization, obstacle_detector, ...): "
+        "{NAME: {...}}, each a registered node and its parameters (`kartci plugins`)")
 
 
 # --- scenario ---------------------------------------------------------------------------------
@@ -307,6 +318,8 @@ class Scenario(Frozen):
         periods = {"physics.odom_rate_hz": 1.0 / self.physics.odom_rate_hz}
         for name, agent in self.agents.items():
             periods[f"agents.{name}.controller.period_s"] = agent.controller.period_s
+            for node, params in agent.nodes.items():
+                periods[f"agents.{name}.nodes.{node}.period_s"] = params.period_s
         for key, period in periods.items():
             ratio = period / dt
             if not math.isfinite(ratio) or abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:

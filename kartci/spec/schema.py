@@ -40,11 +40,13 @@ def scenario_schema() -> dict[str, Any]:
     """The JSON Schema (draft 2020-12) of a scenario file with every registered plugin."""
     worlds, robots = plugins.WORLDS.all(), plugins.ROBOTS.all()
     controllers, metric_sets = plugins.CONTROLLERS.all(), plugins.METRICS.all()
+    nodes = plugins.NODES.all()
     models: list[type[BaseModel]] = [Scenario]
     models += [w.params for w in worlds]
     models += [r.params for r in robots]
     models += [r.sensors for r in robots if r.sensors is not None]
     models += [c.params for c in controllers]
+    models += [n.params for n in nodes]
     models += [m.params for m in metric_sets if m.params is not None]
     models = list(dict.fromkeys(models))  # a model used by two plugins appears once
     refs, collected = models_json_schema([(m, "validation") for m in models],
@@ -61,6 +63,7 @@ def scenario_schema() -> dict[str, Any]:
     agent["model"] = _robot_model(agent["model"]["description"], robots, ref, defs)
     agent["controller"] = _controller(agent["controller"]["description"], controllers, ref)
     agent["sensors"] = _sensors(agent["sensors"]["description"], robots, ref)
+    agent["nodes"] = _nodes(agent["nodes"]["description"], nodes, ref)
     props["metrics"] = _metrics(props["metrics"]["description"], metric_sets, ref)
     criteria = props["criteria"]
     props["criteria"] = _criteria(criteria["description"],
@@ -185,6 +188,15 @@ def _metrics(description: str, metric_sets: list[plugins.MetricSet],
         else:
             props[m.name] = {"description": says, "anyOf": [
                 {"$ref": ref(m.params), "description": f"parameters of `{m.name}`"}, none]}
+    return {"type": "object", "description": description, "properties": props,
+            "additionalProperties": False}
+
+
+def _nodes(description: str, nodes: list[plugins.Node], ref: Any) -> dict[str, Any]:
+    props = {n.name: {"description": f"node `{n.name}`: {n.description}", "anyOf": [
+        {"$ref": ref(n.params), "description": f"parameters of `{n.name}`"},
+        {"type": "null", "description": "the node with its default parameters"}]}
+        for n in nodes}
     return {"type": "object", "description": description, "properties": props,
             "additionalProperties": False}
 

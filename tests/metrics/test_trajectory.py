@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-import json
-import os
-import shutil
-import subprocess
 import sys
-import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import evo
 from scipy.spatial.transform import Rotation
 
 from kartci.metrics.trajectory import (
@@ -46,23 +42,6 @@ def _pair(seed: int = 0) -> tuple[Trajectory, Trajectory]:
     return ref, est
 
 
-def _evo(tmp: Path, tool: str, *args: str) -> dict[str, float]:
-    """Run evo_ape / evo_rpe on tmp/ref.txt and tmp/est.txt; its saved statistics."""
-    exe = BIN / tool
-    if not exe.exists() and shutil.which(tool) is None:
-        pytest.skip(f"{tool} not installed (it comes with the dev extras: pip install -e '.[dev]')")
-    out = tmp / "res.zip"
-    out.unlink(missing_ok=True)
-    env = {**os.environ, "HOME": str(tmp), "MPLBACKEND": "Agg"}  # evo keeps settings in ~/.evo
-    proc = subprocess.run([str(exe if exe.exists() else tool), "tum", "ref.txt", "est.txt", *args,
-                           "--save_results", str(out), "--no_warnings"],
-                          cwd=tmp, env=env, capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    with zipfile.ZipFile(out) as z:
-        stats: dict[str, float] = json.loads(z.read("stats.json"))
-    return stats
-
-
 def _assert_equal(ours: ErrorStats, evo: dict[str, float]) -> None:
     for key in ("rmse", "mean", "median", "std", "min", "max"):
         assert getattr(ours, key) == pytest.approx(evo[key], abs=1e-9), key
@@ -78,7 +57,7 @@ def _assert_equal(ours: ErrorStats, evo: dict[str, float]) -> None:
     ("evo_rpe", ("-d", "3", "-u", "f", "--all_pairs"),
      lambda r, e: rpe(r, e, 3, DeltaUnit.FRAMES, all_pairs=True)),
 ], ids=["ape-trans", "ape-angle", "rpe-1m", "rpe-1m-angle", "rpe-7f", "rpe-3f-all"])
-def test_equals_evo(tmp_path: Path, tool: str, args: tuple[str, ...], ours) -> None:  # type: ignore[no-untyped-def]
+def test_equalsevo(tmp_path: Path, tool: str, args: tuple[str, ...], ours) -> None:  # type: ignore[no-untyped-def]
     ref, est = _pair()
     ref.to_tum(tmp_path / "ref.txt")
     est.to_tum(tmp_path / "est.txt")
@@ -86,7 +65,7 @@ def test_equals_evo(tmp_path: Path, tool: str, args: tuple[str, ...], ours) -> N
     r, e = associate(Trajectory.from_tum(tmp_path / "ref.txt"),
                      Trajectory.from_tum(tmp_path / "est.txt"))
     assert len(r) == len(est)  # every estimate stamp is within 10 ms of a reference stamp
-    _assert_equal(ours(r, e), _evo(tmp_path, tool, *args))
+    _assert_equal(ours(r, e), evo(tmp_path, tool, *args))
 
 
 def test_seconds_delta_is_frames_at_a_fixed_rate() -> None:

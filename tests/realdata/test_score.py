@@ -147,7 +147,7 @@ def test_localization_error_of_an_estimate(bags: Path, tmp_path: Path) -> None:
     m = _metrics(out, "loc")
     assert m["ape_rmse_m"] == pytest.approx(0.3, abs=1e-9)
     assert m["ape_max_m"] == pytest.approx(0.3, abs=1e-9)
-    assert m["rpe_rmse_m"] == pytest.approx(0.0, abs=1e-6)
+    assert m["rpe_1m_rmse_m"] == pytest.approx(0.0, abs=1e-6)
 
 
 def test_a_run_log_scored_through_a_profile_gets_the_runs_own_track_metrics(

@@ -60,7 +60,15 @@ class LidarSpec(Frozen):
     range_noise_std_m: float | None = Field(None, description="range noise, 1 sigma, m; "
                                             "default: the Table 3.5 accuracy (3 cm VLP-16, 2 cm "
                                             "HDL-32E)")
-    record_every: int = Field(10, ge=1, description="write every Nth scan to the log")
+    record_every: int = Field(10, ge=1, description="write every Nth scan to the log (the "
+                              "others still reach the nodes and controller that read them)")
+    dropout_prob: float = Field(0.0, ge=0.0, lt=1.0, description="probability that a return "
+                                "is lost (no echo: dark or specular surfaces), per beam, "
+                                "seeded")
+    motion_distortion: bool = Field(False, description="sample each azimuth at its own time "
+                                    "in the revolution (the kart moves while the head spins, "
+                                    "points stay in their own momentary sensor frame): what "
+                                    "deskewing removes; off: every beam at the scan's stamp")
 
 
 class ImuSpec(Frozen):
@@ -75,6 +83,26 @@ class ImuSpec(Frozen):
     gyro_noise_std_radps: float | None = Field(None, description="gyroscope noise, 1 sigma, "
                                                "rad/s; default: Table 3.6 accuracy x the "
                                                "default full scale of the variant's IMU")
+
+
+    accel_bias_std_mps2: float = Field(0.0, ge=0.0, description="constant accelerometer bias, "
+                                       "1 sigma per axis, m/s^2: drawn once per run, seeded")
+    gyro_bias_std_radps: float = Field(0.0, ge=0.0, description="constant gyroscope bias, "
+                                       "1 sigma per axis, rad/s: drawn once per run, seeded")
+    accel_bias_walk_mps2_per_sqrt_s: float = Field(0.0, ge=0.0, description="accelerometer "
+                                                   "bias random walk, m/s^2 per sqrt(s)")
+    gyro_bias_walk_radps_per_sqrt_s: float = Field(0.0, ge=0.0, description="gyroscope bias "
+                                                   "random walk, rad/s per sqrt(s)")
+
+
+class WheelSpec(Frozen):
+    """What `joint_states` reports of the wheels: their spin, which the physics already lets
+    slip; `slip_std` adds the slip a rigid-tyre simulation lacks (tyre creep, spinning up)."""
+
+    slip_std: float = Field(0.0, ge=0.0, lt=0.5, description="relative wheel-speed error "
+                            "(dimensionless, 1 sigma), a first-order Gauss-Markov process per "
+                            "wheel, seeded: reported = true * (1 + slip)")
+    slip_corr_s: float = Field(0.5, gt=0.0, description="correlation time of the slip, s")
 
 
 class CameraSpec(Frozen):
@@ -96,3 +124,5 @@ class KartSensors(Frozen):
                              "(Tables 3.4, 3.5)")
     imu: ImuSpec = Field(ImuSpec(), description="IMU on imu_link (Tables 3.4, 3.6)")
     camera: CameraSpec = Field(CameraSpec(), description="camera on camera_link (Table 3.4)")
+    wheels: WheelSpec = Field(WheelSpec(), description="wheel odometry errors in "
+                              "`joint_states`")

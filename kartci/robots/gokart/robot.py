@@ -10,6 +10,7 @@ import numpy as np
 
 from kartci.errors import SpecError
 from kartci.logs import header, msg
+from kartci.robots.gokart import noise
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel, KartSensors
 from kartci.sim import lidar as lidar_mod
@@ -73,6 +74,8 @@ class KartRobot(RobotBase):
         self.azimuths = self.lidar.azimuths(sensors.lidar.rate_hz)
         self.blocks = world.blocks
         self._imu_prev: np.ndarray | None = None
+        self._bias = noise.ImuBias(sensors.imu, ctx.rng, self.imu_every * dt_s)
+        self._slip = noise.WheelSlip(sensors.wheels, ctx.rng, ctx.odom_every * dt_s, 4)
         self._scans = 0
         self.contacts: dict[str, _Contact] = {}
         self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
@@ -98,7 +101,8 @@ class KartRobot(RobotBase):
             steer, spin, speeds = self.body.wheel_states()
             put("joint_states", joint_state(
                 t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
-                [*steer, *spin, self.body.column], [0.0, 0.0, *speeds, 0.0]), t_ns)
+                [*steer, *spin, self.body.column],
+                [0.0, 0.0, *self._slip.apply(list(speeds)), 0.0]), t_ns)
             self._zone_friction(st)
             self._pedals(st)
             put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
@@ -163,6 +167,8 @@ class KartRobot(RobotBase):
         acc_std, gyro_std = _imu_noise(self.model, self.sensors)
         f = f + acc_std * self.rng.standard_normal(3)
         g = g + gyro_std * self.rng.standard_normal(3)
+        acc_bias, gyro_bias = self._bias.sample()
+        f, g = f + acc_bias, g + gyro_bias
         cov_a, cov_g = np.diag([acc_std**2] * 3).ravel(), np.diag([gyro_std**2] * 3).ravel()
         no_orientation = np.zeros(9)
         no_orientation[0] = -1.0  # REP 145: this IMU gives no orientation estimate
@@ -181,14 +187,20 @@ class KartRobot(RobotBase):
         yaw = st.yaw
         extra = [o.footprint() for o in self.world.robots
                  if o is not self and isinstance(o, KartRobot)]
-        ranges = lidar_mod.scan_fast(self.lidar, self.azimuths, pos, yaw, self.blocks + extra,
-                                     self.world.ceiling_m, self.sensors.lidar.range_m)
-        std = self.sensors.lidar.range_noise_std_m
+        spec, blocks = self.sensors.lidar, self.blocks + extra
+
+        def scan(azimuths: np.ndarray, xyz: np.ndarray, heading: float) -> np.ndarray:
+            return lidar_mod.scan_fast(self.lidar, azimuths, xyz, heading, blocks,
+                                       self.world.ceiling_m, spec.range_m)
+
+        ranges = (noise.distorted_scan(scan, self.azimuths, st, pos, spec.rate_hz)
+                  if spec.motion_distortion else scan(self.azimuths, pos, yaw))
+        std = spec.range_noise_std_m
         std = self.lidar.range_accuracy_m if std is None else std
         ranges = ranges + std * self.rng.standard_normal(ranges.shape)
+        ranges = noise.dropout(ranges, spec, self.rng)
         self._scans += 1
-        if (self._scans - 1) % self.sensors.lidar.record_every:
-            return
+        record = (self._scans - 1) % spec.record_every == 0
         pts = lidar_mod.to_points(self.lidar, self.azimuths, ranges)
         fields = [msg("sensor_msgs/msg/PointField", name=n, offset=o, datatype=d, count=1)
                   for n, o, d in (("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 12, 7),
@@ -197,7 +209,7 @@ class KartRobot(RobotBase):
             "sensor_msgs/msg/PointCloud2", header=header(t_ns, f"{self.name}/velodyne_link"),
             height=1, width=len(pts), fields=fields, is_bigendian=False,
             point_step=pts.dtype.itemsize, row_step=pts.dtype.itemsize * len(pts),
-            data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns)
+            data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns, record)
 
     def _zone_friction(self, st: BodyState) -> None:
         self.body.set_wheel_friction([self.world.friction_at(float(x), float(y))

@@ -1,0 +1,136 @@
+"""Localization errors from the log: the estimate (`localization/odom`) against ground truth
+(`odom`), associated by stamp and compared without alignment (both are in the map frame), with
+evo's APE / RPE conventions (`kartci.metrics.trajectory`), plus how the estimate converged from
+its initial guess and how often and how long it diverged."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from pydantic import Field
+
+from kartci.errors import LogError
+from kartci.metrics import ScoreContext
+from kartci.metrics.base import Direction, Metric, MetricDef
+from kartci.metrics.trajectory import (
+    DeltaUnit,
+    Relation,
+    Trajectory,
+    TrajectoryError,
+    ape_errors,
+    associate,
+    rpe,
+)
+from kartci.spec.models import MetricParams
+
+
+class LocalizationMetricsParams(MetricParams):
+    """Which topics to compare and the thresholds of convergence and divergence."""
+
+    topic: str = Field("localization/odom", description="the estimate (nav_msgs/Odometry), "
+                       "relative to the agent's namespace or absolute")
+    reference_topic: str = Field("odom", description="ground truth (nav_msgs/Odometry)")
+    max_diff_s: float = Field(0.01, gt=0.0, description="association: largest stamp "
+                              "difference of a pose pair, s (evo's --t_max_diff)")
+    converged_m: float = Field(0.1, gt=0.0, description="the estimate has converged once its "
+                               "position error stays below this for `hold_s`, m")
+    hold_s: float = Field(1.0, ge=0.0, description="how long the error must stay below "
+                          "`converged_m`, s")
+    diverged_m: float = Field(0.3, gt=0.0, description="after convergence, a position error "
+                              "above this is a divergence event, m")
+
+
+DEFS: dict[str, MetricDef] = {
+    "ape_rmse_m": MetricDef("m", Direction.LOWER, 0.002, 0.2, "APE translation RMSE of the "
+                            "localization estimate (evo_ape, no alignment)"),
+    "ape_mean_m": MetricDef("m", Direction.LOWER, 0.002, 0.2, "APE translation mean"),
+    "ape_max_m": MetricDef("m", Direction.LOWER, 0.005, 0.2, "APE translation max"),
+    "ape_rot_rmse_deg": MetricDef("deg", Direction.LOWER, 0.05, 0.2, "APE rotation RMSE "
+                                  "(angle of R_est^-1 R_ref)"),
+    "rpe_1m_rmse_m": MetricDef("m", Direction.LOWER, 0.002, 0.2, "RPE translation RMSE per "
+                               "1 m of travelled path (evo_rpe -d 1 -u m)"),
+    "rpe_1s_rmse_m": MetricDef("m", Direction.LOWER, 0.002, 0.2, "RPE translation RMSE per "
+                               "1 s"),
+    "converge_time_s": MetricDef("s", Direction.LOWER, 0.1, 0.2, "time from the first "
+                                 "estimate until its error stays below the convergence "
+                                 "threshold (inf: never)"),
+    "divergence_events": MetricDef("count", Direction.LOWER, 0.0, 0.0, "times the error rose "
+                                   "above the divergence threshold after convergence"),
+    "diverged_s": MetricDef("s", Direction.LOWER, 0.1, 0.2, "time spent above the "
+                            "divergence threshold after convergence"),
+    "recovery_s": MetricDef("s", Direction.LOWER, 0.1, 0.2, "longest divergence, from the "
+                            "crossing up to the crossing back (to the end: not recovered)"),
+}
+
+
+def _trajectory(ctx: ScoreContext, topic: str) -> Trajectory:
+    table = ctx.table(topic)
+    if table is None or table.empty:
+        raise LogError(f"{ctx.path}: no {topic} messages of agent {ctx.agent}: is its "
+                       "localization node running?")
+    return Trajectory.from_odometry(table)
+
+
+def localization_metrics(ctx: ScoreContext, params: LocalizationMetricsParams) -> list[Metric]:
+    """APE, RPE, convergence and divergence of one agent's localization (none for an agent
+    that runs no localization node and publishes no estimate)."""
+    table = ctx.table(params.topic)
+    if (table is None or table.empty) and "localization" not in ctx.scenario.agents[
+            ctx.agent].nodes:
+        return []
+    ref, est = associate(_trajectory(ctx, params.reference_topic),
+                         _trajectory(ctx, params.topic), params.max_diff_s)
+    err = ape_errors(ref, est)
+    rot = ape_errors(ref, est, Relation.ROTATION_DEG)
+    out = [Metric("ape_rmse_m", float(np.sqrt(np.mean(err**2))), "m"),
+           Metric("ape_mean_m", float(np.mean(err)), "m"),
+           Metric("ape_max_m", float(np.max(err)), "m"),
+           Metric("ape_rot_rmse_deg", float(np.sqrt(np.mean(rot**2))), "deg")]
+    for name, delta, unit in (("rpe_1m_rmse_m", 1.0, DeltaUnit.METERS),
+                              ("rpe_1s_rmse_m", 1.0, DeltaUnit.SECONDS)):
+        try:
+            value = rpe(ref, est, delta, unit).rmse
+        except TrajectoryError:  # too short a run for one pair: no number, not a crash
+            value = float("nan")
+        out.append(Metric(name, value, "m"))
+    return out + episodes(est.t_s, err, params)
+
+
+def converge_index(t_s: np.ndarray, err: np.ndarray,
+                   params: LocalizationMetricsParams) -> int | None:
+    """The first pose from which the error stays below `converged_m` for `hold_s`; None when
+    it never does."""
+    start = None
+    for i in range(len(t_s)):
+        if err[i] >= params.converged_m:
+            start = None
+            continue
+        start = i if start is None else start
+        if t_s[i] - t_s[start] >= params.hold_s:
+            return start
+    return None
+
+
+def episodes(t_s: np.ndarray, err: np.ndarray, params: LocalizationMetricsParams) -> list[Metric]:
+    """Convergence time, then the divergence episodes after it (from the start when the
+    estimate never converged: a lost estimate is one long divergence, not none)."""
+    start = converge_index(t_s, err, params)
+    converge = float("inf") if start is None else float(t_s[start] - t_s[0])
+    t = t_s[start or 0:]
+    above = np.concatenate([[False], err[start or 0:] > params.diverged_m])
+    ups = np.flatnonzero(np.diff(above.astype(int)) == 1)  # index into t of each crossing up
+    downs = np.flatnonzero(np.diff(above.astype(int)) == -1)
+    longest, events = 0.0, []
+    for up in ups:
+        later = downs[downs > up]
+        end = float(t[later[0]]) if len(later) else float(t[-1])
+        longest = max(longest, end - float(t[up]))
+        events.append({"t_s": round(float(t[up]), 3),
+                       "recovered_s": round(end - float(t[up]), 3) if len(later) else None})
+    dt = np.diff(t, append=t[-1])
+    extra: dict[str, Any] = {"events": events}
+    return [Metric("converge_time_s", converge, "s"),
+            Metric("divergence_events", float(len(ups)), "count", extra),
+            Metric("diverged_s", float(np.sum(dt[above[1:]])), "s"),
+            Metric("recovery_s", longest, "s")]

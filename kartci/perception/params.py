@@ -1,0 +1,43 @@
+"""The obstacle detector's parameters; units in the key names."""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from kartci.spec.models import NodeParams
+
+
+class DetectorParams(NodeParams):
+    """Lidar obstacle detection against the world's map."""
+
+    period_s: float = Field(0.02, gt=0.0, description="node period, s (a scan is processed at "
+                            "the first tick after it arrives)")
+    map: str = Field("winti/hall_map.ply", description="the map (PLY, world frame): points "
+                     "near it are the hall, not obstacles")
+    pose_topic: str = Field("localization/odom", description="where the kart is "
+                            "(nav_msgs/Odometry): the localization's estimate, or `odom` for "
+                            "ground truth")
+    sensor_height_m: float = Field(1.154, description="velodyne_link above base_link, m, "
+                                   "until /tf_static says")
+    ground_m: float = Field(0.12, ge=0.0, description="points lower than this above the floor "
+                            "are ground, m")
+    top_m: float = Field(2.2, gt=0.0, description="points higher than this are not "
+                         "obstacles a kart meets (ceiling, walls' tops), m")
+    map_clearance_m: float = Field(0.3, gt=0.0, description="points this close (x, y) to "
+                                   "the map are the hall, m")
+    max_range_m: float = Field(25.0, gt=0.0, description="points farther away are ignored, m")
+    cluster_gap_m: float = Field(0.5, gt=0.0, description="points closer than this are one "
+                                 "object, m")
+    min_points: int = Field(3, ge=1, description="smaller clusters are noise")
+    gate_m: float = Field(1.0, gt=0.0, description="a cluster this close to a track's "
+                          "prediction updates it, m")
+    dynamic_mps: float = Field(0.5, ge=0.0, description="a track is dynamic once faster "
+                               "than this, m/s ...")
+    dynamic_m: float = Field(1.0, ge=0.0, description="... and farther than this from where "
+                             "it was first seen, m")
+    confirm_hits: int = Field(2, ge=1, description="scans a track needs before it is "
+                              "published")
+    keep_static_s: float = Field(3.0, ge=0.0, description="a static track unseen this long "
+                                 "is dropped, s (a box the beams pass over when close)")
+    keep_dynamic_s: float = Field(0.5, ge=0.0, description="a dynamic track unseen this long "
+                                  "is dropped, s")
