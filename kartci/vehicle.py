@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass
 
 from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.params import axle_distance_m as axle_distance_m
 
 
 @dataclass(frozen=True)
@@ -68,8 +69,3 @@ def steer_for_turn_rate(model: GokartModel, v_mps: float, yaw_rate_radps: float)
     0.5 m/s the speed is held at 0.5 m/s so a turn at standstill stays bounded."""
     v_eff = v_mps if abs(v_mps) >= 0.5 else math.copysign(0.5, v_mps)
     return math.atan(axle_distance_m(model) * yaw_rate_radps / v_eff)
-
-
-def axle_distance_m(model: GokartModel) -> float:
-    """Distance between the rear and front axles (Table 3.2), m."""
-    return model.wheel_xy_m[2][0] - model.wheel_xy_m[0][0]

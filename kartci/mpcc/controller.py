@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from kartci.mpcc.cache import Built, get_solver
-from kartci.mpcc.model import ACC, DELTA, SLACK, VS, VX, S
+from kartci.mpcc.model import ACC, DELTA, SLACK, VS, VX, S, SingleTrack
 from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
 from kartci.mpcc.params import MpccController
 from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
@@ -43,7 +43,7 @@ class Mpcc:
 
     def __init__(self, spec: MpccController, model: GokartModel, track: Track) -> None:
         self.spec, self.model, self.track = spec, model, track
-        self.built: Built = get_solver(spec)
+        self.built: Built = get_solver(spec, SingleTrack.of(model))
         self.lay = self.built.layout
         self.lbg, self.ubg = constraint_bounds(spec.horizon_steps)
         lo, hi = model.steering_limit_rad
