@@ -61,10 +61,14 @@ def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle) -> ca.SX:
     vx_s = ca.sqrt(vx * vx + 1.0)  # slip angles are undefined at standstill; smooth floor
     alpha_f = delta - ca.atan((vy + lf * r) / vx_s)
     alpha_r = -ca.atan((vy - lr * r) / vx_s)
-    ff = _tyre(m.front, lr / (lf + lr), alpha_f)  # static axle loads: mass shares
-    fr = _tyre(m.rear, lf / (lf + lr), alpha_r)
-    drag = m.rolling_decel_mps2 * ca.tanh(vx / 0.3) + m.air_drag_per_m * vx * vx
+    share_f, share_r = lr / (lf + lr), lf / (lf + lr)  # static axle loads: mass shares
     brake = 0.5 * (acc - ca.sqrt(acc * acc + 0.01))  # smooth min(acc, 0)
+    # friction circle as in the plant: the rear motors' drive force and the brakes on both
+    # axles (per kg of axle load) leave sqrt(1 - (F_x / D)^2) of each axle's lateral grip
+    long_f, long_r = -brake, (acc - brake) / share_r + brake
+    ff = _tyre(m.front, share_f, alpha_f) * ca.sqrt(1 - (long_f / m.front.d_mps2) ** 2)
+    fr = _tyre(m.rear, share_r, alpha_r) * ca.sqrt(1 - (long_r / m.rear.d_mps2) ** 2)
+    drag = m.rolling_decel_mps2 * ca.tanh(vx / 0.3) + m.air_drag_per_m * vx * vx
     ax = acc - brake * (1 - ca.tanh(vx / 0.3)) - drag  # brakes stop the kart, never reverse it
     dyn_vy = ff * ca.cos(delta) + fr - vx * r
     dyn_r = m.mass_per_yaw_inertia_per_m2 * (lf * ff * ca.cos(delta) - lr * fr)

@@ -109,11 +109,15 @@ def test_steering_wheel_angles_of_table_3_3_give_eq_3_4_and_3_5(steering: str) -
             assert (left, right) == pytest.approx((exp_left, exp_right), abs=2e-3), beta
     finally:
         world.close()
-    if steering == "measured":  # Eq. 3.4 itself, at one point, by hand
-        assert wheel_angles(model, 1.0)[1] == pytest.approx(-0.0355 + 0.0455 + 0.36)
-    else:  # Eq. 3.2 by hand, l = 1.27, w = 0.94, centre wheel 0.36 x 1.0 rad
+    # by hand, mirrored to kartci's left-positive column (vehicle.wheel_angles): the seed's
+    # right wheel at -beta_C, negated, is the inner (left) wheel of a left turn
+    if steering == "measured":  # Eq. 3.4 at beta_C = -1.0
+        assert wheel_angles(model, 1.0)[0] == pytest.approx(-(0.0355 + 0.0455 - 0.36))
+    else:  # Eq. 3.2, l = 1.27, w = 0.94, centre wheel 0.36 x 1.0 rad
         t = math.tan(0.36)
-        assert wheel_angles(model, 1.0)[1] == pytest.approx(math.atan(1.27 * t / (1.27 - 0.47 * t)))
+        assert wheel_angles(model, 1.0)[0] == pytest.approx(math.atan(1.27 * t / (1.27 - 0.47 * t)))
+    left, right = wheel_angles(model, 1.0)
+    assert left > right > 0  # a left turn: the inner wheel turns more (Ackermann sense)
 
 
 @pytest.mark.parametrize(("name", "rings", "lowest", "highest", "spacing", "per_rev"), [
