@@ -33,17 +33,17 @@ def wheel_angles(model: GokartModel, beta_c: float) -> tuple[float, float]:
 
     The seed's Eq. 3.1/3.2 and 3.4/3.5 turn the right wheel more for a positive column angle:
     Ackermann-consistent (inner wheel more) when positive means a right turn. Here positive
-    is a left turn (about +z), so the map is mirrored: beta_C -> -beta_C and both angles
-    negated, which swaps the sign of the quadratic term and makes the left (inner) wheel turn
-    more in a left turn. (Taking the equations as written would be anti-Ackermann: with tyre
-    slip the front wheels would fight each other in tight turns.) The measured map is not
-    symmetric: at +1.73 rad the left wheel turns 0.575 rad and the right 0.303 rad.
+    is a left turn (about +z), so the map is mirrored left-right: the seed's right-wheel
+    equations give the left wheel, which is then the inner wheel of a left turn. (Taking the
+    equations with their sides as written would be anti-Ackermann: with slip-angle tyres the
+    front wheels would fight each other in tight turns.) The measured map is not symmetric: at
+    +1.73 rad the left wheel turns 0.575 rad and the right 0.303 rad.
     """
-    if model.steering == "measured":  # Eq. 3.4 / 3.5 (mirrored), fitted to Table 3.3
+    if model.steering == "measured":  # Eq. 3.4 / 3.5 (sides mirrored), fitted to Table 3.3
         left = -0.0355 * beta_c**3 + 0.0455 * beta_c**2 + 0.36 * beta_c
         right = -0.0355 * beta_c**3 - 0.0455 * beta_c**2 + 0.36 * beta_c
         return left, right
-    # Eq. 3.1 / 3.2 (mirrored), the virtual centre wheel at STEERING_RATIO x the column angle
+    # Eq. 3.2 / 3.1 (sides mirrored), the virtual centre wheel at STEERING_RATIO x the column angle
     t = math.tan(STEERING_RATIO * beta_c)
     lw, w = model.wheelbase_m, model.track_m
     return math.atan2(lw * t, lw - 0.5 * w * t), math.atan2(lw * t, lw + 0.5 * w * t)
