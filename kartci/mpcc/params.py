@@ -43,9 +43,12 @@ class MpccController(ControllerParams):
                             "multiple of physics.dt_s")
     horizon_steps: int = Field(30, ge=5, le=80, description="prediction horizon N, steps "
                                "(REFERENCE.md: N = 30 at 0.05 s measured; ETH: N = 31)")
-    step_s: float = Field(0.05, gt=0.0, description="horizon step, s")
-    rk4_substeps: int = Field(2, ge=1, le=8, description="RK4 integration steps per horizon "
-                              "step")
+    step_s: float = Field(0.075, gt=0.0, description="horizon step, s: 30 x 0.075 s = 2.25 s, "
+                          "long enough to brake from 10 m/s for the hall's hairpin (ETH: 31 x "
+                          "0.1 s)")
+    rk4_substeps: int = Field(3, ge=1, le=8, description="RK4 integration steps per horizon "
+                              "step (0.025 s each: the yaw dynamics of a 20 kg m^2 kart are "
+                              "fast at low speed)")
     state_topic: str = Field("odom", description="nav_msgs/Odometry topic the controller reads "
                              "(relative: in the agent's namespace)")
     max_speed_mps: float = Field(10.0, gt=0.0, description="speed limit, m/s (soft; REFERENCE.md: "
