@@ -27,9 +27,9 @@ from kartci.mpcc.model import (
     VX,
     R,
     S,
+    SingleTrack,
     X,
     Y,
-    SingleTrack,
     discrete,
 )
 from kartci.mpcc.params import MpccController, MpccWeights
