@@ -246,7 +246,7 @@ def test_reverse_and_emergency_stop() -> None:
         assert drive(KartInput(accel_mps2=2.0, reverse=True), 1.5) < -1.5  # backwards
         assert drive(KartInput(brake_mps2=8.0), 1.0) == pytest.approx(0.0, abs=0.05)
         assert drive(KartInput(accel_mps2=4.0), 1.5) > 3.0
-        # the e-stop locks the rear wheels (rear brakes only, as on the kart): about 5.6 m/s^2
+        # the e-stop brakes at the largest deceleration (max_brake_mps2) on all four wheels
         assert drive(KartInput(accel_mps2=4.0, estop=True), 2.0) == pytest.approx(0.0, abs=0.05)
     finally:
         world.close()
