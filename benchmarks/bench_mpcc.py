@@ -19,6 +19,7 @@ import numpy as np
 from kartci.bench import Record
 from kartci.logs import tables
 from kartci.mpcc.cache import get_solver
+from kartci.mpcc.model import SingleTrack
 from kartci.sim import simulate
 from kartci.spec import load_scenario
 
@@ -26,11 +27,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def setup_times(record: Record) -> None:
-    spec = load_scenario("mpcc_lap").agents["kart0"].controller
+    agent = load_scenario("mpcc_lap").agents["kart0"]
+    spec, kart = agent.controller, SingleTrack.of(agent.model)  # type: ignore[arg-type]
     with tempfile.TemporaryDirectory() as cache:
         os.environ["KARTCI_CACHE_DIR"] = cache
-        first = get_solver(spec)  # type: ignore[arg-type]
-        cached = [get_solver(spec).setup_s for _ in range(5)]  # type: ignore[arg-type]
+        first = get_solver(spec, kart)  # type: ignore[arg-type]
+        cached = [get_solver(spec, kart).setup_s for _ in range(5)]  # type: ignore[arg-type]
         del os.environ["KARTCI_CACHE_DIR"]
     n = spec.horizon_steps  # type: ignore[attr-defined]
     step = spec.step_s  # type: ignore[attr-defined]

@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass
 
 from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.params import axle_distance_m as axle_distance_m
 
 
 @dataclass(frozen=True)
@@ -30,18 +31,22 @@ STEERING_RATIO = 0.36  # wheel angle per steering-column angle: the linear term 
 def wheel_angles(model: GokartModel, beta_c: float) -> tuple[float, float]:
     """Left and right front-wheel (steer-joint) angles, rad, for a steering-column angle, rad.
 
-    As in the seed, the angles go to the steer joints as they are (positive: about +z). The
-    measured map (Eq. 3.4 / 3.5) is not symmetric: at +1.73 rad the right wheel turns 0.575 rad
-    and the left 0.303 rad.
+    The seed's Eq. 3.1/3.2 and 3.4/3.5 turn the right wheel more for a positive column angle:
+    Ackermann-consistent (inner wheel more) when positive means a right turn. Here positive
+    is a left turn (about +z), so the map is mirrored left-right: the seed's right-wheel
+    equations give the left wheel, which is then the inner wheel of a left turn. (Taking the
+    equations with their sides as written would be anti-Ackermann: with slip-angle tyres the
+    front wheels would fight each other in tight turns.) The measured map is not symmetric: at
+    +1.73 rad the left wheel turns 0.575 rad and the right 0.303 rad.
     """
-    if model.steering == "measured":  # Eq. 3.4 / 3.5, fitted to Table 3.3
-        right = -0.0355 * beta_c**3 + 0.0455 * beta_c**2 + 0.36 * beta_c
-        left = -0.0355 * beta_c**3 - 0.0455 * beta_c**2 + 0.36 * beta_c
+    if model.steering == "measured":  # Eq. 3.4 / 3.5 (sides mirrored), fitted to Table 3.3
+        left = -0.0355 * beta_c**3 + 0.0455 * beta_c**2 + 0.36 * beta_c
+        right = -0.0355 * beta_c**3 - 0.0455 * beta_c**2 + 0.36 * beta_c
         return left, right
-    # Eq. 3.1 / 3.2, with the virtual centre wheel at STEERING_RATIO x the column angle
+    # Eq. 3.2 / 3.1 (sides mirrored), the virtual centre wheel at STEERING_RATIO x the column angle
     t = math.tan(STEERING_RATIO * beta_c)
     lw, w = model.wheelbase_m, model.track_m
-    return math.atan2(lw * t, lw + 0.5 * w * t), math.atan2(lw * t, lw - 0.5 * w * t)
+    return math.atan2(lw * t, lw - 0.5 * w * t), math.atan2(lw * t, lw + 0.5 * w * t)
 
 
 def column_for_wheel_angle(model: GokartModel, delta: float) -> float:
@@ -68,8 +73,3 @@ def steer_for_turn_rate(model: GokartModel, v_mps: float, yaw_rate_radps: float)
     0.5 m/s the speed is held at 0.5 m/s so a turn at standstill stays bounded."""
     v_eff = v_mps if abs(v_mps) >= 0.5 else math.copysign(0.5, v_mps)
     return math.atan(axle_distance_m(model) * yaw_rate_radps / v_eff)
-
-
-def axle_distance_m(model: GokartModel) -> float:
-    """Distance between the rear and front axles (Table 3.2), m."""
-    return model.wheel_xy_m[2][0] - model.wheel_xy_m[0][0]

@@ -16,7 +16,7 @@ from kartci.logs.types import WORLD_FRAME, base_link, header, msg, yaw_of
 from kartci.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
 from kartci.mpcc.params import MpccController
 from kartci.plugins import AgentContext
-from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.params import GokartModel, cog_x_m
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
 from kartci.vehicle import KartInput, column_for_wheel_angle, wheel_angles
 
@@ -69,7 +69,7 @@ class MpccAgent:
                 self._delta = sum(wheel_angles(self.model, col)) / 2
             return
         p, tw = message.pose.pose.position, message.twist.twist
-        yaw, c = yaw_of(message.pose.pose.orientation), self.spec.vehicle.cog_x_m
+        yaw, c = yaw_of(message.pose.pose.orientation), cog_x_m(self.model)
         x, y = p.x + c * math.cos(yaw), p.y + c * math.sin(yaw)
         vx, vy, r = float(tw.linear.x), float(tw.linear.y) + c * float(tw.angular.z), float(
             tw.angular.z)

@@ -96,8 +96,8 @@ def calibrate_cmd(
     out: OutOpt = None,
     mpcc: Annotated[bool, typer.Option(
         "--mpcc", help="Fit the MPCC's own prediction model instead (LOG: a kartci run log of a "
-        "simulated kart; --params: fields of its vehicle model, e.g. steer_gain, "
-        "mass_per_yaw_inertia_per_m2); writes OUT/mpcc_fit.json.")] = False,
+        "simulated kart; --params: its single-track parameters, e.g. "
+        "mass_per_yaw_inertia_per_m2, front.d_mps2); writes OUT/mpcc_fit.json.")] = False,
 ) -> None:
     """Fit model parameters to a log by minimising the windowed sim-vs-log divergence
     (scipy.optimize.least_squares, trust-region reflective, bounded); prints the values with 95 %
@@ -134,13 +134,19 @@ def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
     from kartci.cli.common import out_console
     from kartci.logs import tables
     from kartci.metrics import recorded_scenario
+    from kartci.errors import SpecError
+    from kartci.mpcc.model import SingleTrack
     from kartci.mpcc.params import MpccVehicle
     from kartci.realdata.mpcc_fit import fit_mpcc, lateral_data
+    from kartci.robots.gokart.params import GokartModel, cog_x_m
 
     scenario = recorded_scenario(tables(log, ["/kartci/scenario"]), log)
-    agent = next(iter(scenario.agents))
-    vehicle = MpccVehicle()
-    fit = fit_mpcc(lateral_data(log, agent, vehicle), vehicle, names)
+    agent, model = next(iter(scenario.agents.items()))
+    if not isinstance(model.model, GokartModel):
+        raise SpecError(f"{log}: --mpcc fits a go-kart's MPCC model; {agent} is a "
+                        f"{model.model.kind}")
+    fit = fit_mpcc(lateral_data(log, agent, cog_x_m(model.model)),
+                   SingleTrack.of(model.model), MpccVehicle(), names)
     out.mkdir(parents=True, exist_ok=True)
     doc = {"log": str(log), "agent": agent, "params": dict(zip(fit.names, fit.values,
                                                                 strict=True)),

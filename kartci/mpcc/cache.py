@@ -20,6 +20,7 @@ from typing import Any
 import casadi as ca
 
 from kartci.errors import RunError
+from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.ocp import Layout, build
 from kartci.mpcc.params import MpccController
 
@@ -35,9 +36,9 @@ def cache_dir() -> Path:
     return Path(base) / "kartci"
 
 
-def solver_key(spec: MpccController) -> str:
-    """The cache key: a hash of CasADi's version, the solver's sources and the spec fields compiled
-    into it (horizon, step, RK4 substeps, vehicle)."""
+def solver_key(spec: MpccController, model: SingleTrack) -> str:
+    """The cache key: a hash of CasADi's version, the solver's sources, the spec fields compiled
+    into it (horizon, step, RK4 substeps, modelling choices) and the kart's parameters."""
     here = Path(__file__).parent
     h = hashlib.sha256()
     h.update(str(ca.CasadiMeta.version()).encode())
@@ -45,6 +46,7 @@ def solver_key(spec: MpccController) -> str:
         h.update((here / name).read_bytes())
     compiled = spec.model_dump(include={"horizon_steps", "step_s", "rk4_substeps", "vehicle"})
     h.update(repr(sorted(compiled.items())).encode())
+    h.update(model.key().encode())
     return h.hexdigest()[:16]
 
 
@@ -72,17 +74,17 @@ def _compiler() -> str | None:
     return shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
 
 
-def get_solver(spec: MpccController) -> Built:
-    """The solver for this spec: from the cache, else compiled into it (or interpreted when
-    compiling is off or impossible)."""
+def get_solver(spec: MpccController, model: SingleTrack) -> Built:
+    """The solver for this spec and kart: from the cache, else compiled into it (or interpreted
+    when compiling is off or impossible)."""
     t0 = time.perf_counter()
-    nlp, layout = build(spec)
+    nlp, layout = build(spec, model)
     cc = _compiler() if spec.compile else None
     if cc is None:
         solver = ca.nlpsol("mpcc", "ipopt", nlp, _options(spec))
         cold = ca.nlpsol("mpcc_cold", "ipopt", nlp, _options(spec, warm=False))
         return Built(solver, cold, layout, False, time.perf_counter() - t0, False)
-    key = solver_key(spec)
+    key = solver_key(spec, model)
     lib = cache_dir() / "mpcc" / f"mpcc_{key}.so"
     hit = lib.exists()
     if not hit:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from kartci.mpcc.cache import Built, get_solver
-from kartci.mpcc.model import ACC, DELTA, SLACK, VS, VX, S
+from kartci.mpcc.model import ACC, DELTA, PSI, SLACK, VS, VX, S, SingleTrack, X, Y
 from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
 from kartci.mpcc.params import MpccController
 from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
@@ -43,7 +43,7 @@ class Mpcc:
 
     def __init__(self, spec: MpccController, model: GokartModel, track: Track) -> None:
         self.spec, self.model, self.track = spec, model, track
-        self.built: Built = get_solver(spec)
+        self.built: Built = get_solver(spec, SingleTrack.of(model))
         self.lay = self.built.layout
         self.lbg, self.ubg = constraint_bounds(spec.horizon_steps)
         lo, hi = model.steering_limit_rad
@@ -127,6 +127,7 @@ class Mpcc:
             xs = np.tile(x0, (sp.horizon_steps + 1, 1))
             xs[1:, S] = s
             xs[1:, VX] = np.diff(np.r_[x0[S], s]) / sp.step_s
+            self._along_track(xs, x0)
             us = np.zeros((sp.horizon_steps, 4))
             us[:, VS] = xs[1:, VX]
             self._lam_g = self._lam_x = None
@@ -136,6 +137,15 @@ class Mpcc:
             if k < lay.n:
                 w[lay.u(k)] = us[k]
         return w
+
+    def _along_track(self, xs: np.ndarray, x0: np.ndarray) -> None:
+        """A fresh guess's poses: on the track at the guessed progress, at the kart's lateral
+        offset, so that the guess moves as its speeds say (the dynamic model's solver needs
+        that from a standstill)."""
+        lateral = float(self.track.project(x0[None, :2])[1][0])
+        poses = np.array([self.track.pose_at(float(s), lateral) for s in xs[1:, S]])
+        xs[1:, X], xs[1:, Y] = poses[:, 0], poses[:, 1]
+        xs[1:, PSI] = np.unwrap(np.r_[x0[PSI], poses[:, 2]])[1:]
 
     def _brake(self, x0: np.ndarray, status: str, iters: int, solve_ms: float) -> Plan:
         """Full brake, steering held: the safe reaction to a failed solve."""

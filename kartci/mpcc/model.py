@@ -1,39 +1,77 @@
-"""The MPCC's prediction model: a dynamic bicycle with Pacejka lateral tyres, blended into a
-kinematic bicycle at low speed (where the dynamic model is singular), integrated with RK4.
+"""The MPCC's prediction model: a dynamic single-track (bicycle) model with Pacejka lateral tyres,
+blended into a kinematic bicycle at low speed (where the dynamic model is singular), integrated
+with RK4. Its parameters are the simulated kart's own (`SingleTrack.of`: one source of truth,
+`models/gokart/params.yaml`), as in Liniger, Domahidi, Morari 2015.
 
 State x = [X, Y, psi, vx, vy, r, s, delta, a]: world position (m), heading (rad), body
 velocities (m/s), yaw rate (rad/s), arc-length progress (m), mean front-wheel angle (rad) and
 longitudinal acceleration command (m/s^2, negative = brake). Input u = [jerk (m/s^3), steering
 rate (rad/s), progress speed vs (m/s), slack (m)]. Tyre forces are mass-normalised (m/s^2), as
-in the ETH kart's MPC (REFERENCE.md).
+in the ETH kart's MPC (REFERENCE.md): an axle carrying a share of the mass gives that share
+times D sin(C atan(B alpha)) per kg of the whole kart.
 """
 
 from __future__ import annotations
 
+from dataclasses import asdict, dataclass
+
 import casadi as ca
 
 from kartci.mpcc.params import MpccVehicle
+from kartci.robots.gokart.params import GokartModel, Tyre, axle_distance_m
 
 NX, NU = 9, 4
 X, Y, PSI, VX, VY, R, S, DELTA, ACC = range(NX)
 JERK, DDELTA, VS, SLACK = range(NU)
 
 
-def continuous(x: ca.SX, u: ca.SX, v: MpccVehicle) -> ca.SX:
+@dataclass(frozen=True)
+class SingleTrack:
+    """The kart as a single-track model: geometry, mass ratio, tyres and drag, all read from
+    the robot's parameters."""
+
+    lf_m: float  # centre of mass to front axle
+    lr_m: float  # centre of mass to rear axle
+    mass_per_yaw_inertia_per_m2: float
+    front: Tyre
+    rear: Tyre
+    rolling_decel_mps2: float
+    air_drag_per_m: float
+
+    @classmethod
+    def of(cls, model: GokartModel) -> SingleTrack:
+        """The single-track model of a go-kart's parameters."""
+        length, lr = axle_distance_m(model), model.cog_to_rear_axle_m
+        return cls(length - lr, lr, model.mass_kg / model.yaw_inertia_kgm2, model.front_tyre,
+                   model.rear_tyre, model.rolling_decel_mps2, model.air_drag_per_m)
+
+    def key(self) -> str:
+        """A stable text of every value, for the compiled solver's cache key."""
+        return repr(sorted(asdict(self).items()))
+
+
+def _tyre(t: Tyre, share: float, alpha: ca.SX) -> ca.SX:
+    return share * t.d_mps2 * ca.sin(t.c * ca.atan(t.b * alpha))
+
+
+def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle) -> ca.SX:
     """dx/dt of the blended bicycle model."""
-    psi, vx, vy, r, acc = x[PSI], x[VX], x[VY], x[R], x[ACC]
-    delta = v.steer_gain * x[DELTA]
-    lf, lr = v.cog_to_front_m, v.cog_to_rear_m
-    vx_s = ca.sqrt(vx * vx + 0.25)  # slip angles are undefined at standstill; smooth floor
+    psi, vx, vy, r, acc, delta = x[PSI], x[VX], x[VY], x[R], x[ACC], x[DELTA]
+    lf, lr = m.lf_m, m.lr_m
+    vx_s = ca.sqrt(vx * vx + 1.0)  # slip angles are undefined at standstill; smooth floor
     alpha_f = delta - ca.atan((vy + lf * r) / vx_s)
     alpha_r = -ca.atan((vy - lr * r) / vx_s)
-    ff = v.front_d_mps2 * ca.sin(v.front_c * ca.atan(v.front_b * alpha_f))
-    fr = v.rear_d_mps2 * ca.sin(v.rear_c * ca.atan(v.rear_b * alpha_r))
-    drag = v.rolling_decel_mps2 * ca.tanh(vx) + v.air_drag_per_m * vx * vx
+    share_f, share_r = lr / (lf + lr), lf / (lf + lr)  # static axle loads: mass shares
     brake = 0.5 * (acc - ca.sqrt(acc * acc + 0.01))  # smooth min(acc, 0)
+    # friction circle as in the plant: the rear motors' drive force and the brakes on both
+    # axles (per kg of axle load) leave sqrt(1 - (F_x / D)^2) of each axle's lateral grip
+    long_f, long_r = -brake, (acc - brake) / share_r + brake
+    ff = _tyre(m.front, share_f, alpha_f) * ca.sqrt(1 - (long_f / m.front.d_mps2) ** 2)
+    fr = _tyre(m.rear, share_r, alpha_r) * ca.sqrt(1 - (long_r / m.rear.d_mps2) ** 2)
+    drag = m.rolling_decel_mps2 * ca.tanh(vx / 0.3) + m.air_drag_per_m * vx * vx
     ax = acc - brake * (1 - ca.tanh(vx / 0.3)) - drag  # brakes stop the kart, never reverse it
     dyn_vy = ff * ca.cos(delta) + fr - vx * r
-    dyn_r = v.mass_per_yaw_inertia_per_m2 * (lf * ff * ca.cos(delta) - lr * fr)
+    dyn_r = m.mass_per_yaw_inertia_per_m2 * (lf * ff * ca.cos(delta) - lr * fr)
     # kinematic bicycle: vy and r relax to their no-slip values
     r_kin = vx * ca.tan(delta) / (lf + lr)
     kin_vy = (lr * r_kin - vy) / v.kinematic_relax_s
@@ -44,7 +82,7 @@ def continuous(x: ca.SX, u: ca.SX, v: MpccVehicle) -> ca.SX:
         vx * ca.cos(psi) - vy * ca.sin(psi),
         vx * ca.sin(psi) + vy * ca.cos(psi),
         r,
-        ax + vy * r * w,
+        ax + w * (vy * r - ff * ca.sin(delta)),
         w * dyn_vy + (1 - w) * kin_vy,
         w * dyn_r + (1 - w) * kin_r,
         u[VS],
@@ -53,15 +91,15 @@ def continuous(x: ca.SX, u: ca.SX, v: MpccVehicle) -> ca.SX:
     )
 
 
-def discrete(v: MpccVehicle, step_s: float, substeps: int) -> ca.Function:
+def discrete(m: SingleTrack, v: MpccVehicle, step_s: float, substeps: int) -> ca.Function:
     """x_{k+1} = F(x_k, u_k): `substeps` RK4 steps over one horizon step."""
     x, u = ca.SX.sym("x", NX), ca.SX.sym("u", NU)
     h = step_s / substeps
     xk = x
     for _ in range(substeps):
-        k1 = continuous(xk, u, v)
-        k2 = continuous(xk + h / 2 * k1, u, v)
-        k3 = continuous(xk + h / 2 * k2, u, v)
-        k4 = continuous(xk + h * k3, u, v)
+        k1 = continuous(xk, u, m, v)
+        k2 = continuous(xk + h / 2 * k1, u, m, v)
+        k3 = continuous(xk + h / 2 * k2, u, m, v)
+        k4 = continuous(xk + h * k3, u, m, v)
         xk = xk + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     return ca.Function("F", [x, u], [xk])

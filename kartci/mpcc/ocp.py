@@ -27,6 +27,7 @@ from kartci.mpcc.model import (
     VX,
     R,
     S,
+    SingleTrack,
     X,
     Y,
     discrete,
@@ -73,11 +74,11 @@ def weights_vector(w: MpccWeights) -> list[float]:
     return [w.contouring, w.lag, w.progress, w.jerk, w.steer_rate, w.slack]
 
 
-def build(spec: MpccController) -> tuple[dict[str, ca.MX], Layout]:
+def build(spec: MpccController, model: SingleTrack) -> tuple[dict[str, ca.MX], Layout]:
     """The NLP {x, p, f, g}; g <= 0 for the path constraints, g == 0 for the dynamics."""
     n = spec.horizon_steps
     lay = Layout(n)
-    f_step = discrete(spec.vehicle, spec.step_s, spec.rk4_substeps)
+    f_step = discrete(model, spec.vehicle, spec.step_s, spec.rk4_substeps)
     # MX with one shared F: the generated C holds F and its derivatives once, not N times,
     # which keeps the compile short
     w = ca.MX.sym("w", lay.size)

@@ -10,34 +10,9 @@ from kartci.spec.models import ControllerParams, Frozen
 
 
 class MpccVehicle(Frozen):
-    """The MPCC's bicycle model of the kart. Defaults are fitted to the simulated kart's
-    steady-circle runs (benchmarks/fit_mpcc.py), not to the real ETH kart."""
+    """Modelling choices of the MPCC's bicycle model. Its physical parameters (geometry, mass,
+    inertia, tyres, drag) are the robot's own (`models/gokart/params.yaml`), not copied here."""
 
-    cog_x_m: float = Field(0.36, description="centre of gravity ahead of base_link, m "
-                           "(cog_j, Table 3.2)")
-    steer_gain: float = Field(0.86, description="yaw response per kinematic bicycle's "
-                              "(dimensionless): the simulated kart turns 14% less at low speed "
-                              "(tyre creep)")
-    cog_to_front_m: float = Field(0.769, description="centre of gravity to front axle, m "
-                                  "(fitted; REFERENCE.md: ETH wheelbase 1.19 m)")
-    cog_to_rear_m: float = Field(0.437, description="centre of gravity to rear axle, m (fitted; "
-                                 "REFERENCE.md: CoM 0.46 m ahead of the rear axle)")
-    mass_per_yaw_inertia_per_m2: float = Field(2.65, description="m / Iz, 1/m^2")
-    front_b: float = Field(9.0, description="Pacejka stiffness factor B of the front tyre, 1/rad: "
-                           "F = D sin(C atan(B alpha)) (REFERENCE.md: ETH B = 9)")
-    front_c: float = Field(1.2, description="Pacejka shape factor C of the front tyre "
-                           "(dimensionless; REFERENCE.md: ETH C = 1)")
-    front_d_mps2: float = Field(3.2, description="peak front lateral force / total mass, m/s^2 "
-                                "(Pacejka D, mass-normalised as in the ETH MPC, REFERENCE.md)")
-    rear_b: float = Field(9.7, description="Pacejka stiffness factor B of the rear tyre, 1/rad "
-                          "(REFERENCE.md: ETH B = 5.2)")
-    rear_c: float = Field(1.1, description="Pacejka shape factor C of the rear tyre "
-                          "(dimensionless; REFERENCE.md: ETH C = 1.1)")
-    rear_d_mps2: float = Field(5.6, description="peak rear lateral force / total mass, m/s^2 "
-                               "(Pacejka D)")
-    rolling_decel_mps2: float = Field(0.15, description="rolling resistance as a constant "
-                                      "deceleration, m/s^2")
-    air_drag_per_m: float = Field(0.004, description="drag deceleration = this * v^2, 1/m")
     blend_min_mps: float = Field(1.0, description="below this speed, m/s: kinematic model only")
     blend_max_mps: float = Field(3.0, description="above this speed, m/s: dynamic model only")
     kinematic_relax_s: float = Field(0.1, gt=0.0, description="time constant with which the "
@@ -68,9 +43,12 @@ class MpccController(ControllerParams):
                             "multiple of physics.dt_s")
     horizon_steps: int = Field(30, ge=5, le=80, description="prediction horizon N, steps "
                                "(REFERENCE.md: N = 30 at 0.05 s measured; ETH: N = 31)")
-    step_s: float = Field(0.05, gt=0.0, description="horizon step, s")
-    rk4_substeps: int = Field(2, ge=1, le=8, description="RK4 integration steps per horizon "
-                              "step")
+    step_s: float = Field(0.075, gt=0.0, description="horizon step, s: 30 x 0.075 s = 2.25 s, "
+                          "long enough to brake from 10 m/s for the hall's hairpin (ETH: 31 x "
+                          "0.1 s)")
+    rk4_substeps: int = Field(3, ge=1, le=8, description="RK4 integration steps per horizon "
+                              "step (0.025 s each: the yaw dynamics of a 20 kg m^2 kart are "
+                              "fast at low speed)")
     state_topic: str = Field("odom", description="nav_msgs/Odometry topic the controller reads "
                              "(relative: in the agent's namespace); `localization/odom`: "
                              "drive on the localization node's estimate")
@@ -80,12 +58,12 @@ class MpccController(ControllerParams):
         "obstacle_detector node's detections, static and moving)")
     detections_topic: str = Field("obstacle_detector/detections", description="the "
                                   "vision_msgs/Detection3DArray read with `perception`")
-    max_speed_mps: float = Field(7.0, gt=0.0, description="speed limit, m/s (soft; REFERENCE.md: "
+    max_speed_mps: float = Field(10.0, gt=0.0, description="speed limit, m/s (soft; REFERENCE.md: "
                                  "ETH MPCC limit 10 m/s)")
-    max_accel_mps2: float = Field(3.0, gt=0.0, description="longitudinal acceleration limit, "
+    max_accel_mps2: float = Field(5.0, gt=0.0, description="longitudinal acceleration limit, "
                                   "m/s^2 (REFERENCE.md: ETH MPCC limit 5 m/s^2)")
     max_brake_mps2: float = Field(5.0, gt=0.0, description="braking deceleration limit, m/s^2")
-    max_lateral_accel_mps2: float = Field(3.5, gt=0.0, description="friction ellipse, lateral, "
+    max_lateral_accel_mps2: float = Field(6.25, gt=0.0, description="friction ellipse, lateral, "
                                           "m/s^2 (REFERENCE.md: ETH MPCC limit 6.25 m/s^2)")
     max_steer_rate_radps: float = Field(1.2, gt=0.0, description="front-wheel angle rate limit, "
                                         "rad/s")

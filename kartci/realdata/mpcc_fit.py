@@ -1,5 +1,6 @@
-"""Fit the MPCC's own prediction model (kartci.mpcc.model) to a kart's log, so its steering
-gain and yaw inertia come from data instead of by hand.
+"""Fit the MPCC's own prediction model (kartci.mpcc.model) to a kart's log: its single-track
+parameters (read from the kart's own parameters, `SingleTrack.of`) checked against, and tuned
+to, what the kart did.
 
 The lateral part of the model is fitted: vy and yaw rate r, integrated (RK4, the log's step)
 over windows of `window_s` from the recorded values, with the recorded forward speed and mean
@@ -19,6 +20,7 @@ import numpy as np
 
 from kartci.errors import LogError, SpecError
 from kartci.logs import tables
+from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.params import MpccVehicle
 
 STEER_JOINTS = ("front_left_wheel_steer_joint.position", "front_right_wheel_steer_joint.position")
@@ -36,8 +38,9 @@ class Lateral:
     delta: np.ndarray
 
 
-def lateral_data(run_log: Path, agent: str, vehicle: MpccVehicle) -> Lateral:
-    """The lateral motion of a kart run log (odometry and the steer joints' angles)."""
+def lateral_data(run_log: Path, agent: str, cog_x_m: float) -> Lateral:
+    """The lateral motion of a kart run log (odometry and the steer joints' angles), moved
+    from base_link to the centre of mass `cog_x_m` (m) ahead of it."""
     t = tables(run_log, [f"/{agent}/odom", f"/{agent}/joint_states"])
     odom, joints = t.get(f"/{agent}/odom"), t.get(f"/{agent}/joint_states")
     if odom is None or joints is None or not set(STEER_JOINTS) <= set(joints.columns):
@@ -48,25 +51,44 @@ def lateral_data(run_log: Path, agent: str, vehicle: MpccVehicle) -> Lateral:
                       joints[list(STEER_JOINTS)].to_numpy(float).mean(axis=1))
     r = odom["wz"].to_numpy(float)
     return Lateral(ts - ts[0], odom["vx"].to_numpy(float),
-                   odom["vy"].to_numpy(float) + r * vehicle.cog_x_m, r, delta)
+                   odom["vy"].to_numpy(float) + r * cog_x_m, r, delta)
 
 
-def _step_function(vehicle: MpccVehicle, names: Sequence[str], h: float) -> Any:
-    """One RK4 step of (vy, r) with inputs vx, delta and the fitted parameters p."""
+def fittable(track: SingleTrack) -> dict[str, float]:
+    """The single-track model's parameters by name (`front.d_mps2` for a tyre's)."""
+    out = {k: float(v) for k, v in vars(track).items() if isinstance(v, float | int)}
+    for axle in ("front", "rear"):
+        tyre = getattr(track, axle)
+        out.update({f"{axle}.{k}": float(v) for k, v in tyre.model_dump().items()})
+    return out
+
+
+def _symbolic(track: SingleTrack, names: Sequence[str], p: Any) -> Any:
+    """The track's parameters as a namespace, the named ones replaced by symbols of p."""
+    tyres = {a: SimpleNamespace(**getattr(track, a).model_dump()) for a in ("front", "rear")}
+    m = SimpleNamespace(**{**vars(track), **tyres})
+    for i, name in enumerate(names):
+        axle, _, field = name.rpartition(".")
+        setattr(tyres[axle] if axle else m, field, p[i])
+    return m
+
+
+def _step_function(track: SingleTrack, vehicle: MpccVehicle, names: Sequence[str],
+                   h: float) -> Any:
+    """One RK4 step of (vy, r) with inputs vx, delta and the fitted parameters p (no
+    longitudinal acceleration: the lateral dynamics alone)."""
     import casadi as ca
 
     from kartci.mpcc.model import DELTA, NU, NX, PSI, VX, VY, R, continuous
 
     p = ca.SX.sym("p", len(names))
-    v = SimpleNamespace(**vehicle.model_dump())
-    for i, name in enumerate(names):
-        setattr(v, name, p[i])
+    m = _symbolic(track, names, p)
     vy, r, vx, delta = (ca.SX.sym(n) for n in ("vy", "r", "vx", "delta"))
 
     def f(vy_: Any, r_: Any) -> Any:
         x = ca.SX.zeros(NX)
         x[VX], x[VY], x[R], x[DELTA], x[PSI] = vx, vy_, r_, delta, 0
-        dx = continuous(x, ca.SX.zeros(NU), v)  # type: ignore[arg-type]  # symbols for fields
+        dx = continuous(x, ca.SX.zeros(NU), m, vehicle)
         return dx[VY], dx[R]
 
     k1 = f(vy, r)
@@ -78,11 +100,11 @@ def _step_function(vehicle: MpccVehicle, names: Sequence[str], h: float) -> Any:
     return ca.Function("step", [vy, r, vx, delta, p], [out])
 
 
-def predict(data: Lateral, vehicle: MpccVehicle, names: Sequence[str], values: Sequence[float],
-            window_s: float) -> np.ndarray:
+def predict(data: Lateral, track: SingleTrack, vehicle: MpccVehicle, names: Sequence[str],
+            values: Sequence[float], window_s: float) -> np.ndarray:
     """(vy, r) predicted at every sample, each window started from the recorded values."""
     h = float(np.median(np.diff(data.t)))
-    step = _step_function(vehicle, names, h)
+    step = _step_function(track, vehicle, names, h)
     per_window = max(1, round(window_s / h))
     out = np.empty((len(data.t), 2))
     p = np.asarray(values, float)
@@ -107,21 +129,22 @@ class MpccFit:
     rms_after: tuple[float, float]
 
 
-def fit_mpcc(data: Lateral, vehicle: MpccVehicle, names: Sequence[str],
+def fit_mpcc(data: Lateral, track: SingleTrack, vehicle: MpccVehicle, names: Sequence[str],
              window_s: float = 0.5) -> MpccFit:
-    """Fit the named MpccVehicle fields to the recorded lateral motion."""
+    """Fit the named single-track parameters (see `fittable`) to the recorded lateral
+    motion, starting from the kart's own."""
     from scipy.optimize import least_squares
 
-    fields = MpccVehicle.model_fields
+    fields = fittable(track)
     unknown = [n for n in names if n not in fields]
     if unknown:
-        raise SpecError(f"--params {unknown[0]}: not a field of the MPCC's vehicle model "
+        raise SpecError(f"--params {unknown[0]}: not a field of the MPCC's single-track model "
                         f"({', '.join(fields)})")
-    start = np.array([float(getattr(vehicle, n)) for n in names])
+    start = np.array([fields[n] for n in names])
     measured = np.column_stack([data.vy, data.r])
 
     def residual(scaled: np.ndarray) -> np.ndarray:
-        return np.asarray((predict(data, vehicle, names, scaled * start, window_s)
+        return np.asarray((predict(data, track, vehicle, names, scaled * start, window_s)
                            - measured).ravel())
 
     result = least_squares(residual, np.ones(len(names)), bounds=(1 / 3, 3.0), method="trf",

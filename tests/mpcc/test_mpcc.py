@@ -12,8 +12,10 @@ from kartci.logs import tables
 from kartci.metrics import Metric, compute, race
 from kartci.metrics.kart import kart_track
 from kartci.mpcc.cache import get_solver, solver_key
+from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.params import MpccController, MpccWeights
 from kartci.project import BUILTIN
+from kartci.robots.gokart.params import GokartModel
 from kartci.sim import simulate
 from kartci.spec import load_scenario
 from kartci.track import load_track
@@ -29,15 +31,19 @@ def test_solver_is_compiled_once_then_loaded_from_the_cache(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
     spec = MpccController(horizon_steps=8)
-    first = get_solver(spec)
+    kart = SingleTrack.of(GokartModel())
+    first = get_solver(spec, kart)
     assert first.compiled and not first.cache_hit
     assert len(list((tmp_path / "mpcc").glob("mpcc_*.so"))) == 1
-    second = get_solver(spec)
+    second = get_solver(spec, kart)
     assert second.cache_hit
-    # tuning and limits are solver inputs: they reuse the binary; the horizon does not
+    # tuning and limits are solver inputs: they reuse the binary; the horizon and the kart's
+    # own parameters (the model reads them from the robot) do not
+    key = solver_key(spec, kart)
     assert solver_key(spec.model_copy(update={"weights": MpccWeights(lag=5.0),
-                                              "max_speed_mps": 3.0})) == solver_key(spec)
-    assert solver_key(spec.model_copy(update={"horizon_steps": 9})) != solver_key(spec)
+                                              "max_speed_mps": 3.0}), kart) == key
+    assert solver_key(spec.model_copy(update={"horizon_steps": 9}), kart) != key
+    assert solver_key(spec, SingleTrack.of(GokartModel(yaw_inertia_kgm2=30.0))) != key
 
 
 def test_a_lower_speed_limit_lowers_the_top_speed(tmp_path: Path) -> None:

@@ -109,11 +109,15 @@ def test_steering_wheel_angles_of_table_3_3_give_eq_3_4_and_3_5(steering: str) -
             assert (left, right) == pytest.approx((exp_left, exp_right), abs=2e-3), beta
     finally:
         world.close()
-    if steering == "measured":  # Eq. 3.4 itself, at one point, by hand
-        assert wheel_angles(model, 1.0)[1] == pytest.approx(-0.0355 + 0.0455 + 0.36)
-    else:  # Eq. 3.2 by hand, l = 1.27, w = 0.94, centre wheel 0.36 x 1.0 rad
+    # by hand, mirrored left-right to kartci's left-positive column (vehicle.wheel_angles): the
+    # seed's right wheel (Eq. 3.2, 3.4) is the inner, left wheel of a left turn
+    if steering == "measured":  # Eq. 3.4 at beta_C = 1.0
+        assert wheel_angles(model, 1.0)[0] == pytest.approx(-0.0355 + 0.0455 + 0.36)
+    else:  # Eq. 3.2, l = 1.27, w = 0.94, centre wheel 0.36 x 1.0 rad
         t = math.tan(0.36)
-        assert wheel_angles(model, 1.0)[1] == pytest.approx(math.atan(1.27 * t / (1.27 - 0.47 * t)))
+        assert wheel_angles(model, 1.0)[0] == pytest.approx(math.atan(1.27 * t / (1.27 - 0.47 * t)))
+    left, right = wheel_angles(model, 1.0)
+    assert left > right > 0  # a left turn: the inner wheel turns more (Ackermann sense)
 
 
 @pytest.mark.parametrize(("name", "rings", "lowest", "highest", "spacing", "per_rev"), [
@@ -242,7 +246,7 @@ def test_reverse_and_emergency_stop() -> None:
         assert drive(KartInput(accel_mps2=2.0, reverse=True), 1.5) < -1.5  # backwards
         assert drive(KartInput(brake_mps2=8.0), 1.0) == pytest.approx(0.0, abs=0.05)
         assert drive(KartInput(accel_mps2=4.0), 1.5) > 3.0
-        # the e-stop locks the rear wheels (rear brakes only, as on the kart): about 5.6 m/s^2
+        # the e-stop brakes at the largest deceleration (max_brake_mps2) on all four wheels
         assert drive(KartInput(accel_mps2=4.0, estop=True), 2.0) == pytest.approx(0.0, abs=0.05)
     finally:
         world.close()
@@ -260,3 +264,28 @@ def test_joystick_mappings_round_trip(mapping: str) -> None:
     assert got.steering_rad == pytest.approx(wish.steering_rad, abs=1e-6)
     assert got.accel_mps2 == pytest.approx(2.5, abs=1e-5)
     assert (got.brake_mps2, got.reverse, got.estop) == (0.0, True, False)
+
+
+@pytest.mark.parametrize("variant", ["bumblebee", "herbie"])
+def test_urdf_mass_properties_are_the_params(variant: str) -> None:
+    """The URDF's links add up to params.yaml's mass, centre of mass (0.46 m ahead of the rear
+    axle, REFERENCE.md) and yaw inertia (20 kg m^2), as PyBullet loads them."""
+    model = GokartModel()
+    c = pb.connect(pb.DIRECT)
+    try:
+        body = pb.loadURDF(str(MODELS / f"{variant}.urdf"), flags=pb.URDF_USE_INERTIA_FROM_FILE,
+                           physicsClientId=c)
+        links = []  # mass, world CoM (x, y), own izz
+        for link in range(-1, pb.getNumJoints(body, physicsClientId=c)):
+            info = pb.getDynamicsInfo(body, link, physicsClientId=c)
+            com = (pb.getBasePositionAndOrientation(body, physicsClientId=c)[0] if link < 0
+                   else pb.getLinkState(body, link, physicsClientId=c)[0])
+            links.append((info[0], com[0], com[1], info[2][2]))
+        mass = sum(m for m, _, _, _ in links)
+        x = sum(m * lx for m, lx, _, _ in links) / mass
+        izz = sum(i + m * ((lx - x) ** 2 + ly**2) for m, lx, ly, i in links)
+    finally:
+        pb.disconnect(c)
+    assert mass == pytest.approx(model.mass_kg, abs=0.01)
+    assert x - model.wheel_xy_m[0][0] == pytest.approx(model.cog_to_rear_axle_m, abs=1e-3)
+    assert izz == pytest.approx(model.yaw_inertia_kgm2, rel=0.01)

@@ -1,21 +1,23 @@
-"""The go-kart as a PyBullet multibody: velocity-controlled rear wheels with a torque limit,
-position-controlled steer joints through the measured steering map, free front wheels."""
+"""The go-kart as a PyBullet multibody: tyre forces from a slip model (tyres.py) applied to the
+chassis every physics step, position-controlled steer joints through the measured steering map,
+and wheels spun at their rolling speed (for odometry and looks; their contacts have no
+friction and only carry the weight)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
 from kartci._bullet import pb, quiet_c_output
 from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.tyres import air_drag_n, drive_demand, wheel_force, wheels
 from kartci.sim.body import Base, BodyState
 from kartci.sim.urdf import fixed_frames, physics_urdf
 from kartci.vehicle import KartInput, wheel_angles
 
-ROLLING_DECEL_MPS2 = 0.15  # coasting: rolling resistance and drivetrain drag
-AIR_DRAG_PER_M = 0.004  # aerodynamic deceleration = this * v^2
-SLIP_WINDOW_MPS = 0.5  # the motor's speed reference stays within this of the wheel speed
+WHEEL_SPIN_TORQUE_NM = 20.0  # spins the (frictionless) wheels at their rolling speed
 
 
 class Gokart(Base):
@@ -39,12 +41,17 @@ class Gokart(Base):
         self.steer = [joints["front_left_wheel_steer_joint"],
                       joints["front_right_wheel_steer_joint"]]
         self.wheels = [*self.rear, *self.front]
-        pb.setJointMotorControlArray(self.body, self.front, pb.VELOCITY_CONTROL,
-                                     forces=[0.0, 0.0], physicsClientId=client)
-        self.friction = [-1.0] * 4
+        # no velocity damping (Bullet's default 0.04): tyres.py models rolling and air drag
+        pb.changeDynamics(self.body, -1, linearDamping=0.0, angularDamping=0.0,
+                          physicsClientId=client)
+        for link in self.wheels:  # the tyre model makes every horizontal force
+            pb.changeDynamics(self.body, link, lateralFriction=0.0, rollingFriction=0.0,
+                              spinningFriction=0.0, physicsClientId=client)
+        self.tyres = wheels(model)
+        self.radii = [model.rear_wheel_radius_m] * 2 + [model.front_wheel_radius_m] * 2
+        self.mu_scale = [1.0] * 4
         self.input = KartInput()
         self.column = 0.0  # steering-column angle, rad
-        self.v_ref = 0.0  # motor speed reference at the rear tire, m/s
 
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;
@@ -56,50 +63,48 @@ class Gokart(Base):
                                cmd.reverse, cmd.estop)
 
     def set_wheel_friction(self, mu: list[float]) -> None:
-        """Per-wheel floor friction (Bullet multiplies the two bodies' coefficients)."""
-        for link, f, old in zip(self.wheels, mu, self.friction, strict=True):
-            if f != old:
-                pb.changeDynamics(self.body, link, lateralFriction=f * self.model.tire_friction,
-                                  physicsClientId=self.client)
-        self.friction = list(mu)
+        """Per-wheel floor friction: scales each tyre's D by mu / the reference friction."""
+        ref = self.model.tyre_reference_friction
+        self.mu_scale = [f * self.model.tire_friction / ref for f in mu]
 
     def pre_step(self) -> None:
-        """Turn the steering column towards its target at the steering rate, and drive the rear
-        wheels at the motor's speed reference within the torque limit."""
-        m, inp, dt = self.model, self.input, self.dt
+        """Turn the steering column towards its target at the steering rate, and apply the four
+        tyre forces and the air drag for the coming physics step."""
+        m, inp, dt, c = self.model, self.input, self.dt, self.client
         step = m.steering_rate_radps * dt
         self.column += min(max(inp.steering_rad - self.column, -step), step)
         left, right = wheel_angles(m, self.column)
         pb.setJointMotorControlArray(self.body, self.steer, pb.POSITION_CONTROL,
                                      targetPositions=[left, right], forces=[800.0, 800.0],
-                                     positionGains=[1.0, 1.0], physicsClientId=self.client)
-        v = self.rear_speed()
-        ref = self.v_ref
-        if inp.estop:
-            ref = 0.0
-        else:
-            direction = -1.0 if inp.reverse else 1.0
-            decel = inp.brake_mps2 + ROLLING_DECEL_MPS2 + AIR_DRAG_PER_M * ref * ref
-            ref += direction * inp.accel_mps2 * dt
-            ref = max(ref - decel * dt, 0.0) if ref > 0 else min(ref + decel * dt, 0.0)
-            ref = min(max(ref, -m.reverse_speed_mps), m.max_speed_mps)
-            ref = min(max(ref, v - SLIP_WINDOW_MPS), v + SLIP_WINDOW_MPS)
-        self.v_ref = ref
-        # two rear motors (REFERENCE.md): each wheel's speed follows its own path radius, an
-        # electronic differential on the measured yaw rate, so the axle does not scrub
-        yaw_rate = float(pb.getBaseVelocity(self.body, physicsClientId=self.client)[1][2])
-        half = abs(m.wheel_xy_m[0][1])
-        w_left = (ref - yaw_rate * half) / m.rear_wheel_radius_m
-        w_right = (ref + yaw_rate * half) / m.rear_wheel_radius_m
-        tau = m.wheel_torque_limit_nm * (3.0 if inp.estop else 1.0)
-        pb.setJointMotorControlArray(self.body, self.rear, pb.VELOCITY_CONTROL,
-                                     targetVelocities=[w_left, w_right], forces=[tau, tau],
-                                     physicsClientId=self.client)
-
-    def rear_speed(self) -> float:
-        """Mean rear-wheel speed at the tire, m/s."""
-        js = pb.getJointStates(self.body, self.rear, physicsClientId=self.client)
-        return float(js[0][1] + js[1][1]) / 2 * self.model.rear_wheel_radius_m
+                                     positionGains=[1.0, 1.0], physicsClientId=c)
+        com, quat = pb.getBasePositionAndOrientation(self.body, physicsClientId=c)
+        lin, ang = pb.getBaseVelocity(self.body, physicsClientId=c)
+        r = pb.getMatrixFromQuaternion(quat)  # row-major body-to-world
+        vx = r[0] * lin[0] + r[3] * lin[1] + r[6] * lin[2]
+        vy = r[1] * lin[0] + r[4] * lin[1] + r[7] * lin[2]
+        yaw_rate = r[2] * ang[0] + r[5] * ang[1] + r[8] * ang[2]
+        demand = drive_demand(m, inp.accel_mps2, inp.brake_mps2, inp.reverse, inp.estop, vx)
+        steer = [0.0, 0.0, *(s[0] for s in pb.getJointStates(self.body, self.steer,
+                                                             physicsClientId=c))]
+        dz = -m.cog_height_m
+        spin = []
+        for w, delta, mu, radius in zip(self.tyres, steer, self.mu_scale, self.radii,
+                                        strict=True):
+            fx, fy = wheel_force(m, w, demand, delta, (vx, vy), yaw_rate, mu)
+            at = (com[0] + r[0] * w.dx_m + r[1] * w.dy_m + r[2] * dz,
+                  com[1] + r[3] * w.dx_m + r[4] * w.dy_m + r[5] * dz,
+                  com[2] + r[6] * w.dx_m + r[7] * w.dy_m + r[8] * dz)
+            force = (r[0] * fx + r[1] * fy, r[3] * fx + r[4] * fy, r[6] * fx + r[7] * fy)
+            pb.applyExternalForce(self.body, -1, force, at, pb.WORLD_FRAME, physicsClientId=c)
+            v_wheel = vx - yaw_rate * w.dy_m
+            v_lat = vy + yaw_rate * w.dx_m
+            spin.append((math.cos(delta) * v_wheel + math.sin(delta) * v_lat) / radius)
+        drag = air_drag_n(m, vx)
+        pb.applyExternalForce(self.body, -1, (r[0] * drag, r[3] * drag, r[6] * drag), com,
+                              pb.WORLD_FRAME, physicsClientId=c)
+        pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
+                                     targetVelocities=spin, forces=[WHEEL_SPIN_TORQUE_NM] * 4,
+                                     physicsClientId=c)
 
     def wheel_states(self) -> tuple[list[float], list[float], list[float]]:
         """Steer-joint angles (rad), and the four wheels' angles (rad) and speeds (rad/s), in

@@ -9,6 +9,18 @@ from pydantic import Field
 from kartci.spec.models import Frozen, RobotParams
 
 
+class Tyre(Frozen):
+    """One axle's tyres: Pacejka's magic formula for the lateral force, mass-normalised as in the
+    ETH kart's MPC (Liniger et al. 2015; REFERENCE.md): F_y = m_axle D sin(C atan(B alpha)),
+    m_axle the static load on the axle in kg, alpha the slip angle in rad."""
+
+    b: float = Field(gt=0.0, description="stiffness factor B, 1/rad")
+    c: float = Field(gt=0.0, description="shape factor C (dimensionless)")
+    d_mps2: float = Field(gt=0.0, description="peak factor D, m/s^2: the largest force per kg "
+                          "of axle load, on a floor of `tyre_reference_friction`; also the "
+                          "radius of the axle's friction circle (longitudinal and lateral)")
+
+
 class GokartModel(RobotParams):
     """The ETH go-kart (seed 000, Tables 3.1, 3.2, 3.4); limits from REFERENCE.md."""
 
@@ -38,8 +50,29 @@ class GokartModel(RobotParams):
     steering_rate_radps: float = Field(4.0, description="column angle slew rate, rad/s")
     wheelbase_m: float = Field(1.27, description="l of Eq. 3.1/3.2, m (Ackermann option)")
     track_m: float = Field(0.94, description="w of Eq. 3.1/3.2, m (Ackermann option)")
-    tire_friction: float = Field(1.0, description="tyre friction factor (dimensionless), "
-                                 "multiplied by the floor's or zone's friction coefficient")
+    tire_friction: float = Field(1.0, description="tyre friction factor (dimensionless): "
+                                 "scales the tyres' D on top of the floor's or zone's friction")
+    mass_kg: float = Field(283.4, gt=0.0, description="total mass, kg (seed 000 Table 3.1, "
+                           "Bumblebee); the URDF's link masses add up to it")
+    cog_to_rear_axle_m: float = Field(0.46, gt=0.0, description="centre of mass ahead of the "
+                                      "rear axle, m (REFERENCE.md: ETH kart, 0.46 m)")
+    cog_height_m: float = Field(0.24, gt=0.0, description="centre of mass above the floor, m "
+                                "(seed 000 Table 3.1)")
+    yaw_inertia_kgm2: float = Field(20.0, gt=0.0, description="yaw moment of inertia about "
+                                    "the centre of mass, kg m^2 (REFERENCE.md: ETH kart, about "
+                                    "20 kg m^2)")
+    front_tyre: Tyre = Field(Tyre(b=9.0, c=1.0, d_mps2=10.0), description="front tyres "
+                             "(REFERENCE.md: ETH B 9, C 1, D 10 m/s^2)")
+    rear_tyre: Tyre = Field(Tyre(b=5.2, c=1.1, d_mps2=10.0), description="rear tyres "
+                            "(REFERENCE.md: ETH B 5.2, C 1.1, D 10 m/s^2)")
+    tyre_reference_friction: float = Field(0.9, gt=0.0, description="floor friction at which "
+                                           "the tyres' D applies (concrete, REFERENCE.md); a "
+                                           "floor or zone of friction mu scales D by "
+                                           "mu / this")
+    rolling_decel_mps2: float = Field(0.15, ge=0.0, description="rolling resistance and "
+                                      "drivetrain drag as a deceleration, m/s^2")
+    air_drag_per_m: float = Field(0.004, ge=0.0, description="aerodynamic deceleration = this "
+                                  "* v^2, 1/m")
     speed_gain_per_s: float = Field(2.0, gt=0.0, description="drive-by-wire speed loop for "
                                     "ackermann_cmd and cmd_vel, 1/s: accel = gain * (v_cmd - v)")
     wheel_xy_m: tuple[tuple[float, float], ...] = Field(
@@ -83,8 +116,6 @@ class ImuSpec(Frozen):
     gyro_noise_std_radps: float | None = Field(None, description="gyroscope noise, 1 sigma, "
                                                "rad/s; default: Table 3.6 accuracy x the "
                                                "default full scale of the variant's IMU")
-
-
     accel_bias_std_mps2: float = Field(0.0, ge=0.0, description="constant accelerometer bias, "
                                        "1 sigma per axis, m/s^2: drawn once per run, seeded")
     gyro_bias_std_radps: float = Field(0.0, ge=0.0, description="constant gyroscope bias, "
@@ -126,3 +157,14 @@ class KartSensors(Frozen):
     camera: CameraSpec = Field(CameraSpec(), description="camera on camera_link (Table 3.4)")
     wheels: WheelSpec = Field(WheelSpec(), description="wheel odometry errors in "
                               "`joint_states`")
+
+
+def axle_distance_m(model: GokartModel) -> float:
+    """Distance between the rear and front axles (Table 3.2), m."""
+    return model.wheel_xy_m[2][0] - model.wheel_xy_m[0][0]
+
+
+def cog_x_m(model: GokartModel) -> float:
+    """The centre of mass ahead of base_link, m: the rear axle (Table 3.2) plus
+    `cog_to_rear_axle_m`."""
+    return model.wheel_xy_m[0][0] + model.cog_to_rear_axle_m

@@ -287,9 +287,8 @@ class KartRobot(RobotBase):
     def reinitialise(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
                      yaw_rate_radps: float) -> None:
         """Continue from a recorded state (kartci simreal's windows): pose and motion of the
-        body, wheels rolling at that speed (on their collision radius), the motor reference at
-        the speed the motor controller then measures; the steering column keeps its angle and
-        the next command sets the rest."""
+        body, wheels rolling at that speed (on their collision radius); the steering column
+        keeps its angle and the next command sets the rest."""
         m, body = self.model, self.body
         body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
         half = abs(m.wheel_xy_m[0][1])
@@ -298,7 +297,6 @@ class KartRobot(RobotBase):
         spin = [(v_mps - yaw_rate_radps * half) / radii[0],
                 (v_mps + yaw_rate_radps * half) / radii[1], v_mps / radii[2], v_mps / radii[3]]
         body.spin(body.wheels, spin)
-        body.v_ref = (spin[0] + spin[1]) / 2 * m.rear_wheel_radius_m
         self._target, self._imu_prev = None, None
         self.contacts.clear()
 

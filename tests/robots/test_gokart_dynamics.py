@@ -1,0 +1,160 @@
+"""The simulated kart against its own tyre model (Pacejka lateral, longitudinal drive/brake,
+friction circle; models/gokart/params.yaml): limit handling, step-steer response against the
+single-track model the MPCC predicts with, braking distance, and the slippery floor.
+
+Each manoeuvre runs on open ground (the club circuit without barriers) for a few seconds of sim
+time, starting at speed (the base's velocity is set; the frictionless wheels need no spin-up)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from kartci._bullet import pb
+from kartci.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, discrete
+from kartci.mpcc.params import MpccVehicle
+from kartci.robots.gokart.body import Gokart
+from kartci.robots.gokart.params import GokartModel
+from kartci.sim.circuit import Circuit
+from kartci.spec import load_scenario, project_root
+from kartci.vehicle import KartInput, wheel_angles
+
+MODELS = project_root() / "kartci" / "data" / "models" / "gokart"
+DT = 0.002
+ODOM_EVERY = 10  # the robot re-reads the floor friction and its pedals at 50 Hz, as here
+SLIPPERY = "[{name: coated, min_m: [-30, -20], max_m: [100, 60], friction: 0.6}]"
+
+Driver = Callable[[int, tuple[float, float]], KartInput]  # step, (speed, column) -> command
+
+
+def _run(driver: Driver, seconds: float, v0_mps: float, zones: str = "[]",
+         ) -> tuple[np.ndarray, GokartModel]:
+    """Drive on open ground; rows of [t, world vx, world vy, body vx, yaw rate, mean wheel
+    angle] per physics step."""
+    spec = load_scenario("mpcc_circuit", ["world.barriers=false", f"world.zones={zones}"])
+    model = spec.agents["kart0"].model
+    assert isinstance(model, GokartModel)
+    world = Circuit(spec.world, DT)
+    kart = Gokart(world.client, model, MODELS, (30.0, 20.0, 0.0), DT)
+    pb.resetBaseVelocity(kart.body, [v0_mps, 0, 0], [0, 0, 0], physicsClientId=world.client)
+    rows = []
+    try:
+        for k in range(round(seconds / DT)):
+            st = kart.state()
+            if k % ODOM_EVERY == 0:
+                kart.set_wheel_friction([world.friction_at(float(x), float(y))
+                                         for x, y in kart.wheel_contacts_xy(st)])
+                kart.command(driver(k, (math.hypot(*st.v_body[:2]), kart.column)))
+            kart.pre_step()
+            world.step()
+            lin, _ = pb.getBaseVelocity(kart.body, physicsClientId=world.client)
+            rows.append((k * DT, lin[0], lin[1], st.v_body[0], st.w_body[2],
+                         sum(wheel_angles(model, kart.column)) / 2))
+    finally:
+        world.close()
+    return np.array(rows), model
+
+
+def peak_acceleration(zones: str = "[]") -> tuple[float, GokartModel]:
+    """Largest horizontal acceleration (m/s^2, over 0.05 s) in a ramp steer from 10 m/s,
+    pedals off, column ramped at 0.4 rad/s until the kart lets go."""
+    rows, model = _run(lambda k, _: KartInput(steering_rad=0.4 * k * DT), 2.0, 10.0, zones)
+    lag = 25
+    acc = (rows[lag:, 1:3] - rows[:-lag, 1:3]) / (lag * DT)
+    return float(np.hypot(acc[:, 0], acc[:, 1]).max()), model
+
+
+def step_steer(column_rad: float = 0.5, v_mps: float = 6.0,
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Yaw rate (rad/s) of the plant and of the MPCC's single-track model after a column step
+    at `v_mps`, both holding speed with the same loop; the model is fed the plant's measured
+    mean wheel angle, so the steering slew is the same for both."""
+
+    def pedals(v: float) -> float:
+        return 3.0 * (v_mps - v)
+
+    def driver(k: int, state: tuple[float, float]) -> KartInput:
+        a = pedals(state[0])
+        return KartInput(steering_rad=column_rad, accel_mps2=max(a, 0.0),
+                         brake_mps2=max(-a, 0.0))
+
+    rows, model = _run(driver, 2.0, v_mps)
+    f = discrete(SingleTrack.of(model), MpccVehicle(), DT * ODOM_EVERY, 5)
+    x = np.zeros(NX)
+    x[VX] = v_mps
+    model_r = []
+    for k in range(0, len(rows), ODOM_EVERY):
+        x[DELTA] = rows[k, 5]
+        x[ACC] = pedals(float(math.hypot(x[VX], x[VY])))
+        x = np.asarray(f(x, ca.DM.zeros(NU))).ravel()
+        model_r.append(x[R])
+    return rows[ODOM_EVERY - 1::ODOM_EVERY, 4], np.array(model_r)
+
+
+def response(r: np.ndarray) -> tuple[float, float, float]:
+    """Rise time (s, 10 % to 90 % of the final value), overshoot (fraction of the final value)
+    and final value (the mean of the last 0.3 s) of a yaw-rate step response sampled at 50 Hz."""
+    final = float(r[-15:].mean())
+    dt = DT * ODOM_EVERY
+    t10 = float(np.argmax(r >= 0.1 * final)) * dt
+    t90 = float(np.argmax(r >= 0.9 * final)) * dt
+    return t90 - t10, float(r.max()) / final - 1.0, final
+
+
+def braking_distance(brake_mps2: float, zones: str = "[]") -> tuple[float, GokartModel]:
+    """Distance (m) from 10 m/s to standstill under a constant brake command."""
+    rows, model = _run(lambda k, _: KartInput(brake_mps2=brake_mps2), 4.0, 10.0, zones)
+    stop = int(np.argmax(rows[:, 3] < 0.01))
+    assert stop > 0, "the kart did not stop"
+    return float(np.sum(rows[:stop, 3]) * DT), model
+
+
+def model_braking_distance(model: GokartModel, decel_mps2: float, v0_mps: float = 10.0) -> float:
+    """The longitudinal model's distance: dv/dt = -(a + c v^2), a the brake plus rolling
+    deceleration, c the air drag coefficient: d = ln(1 + c v0^2 / a) / (2 c)."""
+    c = model.air_drag_per_m
+    return math.log(1.0 + c * v0_mps**2 / decel_mps2) / (2.0 * c)
+
+
+def test_ramp_steer_saturates_at_the_tyre_d() -> None:
+    peak, model = peak_acceleration()
+    d = model.rear_tyre.d_mps2  # front and rear D are both 10 m/s^2 (REFERENCE.md)
+    assert model.front_tyre.d_mps2 == d
+    # concrete (mu 0.9) is the tyres' reference floor: the kart reaches D within 10 %, and
+    # never more (PyBullet's contacts add no friction of their own)
+    assert 0.9 * d <= peak <= 1.02 * d
+
+
+def test_the_slippery_zone_scales_the_saturation_by_its_friction() -> None:
+    dry, _ = peak_acceleration()
+    wet, model = peak_acceleration(SLIPPERY)
+    expected = 0.6 / model.tyre_reference_friction
+    assert wet / dry == pytest.approx(expected, rel=0.1)
+    assert wet <= 1.02 * model.rear_tyre.d_mps2 * expected
+
+
+@pytest.mark.parametrize(("column_rad", "v_mps"), [(0.5, 6.0), (1.0, 5.0)])
+def test_step_steer_matches_the_single_track_model(column_rad: float, v_mps: float) -> None:
+    plant, model = step_steer(column_rad, v_mps)
+    rise_p, over_p, final_p = response(plant)
+    rise_m, over_m, final_m = response(model)
+    assert final_p == pytest.approx(final_m, rel=0.06)  # steady yaw rate within 6 %
+    assert rise_p == pytest.approx(rise_m, abs=0.04)  # rise time within two 50 Hz samples
+    assert abs(over_p - over_m) <= 0.03  # overshoot within 3 percentage points
+    assert final_p > 0.5  # a real turn: > 3 m/s^2
+
+
+def test_braking_distance_from_10_mps_matches_the_longitudinal_model() -> None:
+    got, model = braking_distance(5.0)
+    assert got == pytest.approx(model_braking_distance(model, 5.0 + model.rolling_decel_mps2),
+                                rel=0.03)
+
+
+def test_braking_on_the_slippery_zone_is_limited_by_the_friction_circle() -> None:
+    got, model = braking_distance(8.0, SLIPPERY)
+    grip = model.rear_tyre.d_mps2 * 0.6 / model.tyre_reference_friction  # 6.7 < 8 m/s^2
+    assert got == pytest.approx(model_braking_distance(model, grip), rel=0.03)
