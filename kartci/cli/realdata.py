@@ -132,9 +132,9 @@ def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
 
     from kartci.atomic import write_text_atomic
     from kartci.cli.common import out_console
+    from kartci.errors import SpecError
     from kartci.logs import tables
     from kartci.metrics import recorded_scenario
-    from kartci.errors import SpecError
     from kartci.mpcc.model import SingleTrack
     from kartci.mpcc.params import MpccVehicle
     from kartci.realdata.mpcc_fit import fit_mpcc, lateral_data
