@@ -5,7 +5,10 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
+
+from kartci.results import ScenarioResult
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout
 # Two short line-tracker runs, for tests of running many scenarios rather than one
@@ -22,3 +25,16 @@ def kartci(*args: str | Path, cwd: Path | None = None,
     return subprocess.run([sys.executable, "-m", "kartci.cli", *map(str, args)],
                           capture_output=True, text=True, cwd=cwd, timeout=300,
                           env={**base, **(env or {})})
+
+
+@dataclass(frozen=True)
+class KartLap:
+    """One kart lap run through the CLI and `baseline update` (fixture `kart_lap`): the run
+    folder, its baselines (with the reference trace), the update's output and the result judged
+    again so that its report overlays the trace."""
+
+    out: Path
+    baselines: Path
+    update: subprocess.CompletedProcess[str]
+    result: ScenarioResult
+

@@ -7,8 +7,11 @@ import html
 
 import pandas as pd
 
-from kartci.report.tables import num
 from kartci.results import Plots
+
+
+def _s(x: float) -> str:
+    return f"{x:.3f} s"  # to the millisecond: laps differ in the third digit
 
 
 def _table(agent: str, laps: pd.DataFrame) -> str:
@@ -18,13 +21,13 @@ def _table(agent: str, laps: pd.DataFrame) -> str:
     rows = []
     for _, row in laps.iterrows():
         cells = "".join(
-            f'<td class="{"best" if row[c] == best[c] else ""}">{num(float(row[c]), "s")}</td>'
+            f'<td class="{"best" if row[c] == best[c] else ""}">{_s(float(row[c]))}</td>'
             for c in cols)
         rows.append(f"<tr><td>{int(row['lap'])}</td>{cells}</tr>")
     sectors = [c for c in cols if c != "time_s"]
     ideal = sum(float(best[c]) for c in sectors)
-    rows.append(f'<tr class="ideal"><td>ideal</td><td>{num(ideal, "s")}</td>'
-                + "".join(f"<td>{num(float(best[c]), 's')}</td>" for c in sectors) + "</tr>")
+    rows.append(f'<tr class="ideal"><td>ideal</td><td>{_s(ideal)}</td>'
+                + "".join(f"<td>{_s(float(best[c]))}</td>" for c in sectors) + "</tr>")
     return (f'<table class="laps"><caption>{html.escape(agent)}: laps (best in bold; ideal lap = '
             f"best sectors added up)</caption><tr><th>lap</th>{head}</tr>{''.join(rows)}</table>")
 

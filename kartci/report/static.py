@@ -71,6 +71,7 @@ def figure_svg(f: Figure) -> str:
     ax.set_xlabel(f.xlabel)
     ax.set_ylabel(f.ylabel)
     ax.set_title(f.title, fontsize=8)
-    if len(f.series) <= 12 and any(s.role is not Role.OUTLINE for s in f.series):
+    if len(f.series) <= 12 and any(s.role not in (Role.OUTLINE, Role.SHAPE) and s.c is None
+                                   for s in f.series):
         ax.legend(loc="best", fontsize=6)
     return _svg(fig)
