@@ -12,7 +12,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 import yaml
 from helpers import ROOT
@@ -167,4 +166,4 @@ def test_kartci_msgs_package_agrees_with_kartci(tmp_path: Path) -> None:
     assert xml.findtext("name") == "kartci_msgs"
     assert deps <= {e.text for e in xml.iter("depend")}
     assert f"DEPENDENCIES {' '.join(sorted(deps, reverse=True))}" in cmake
-    assert np.all([re.fullmatch(r"[A-Z][A-Za-z0-9]*\.msg", n) for n in ours])
+    assert all(re.fullmatch(r"[A-Z][A-Za-z0-9]*\.msg", n) for n in ours)
