@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import json
 from collections.abc import Callable, Mapping
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -43,6 +44,8 @@ REPLACED_TOPIC = "/kartci/replaced_agents"  # std_msgs/String, JSON {agent: "mod
 
 Message = tuple[str, Any]  # (absolute topic, ROS 2 message)
 Tap = Callable[[str, Any, int, bool], None]  # (topic, message, t_ns, latched)
+# Taps every Session started in this context gets (`kartci run --live`, see kartci.live)
+LIVE_TAPS: ContextVar[tuple[Tap, ...]] = ContextVar("kartci_live_taps", default=())
 
 
 @dataclass(frozen=True)
@@ -235,7 +238,7 @@ class Session:
                  taps: tuple[Tap, ...] = ()) -> None:
         """Check the agent objects; nothing is built before `reset()`."""
         self.scenario = scenario
-        self.taps = taps
+        self.taps = taps or LIVE_TAPS.get()
         self.log_path = log_path
         self.agents = check_agents(scenario, agents)
         self.replaced = {name: describe(a) for name, a in self.agents.items()}
