@@ -123,7 +123,12 @@ def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     written is exit 2, and no earlier report stays in its place (write_all removes them
     first)."""
     from kartci.report import write_all
-    from kartci.report.ci import annotation_lines, append_step_summary, in_github_actions
+    from kartci.report.ci import (
+        annotation_lines,
+        append_step_summary,
+        in_github_actions,
+        scenario_files,
+    )
 
     try:
         paths = write_all(results, out, words)
@@ -136,7 +141,7 @@ def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     if ci:
         append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
     if ci and in_github_actions():
-        for line in annotation_lines(results):
+        for line in annotation_lines(results, files=scenario_files(results)):
             typer.echo(line)
     code = exit_code(results)
     out_console.print(f"report: {paths['html']}  (exit {code})", highlight=False)

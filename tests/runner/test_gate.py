@@ -227,7 +227,8 @@ def test_a_report_that_cannot_be_written_is_exit_2_and_leaves_no_old_report(
     monkeypatch.setattr("kartci.report.report_html", boom)
     with pytest.raises(RunError, match="writing the reports"):
         finish(ok, tmp_path, ci=False)
-    for name in ("report.html", "summary.md", "summary.json", "junit.xml"):
+    for name in ("report.html", "report-static.html", "summary.md", "summary.json",
+                 "junit.xml"):
         assert not (tmp_path / name).exists()
 
 
