@@ -48,9 +48,10 @@ def baseline_update(
             folder = out / label
             check_complete(folder)
             load(target / f"{label}.json")
-            checked.append((label, read_metrics(folder / "metrics.json"),
-                            reference_plots(folder)))
-        for label, values, drawn in checked:
+            checked.append((label, read_metrics(folder / "metrics.json")))
+        # the traces' plots read the logs: after the cheap checks, still before any write
+        traced = [(label, values, reference_plots(out / label)) for label, values in checked]
+        for label, values, drawn in traced:
             changes = update(target / f"{label}.json", label, values)
             moved = [c for c in changes if c.kind != "unchanged"]
             out_console.print(f"{label}: {len(moved)} of {len(changes)} metrics changed",
