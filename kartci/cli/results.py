@@ -84,3 +84,18 @@ def report(out: Annotated[Path, typer.Argument(help="A folder written by `kartci
         if manifest_labels(out) is None:
             write_manifest(out, "report", [r.name for r in results])
         finish(results, out)
+
+
+@app.command()
+def history(
+    summaries: Annotated[list[Path], typer.Argument(
+        help="summary.json files of successive commits, oldest first (CI keeps them on the "
+             "kartci-history branch).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for history.html.")] = Path(),
+) -> None:
+    """Every metric of every scenario across commits (asv-style), as OUT/history.html."""
+    from kartci.report.history import write_history
+
+    path = write_history(list(summaries), out)
+    typer.echo(f"history: {path} ({len(summaries)} commits)")
+

@@ -23,6 +23,7 @@ class Axis(StrEnum):
     TIME = "time"
     DISTANCE = "distance"
     PLANE = "plane"
+    COMMIT = "commit"  # metric history: x is the commit's index, `Figure.ticks` its name
 
 
 class Role(StrEnum):
@@ -76,6 +77,7 @@ class Figure:
     log_y: bool = False
     colour_label: str = ""  # what `Series.c` is (plane views), e.g. "speed [m/s]"
     hlines: tuple[float, ...] = ()  # horizontal guides (sensor range, track edge)
+    ticks: tuple[str, ...] = ()  # names of the integer x values (commits)
 
 
 def thin(n: int, limit: int = MAX_POINTS) -> np.ndarray:

@@ -52,8 +52,8 @@ def figure_doc(f: Figure) -> dict[str, Any]:
     """A figure as the browser script reads it."""
     return {"key": f.key, "title": f.title, "xlabel": f.xlabel, "ylabel": f.ylabel,
             "axis": f.axis.value, "log_y": f.log_y, "colour_label": f.colour_label,
-            "hlines": list(f.hlines), "series": [_series(s) for s in f.series],
-            "events": [_event(e) for e in f.events]}
+            "hlines": list(f.hlines), "ticks": list(f.ticks),
+            "series": [_series(s) for s in f.series], "events": [_event(e) for e in f.events]}
 
 
 def figures_block(scenario: str, figures: list[Figure]) -> str:

@@ -17,6 +17,7 @@ from cdp import Browser, find_browser
 from helpers import PAIR, ROOT, KartLap
 
 from kartci.report import COMPARE, write_all
+from kartci.report.history import write_history
 from kartci.runner import expand, run_jobs
 from kartci.runner.compare import compare_outs
 
@@ -115,3 +116,28 @@ def test_report_is_interactive_in_headless_chromium(reports: tuple[Path, Path], 
     lo1, hi1 = zoom_after[0]
     assert hi1 - lo1 == pytest.approx((hi0 - lo0) * 0.8)  # zoomed in by the wheel step
     assert all(z == zoom_after[0] for z in zoom_after)  # shared by the scenario's time plots
+
+
+def test_history_page_names_the_commit_under_the_cursor(tmp_path: Path) -> None:
+    exe = find_browser()
+    if exe is None:
+        pytest.skip("no headless Chromium: install Debian's chromium package (.ci/run does)")
+    files = []
+    for i, lap in enumerate([12.5, 12.25, 13.0]):
+        doc = {"exit_code": 0, "scenarios": {"kart_lap": {"metrics": {"lap_s": {"value": lap}}}}}
+        files.append(tmp_path / f"00000{i}-c{i}.json")
+        files[-1].write_text(json.dumps(doc))
+    page = write_history(files, tmp_path)
+    browser = Browser(exe, tmp_path / "profile")
+    try:
+        session = browser.open(page.as_uri())
+        chart = "kartciFigures.charts[0].chart"
+        x, y = _center(browser, session, f"{chart}.over")
+        browser.send("Input.dispatchMouseEvent", session, type="mouseMoved", x=x, y=y)
+        legend = json.loads(browser.evaluate(session, f"""JSON.stringify(
+          [...{chart}.root.querySelectorAll('.u-value')].map(e => e.textContent))"""))
+        errors = browser.console_errors()
+    finally:
+        browser.close()
+    assert errors == []
+    assert legend == ["000001-c1", "12.25"]  # the middle commit, by name, and its value

@@ -125,9 +125,11 @@
     const data = tables.length === 1 ? tables[0] : uPlot.join(tables);
     const groupKey = scenario + "|" + fig.axis;
     const group = groups[groupKey] || (groups[groupKey] = { charts: [], syncing: false });
-    const series = [{ label: fig.axis === "time" ? "t [s]" : "s [m]" }].concat(
+    const xName = { time: "t [s]", distance: "s [m]", commit: "commit" }[fig.axis];
+    const tick = v => (fig.ticks && fig.ticks[v] !== undefined ? fig.ticks[v] : v);
+    const series = [{ label: xName, value: (u, v) => (v === null ? "--" : tick(v)) }].concat(
       fig.series.map((s, i) => Object.assign({ label: s.label, spanGaps: true, points:
-        { show: false } }, style(s.role, i))));
+        { show: fig.axis === "commit" } }, style(s.role, i))));
     const hooks = { setCursor: [] };
     if (fig.axis === "time") {
       hooks.setCursor.push(u => {
@@ -143,7 +145,9 @@
       height: 300,
       series,
       scales: { x: { time: false }, y: fig.log_y ? { distr: 3 } : {} },
-      axes: [{ label: fig.xlabel }, { label: fig.ylabel, size: 60 }],
+      axes: [fig.axis === "commit"
+        ? { label: fig.xlabel, values: (u, vals) => vals.map(v => (Number.isInteger(v) ? tick(v) : "")) }
+        : { label: fig.xlabel }, { label: fig.ylabel, size: 60 }],
       cursor: { sync: { key: groupKey }, drag: { x: true, y: false } },
       legend: { live: true },
       hooks,
