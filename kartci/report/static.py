@@ -3,6 +3,7 @@ interactive report, for `report-static.html`, e-mail and anywhere JavaScript doe
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import matplotlib.pyplot as plt
@@ -11,7 +12,7 @@ from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 
-from kartci.report.figures import Axis, Figure, Role, Series
+from kartci.report.figures import Axis, Figure, Role, Series, thin
 from kartci.report.plots import _svg  # also sets Agg, the SVG settings and the mathtext guard
 
 STYLE: dict[Role, dict[str, Any]] = {Role.REFERENCE: {"color": "grey", "ls": "--", "lw": 1.0},
@@ -47,8 +48,20 @@ def _marks(ax: Axes, f: Figure) -> None:
             ax.axvline(e.lap_m if f.axis is Axis.DISTANCE else e.t_s, color="red", ls=":", lw=0.8)
 
 
+STATIC_POINTS = 400  # per series: a 5.5-inch figure shows no more, and SVG grows with each
+
+
+def _fewer(s: Series) -> Series:
+    if s.role in (Role.OUTLINE, Role.SHAPE) or len(s.x) <= STATIC_POINTS:
+        return s
+    i = thin(len(s.x), STATIC_POINTS)
+    return replace(s, x=s.x[i], y=s.y[i], t=None if s.t is None else s.t[i],
+                   c=None if s.c is None else s.c[i])
+
+
 def figure_svg(f: Figure) -> str:
-    """One figure as inline SVG."""
+    """One figure as inline SVG, each series thinned to STATIC_POINTS."""
+    f = replace(f, series=[_fewer(s) for s in f.series])
     fig, ax = plt.subplots(figsize=(5.5, 4.0 if f.axis is Axis.PLANE else 3.0))
     lo, hi = _colour_range(f)
     mappable = None

@@ -27,7 +27,7 @@
     return Math.abs(xs[lo] - x) <= Math.abs(xs[hi] - x) ? lo : hi;
   }
 
-  function interp(ts, vs, t) {
+  function nearest(ts, vs, t) {
     if (!ts || ts.length === 0 || t < ts[0] || t > ts[ts.length - 1]) return null;
     const i = nearestIndex(ts, t);
     return vs[i];
@@ -271,7 +271,7 @@
     const parts = [];
     for (const s of this.fig.series) {
       if (!s.c || !s.t) continue;
-      const v = interp(s.t, s.c, t);
+      const v = nearest(s.t, s.c, t);
       if (v !== null) parts.push(s.label + ": " + v.toFixed(2) + " m/s");
     }
     this.info.textContent = "t = " + t.toFixed(2) + " s  " + parts.join("  ");
@@ -327,7 +327,7 @@
     ctx.setLineDash([]);
     for (const s of this.fig.series) {
       if (!s.t) continue;
-      const x = interp(s.t, s.x, this.t), y = interp(s.t, s.y, this.t);
+      const x = nearest(s.t, s.x, this.t), y = nearest(s.t, s.y, this.t);
       if (x === null) continue;
       const [px, py] = this.toPx(x, y);
       ctx.fillStyle = s.role === "reference" ? "#888" : "#d00";
