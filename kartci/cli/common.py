@@ -117,7 +117,7 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
 
 
 def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-            ci: bool = True) -> None:
+            ci: bool = True, history: Path | None = None) -> None:
     """Write every report, print the verdicts and (unless `ci` is off, as for a shard, whose
     merge reports for it) the CI outputs; exit with the gating code. A report that cannot be
     written is exit 2, and no earlier report stays in its place (write_all removes them
@@ -131,7 +131,7 @@ def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     )
 
     try:
-        paths = write_all(results, out, words)
+        paths = write_all(results, out, words, history)
     except (KartciError, OSError):
         raise
     except Exception as err:  # a report that cannot be drawn: bad input, not a regression

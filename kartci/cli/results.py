@@ -26,6 +26,10 @@ def merge(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")],
     baselines: BaselinesOpt = None,
     strict: StrictOpt = None,
+    history: Annotated[Path | None, typer.Option(
+        help="Folder of earlier commits' summary.json (oldest first by name, as on the "
+             "kartci-history branch): report.html plots each metric across them and this run; "
+             "a missing folder draws no history.")] = None,
 ) -> None:
     """Join partial results into one run: copy the scenario folders into OUT, then judge and
     report them exactly as an unsharded run would (same summary, verdicts, exit code)."""
@@ -36,7 +40,7 @@ def merge(
         clear_reports(out)
         results = join(dirs, out, baselines_dir(baselines), strict_mode(strict))
         write_manifest(out, "merge", [r.name for r in results])
-        finish(results, out)
+        finish(results, out, history=history)
 
 
 @app.command("compare")

@@ -7,6 +7,7 @@ from __future__ import annotations
 import html
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -19,27 +20,34 @@ from kartci.report.interactive import body_assets, figures_block, head_assets
 History = dict[str, dict[str, list[float | None]]]  # scenario -> metric -> value per commit
 
 
-def read_summaries(paths: list[Path]) -> tuple[list[str], History]:
-    """Commit labels (file stems, in the order given) and every metric's value per commit; a
-    metric a commit lacks, or a failed scenario, is a gap."""
-    labels: list[str] = []
+def load_summary(path: Path) -> dict[str, Any]:
+    """One commit's summary.json; anything else is a SpecError naming the file."""
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(doc["scenarios"], dict):
+            raise TypeError("scenarios is not a mapping")
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise SpecError(f"{path}: not a kartci summary.json ({err})") from None
+    return dict(doc)
+
+
+def collect(docs: list[tuple[str, dict[str, Any]]]) -> tuple[list[str], History]:
+    """Commit labels and every metric's value per commit, from (label, summary) pairs, oldest
+    first; a metric a commit lacks, or a failed scenario, is a gap."""
     history: History = {}
-    for i, path in enumerate(paths):
-        try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-            scenarios = doc["scenarios"]
-            if not isinstance(scenarios, dict):
-                raise TypeError("scenarios is not a mapping")
-        except (OSError, ValueError, KeyError, TypeError) as err:
-            raise SpecError(f"{path}: not a kartci summary.json ({err})") from None
-        labels.append(path.stem)
-        for name, sc in scenarios.items():
+    for i, (_, doc) in enumerate(docs):
+        for name, sc in doc["scenarios"].items():
             metrics = sc.get("metrics") if isinstance(sc, dict) else None
             for metric, entry in (metrics or {}).items():
                 value = entry.get("value") if isinstance(entry, dict) else None
-                column = history.setdefault(name, {}).setdefault(metric, [None] * len(paths))
+                column = history.setdefault(name, {}).setdefault(metric, [None] * len(docs))
                 column[i] = float(value) if isinstance(value, int | float) else None
-    return labels, history
+    return [label for label, _ in docs], history
+
+
+def read_summaries(paths: list[Path]) -> tuple[list[str], History]:
+    """Commit labels (file stems, in the order given) and every metric's value per commit."""
+    return collect([(p.stem, load_summary(p)) for p in paths])
 
 
 def history_figures(labels: list[str], metrics: dict[str, list[float | None]]) -> list[Figure]:
@@ -52,11 +60,18 @@ def history_figures(labels: list[str], metrics: dict[str, list[float | None]]) -
             for metric, values in sorted(metrics.items())]
 
 
+def history_sections(labels: list[str], history: History, only: set[str] | None = None,
+                     level: int = 2) -> str:
+    """A section per scenario (those in `only`, if given) with its metrics over the commits."""
+    return "".join(
+        f'<section id="history-{html.escape(name)}"><h{level}>{html.escape(name)}</h{level}>'
+        f"{figures_block(f'history {name}', history_figures(labels, metrics))}</section>"
+        for name, metrics in sorted(history.items()) if only is None or name in only)
+
+
 def history_html(labels: list[str], history: History) -> str:
     """history.html: every scenario's metrics over the commits, self-contained."""
-    body = "".join(f'<section id="{html.escape(name)}"><h2>{html.escape(name)}</h2>'
-                   f"{figures_block(name, history_figures(labels, metrics))}</section>"
-                   for name, metrics in sorted(history.items()))
+    body = history_sections(labels, history)
     return (f'<!doctype html><html><head><meta charset="utf-8"><title>kartci history</title>'
             f"<style>{CSS}</style>{head_assets()}</head><body><h1>kartci metric history</h1>"
             f"<p>{len(labels)} commits, oldest {html.escape(labels[0] if labels else '-')}, "
@@ -74,4 +89,5 @@ def write_history(paths: list[Path], out: Path) -> Path:
     return target
 
 
-__all__ = ["History", "history_figures", "history_html", "read_summaries", "write_history"]
+__all__ = ["History", "collect", "history_figures", "history_html", "history_sections",
+           "load_summary", "read_summaries", "write_history"]

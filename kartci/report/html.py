@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import html
 from datetime import UTC, datetime
+from typing import Any
 
 from kartci.report.figures import scenario_figures
 from kartci.report.interactive import body_assets, figures_block, head_assets
@@ -75,8 +76,18 @@ def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
     return "\n".join(out)
 
 
+def _history(results: list[ScenarioResult], history: tuple[list[str], Any]) -> str:
+    """The metric history of this run's scenarios, the run itself as the newest point."""
+    from kartci.report.history import history_sections
+
+    labels, values = history
+    return (f'<section id="metric-history"><h2>Metric history</h2><p>{len(labels) - 1} earlier '
+            "commits of main, then this run (hover a point for its commit).</p>"
+            f"{history_sections(labels, values, {r.name for r in results}, level=3)}</section>")
+
+
 def report_html(results: list[ScenarioResult], words: Wording = RUN,
-                static: bool = False) -> str:
+                static: bool = False, history: tuple[list[str], Any] | None = None) -> str:
     """report.html, self-contained and offline: the verdict, a table of scenarios, and each
     scenario's metrics, criteria, lap tables and figures: interactive (uPlot, inlined once), or
     `static` SVG with no script (report-static.html, for e-mail)."""
@@ -86,6 +97,8 @@ def report_html(results: list[ScenarioResult], words: Wording = RUN,
                    for r in results)
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     body = "\n".join(_scenario(r, words, static) for r in results)
+    if history is not None and not static:
+        body += _history(results, history)
     title = f"{words.title} report"
     return (f"<!doctype html><html><head><meta charset=\"utf-8\"><title>{html.escape(title)}"
             f"</title><style>{CSS}</style>{'' if static else head_assets()}</head><body>"

@@ -12,7 +12,7 @@ from typing import Any
 from helpers import kartci
 
 from kartci.metrics.base import Direction
-from kartci.report import summary_json
+from kartci.report import summary_json, write_all
 from kartci.results import ScenarioResult
 from kartci.verdict import MetricVerdict, Status
 
@@ -25,8 +25,8 @@ def _summary(path: Path, values: dict[str, float]) -> Path:
 
 
 def _figures(page: Path) -> list[dict[str, Any]]:
-    block = re.search(r'data-scenario="kart_lap"><script type="application/json">(.*?)</script>',
-                      page.read_text(encoding="utf-8"), re.S)
+    block = re.search(r'data-scenario="history kart_lap"><script type="application/json">'
+                      r"(.*?)</script>", page.read_text(encoding="utf-8"), re.S)
     assert block is not None
     figures: list[dict[str, Any]] = json.loads(block.group(1).replace("<\\/", "</"))["figures"]
     return figures
@@ -53,3 +53,20 @@ def test_a_file_that_is_not_a_summary_is_one_clear_error(tmp_path: Path) -> None
     p = kartci("history", bad, "--out", tmp_path)
     assert p.returncode == 2
     assert p.stderr.strip() == f"kartci: error: {bad}: not a kartci summary.json ('scenarios')"
+
+
+def test_the_merged_report_plots_the_history_with_this_run_last(tmp_path: Path) -> None:
+    earlier = tmp_path / "summaries"
+    earlier.mkdir()
+    _summary(earlier / "000001-aaa.json", {"lap_s": 12.5})
+    _summary(earlier / "000002-bbb.json", {"lap_s": 12.25})
+    now = [ScenarioResult("kart_lap", "", [MetricVerdict("lap_s", 11.75, "s", None, None,
+                                                          Direction.LOWER, Status.NEW)])]
+    write_all(now, tmp_path / "out", history=earlier)
+    page = (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
+    assert "<h2>Metric history</h2><p>2 earlier commits" in page
+    [fig] = _figures(tmp_path / "out" / "report.html")
+    assert fig["ticks"] == ["000001-aaa", "000002-bbb", "this run"]
+    assert fig["series"][0]["y"] == [12.5, 12.25, 11.75]
+    write_all(now, tmp_path / "none", history=tmp_path / "missing")  # no branch yet: no plot
+    assert "Metric history" not in (tmp_path / "none" / "report.html").read_text()
