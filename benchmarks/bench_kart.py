@@ -2,7 +2,7 @@
 the cost of one full VLP-16 / HDL-32E scan, fast 2.5D model vs PyBullet's batched ray test,
 measured in one process, medians of repeats. Prints figures; asserts nothing.
 
-    .venv/bin/python benchmarks/bench_kart.py [--repeats 3]
+    .venv/bin/python benchmarks/bench_kart.py [--repeats 3] [--json OUT.json]
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from kartci.bench import Better, Record
 from kartci.sim import lidar, simulate
 from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
@@ -29,7 +30,7 @@ def rtf(sets: list[str], out: Path) -> float:
     return info.sim_time_s / (time.perf_counter() - t0)
 
 
-def scan_ms(name: str, repeats: int) -> tuple[float, float, int]:
+def scan_ms(name: str, repeats: int) -> tuple[list[float], list[float], int]:
     spec = load_scenario("kart_replay")
     assert isinstance(spec.world, HallWorld)
     world = World(spec.world, 0.002)
@@ -47,24 +48,33 @@ def scan_ms(name: str, repeats: int) -> tuple[float, float, int]:
             ref.append((time.perf_counter() - t0) * 1e3)
     finally:
         world.close()
-    return statistics.median(fast), statistics.median(ref), len(az) * len(m.elevations_rad)
+    return fast, ref, len(az) * len(m.elevations_rad)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", type=Path, help="also write the figures to this file "
+                        "(compare two with `kartci bench compare`)")
     args = parser.parse_args()
+    record = Record("bench_kart")
     for name in ("vlp16", "hdl32e"):
         fast, ref, rays = scan_ms(name, max(5, args.repeats))
-        print(f"{name}: {rays} rays per scan; fast model {fast:.1f} ms, PyBullet rays "
-              f"{ref:.1f} ms (median)")
+        f = record.add(f"{name} scan, fast model", "ms", fast)
+        r = record.add(f"{name} scan, PyBullet rays", "ms", ref)
+        print(f"{name}: {rays} rays per scan; fast model {f.median:.1f} ms, PyBullet rays "
+              f"{r.median:.1f} ms (median)")
     with tempfile.TemporaryDirectory() as tmp:
         for label, sets in (("kart_manual, no lidar", []),
                             ("kart_manual, VLP-16 10 Hz",
                              ["agents.kart0.sensors.lidar.enabled=true"])):
             samples = [rtf(sets, Path(tmp)) for _ in range(args.repeats)]
+            record.add(f"{label} RTF", "x", samples, Better.HIGHER)
             print(f"{label:28s} median RTF {statistics.median(samples):5.1f}x  ("
                   + ", ".join(f"{s:.1f}" for s in samples) + ")")
+
+    if args.json:
+        record.save(args.json)
 
 
 if __name__ == "__main__":

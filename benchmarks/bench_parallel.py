@@ -4,7 +4,7 @@ Ray executor's overhead against the pool at the same -j. Each round runs every v
 Before each command it waits (up to a minute) for the CPUs to be idle, since a busy
 neighbour on a 2-core machine halves what -j 2 can show; it says when it waited in vain.
 
-    .venv/bin/python benchmarks/bench_parallel.py [--rounds 3] [--jobs 2] [--no-ray]
+    .venv/bin/python benchmarks/bench_parallel.py [--rounds 3] [--jobs 2] [--no-ray] [--json F]
 """
 
 from __future__ import annotations
@@ -18,6 +18,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from kartci.bench import Better, Record
 
 
 def busy_fraction(window_s: float = 0.5) -> float:
@@ -58,6 +60,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--no-ray", action="store_true", help="skip the Ray executor")
+    parser.add_argument("--json", type=Path, help="also write the figures to this file "
+                        "(compare two with `kartci bench compare`)")
     opts = parser.parse_args()
     j = str(opts.jobs)
     variants = {"-j 1": ["-j", "1"], f"-j {j}": ["-j", j]}
@@ -87,10 +91,19 @@ def main() -> None:
     print(f"  ideal -j {j} bound: {total / max(total / opts.jobs, max(per.values())):.2f}x "
           "(sum of runs over the longest run or an even split)")
     print(f"speed-up -j {j} over -j 1: {med['-j 1'] / med[f'-j {j}']:.2f}x")
+    record = Record("bench_parallel")
+    for v, w in walls.items():
+        record.add(f"default suite {v}", "s", w)
+    record.add(f"default suite -j {j} over -j 1", "x",
+               [a / b for a, b in zip(walls["-j 1"], walls[f"-j {j}"], strict=True)],
+               Better.HIGHER, "ratio of the two commands in the same round")
     if f"ray -j {j}" in med:
         extra = med[f"ray -j {j}"] - med[f"-j {j}"]
         print(f"Ray overhead vs the process pool: {extra:+.2f} s "
               f"({med[f'ray -j {j}'] / med[f'-j {j}']:.2f}x the pool's wall-clock)")
+
+    if opts.json:
+        record.save(opts.json)
 
 
 if __name__ == "__main__":

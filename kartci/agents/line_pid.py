@@ -46,6 +46,9 @@ class LinePid:
         s = self.spec
         y = self._left - self._right
         d = s.slope_m * y + s.offset_m
+        if s.widened_range:
+            d = s.wide_slope_m * (widened(self._left, self._right, s.edge_left, s.edge_right)
+                                  - s.wide_intercept)
         error = -d
         self._integral += 0.01 * s.ki * error
         u2 = s.kp * error + self._integral
@@ -60,3 +63,18 @@ class LinePid:
         state = msg("kartci_msgs/msg/LineControllerState", header=header(t_ns, self.frame),
                     distance_estimate_m=d, u2=u2, integral=self._integral, sonar_stop=stop)
         return [("wheel_cmd", cmd), ("controller/state", state)]
+
+
+def widened(left: float, right: float, edge_left: float, edge_right: float) -> float:
+    """Seed 001 Sec. 6.3 (Albert Costa's logic): past +0.008 m (left brighter than the right and
+    than its own output there) y = left + right + c, past -0.008 m y = -(left + right) - c,
+    else y = left - right. The seed writes c = 2 maxdiff for its cameras' scale; here c is the
+    one value that joins the branches at +-0.008 m: maxdiff - (sum there) = -2 edge_right, so y
+    is continuous and monotonic. Symmetric cameras: the right's output at -0.008 m is the left's
+    at +0.008 m, so one threshold serves both sides."""
+    c = -2.0 * edge_right
+    if left > right and left > edge_left:
+        return left + right + c
+    if right > left and right > edge_left:
+        return -(left + right) - c
+    return left - right

@@ -30,6 +30,18 @@ class LinePidController(ControllerParams):
                             "(Eq. 6.13)")
     half_track_m: float = Field(0.06, description="lever in the annex wheel-speed law, m: "
                                 "wL = (v1 - 0.06 u2) / r, wR = (v1 + 0.06 u2) / r")
+    widened_range: bool = Field(False, description="Albert Costa's widened range (seed 001 "
+                                "Sec. 6.3): outside +-0.008 m the camera sum, not the difference, "
+                                "carries the offset, read with Eq. 6.15 out to +-0.021 m. Off: "
+                                "the annex TestSensor.cc, which uses Eq. 6.13 alone")
+    edge_left: float = Field(0.4582, description="widened range: the left camera's output at "
+                             "+0.008 m (output1 at maxdiff; kartci's sensor, `kartci "
+                             "characterise`)")
+    edge_right: float = Field(0.1704, description="widened range: the right camera's output "
+                              "at +0.008 m (the left's at -0.008 m, by symmetry)")
+    wide_slope_m: float = Field(1.0 / 26.5472, description="widened range: d = wide_slope_m * "
+                                "(y - wide_intercept), m per unit of y (Eq. 6.15 inverted)")
+    wide_intercept: float = Field(0.0134, description="widened range: Eq. 6.15's intercept")
 
 
 class ManualController(ControllerParams):

@@ -9,6 +9,7 @@ import warnings
 
 from kartci.cli import (  # noqa: F401  (importing a command module registers its commands)
     baseline,
+    bench,
     init,
     logs,
     results,

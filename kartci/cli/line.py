@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+from pathlib import Path
 from typing import Annotated
 
 import numpy as np
@@ -80,3 +81,39 @@ def characterise(
         out_console.print(line, highlight=False)
     out_console.print(f"wrote {out}/sweep.csv, fov_sweep.csv, characterisation.html",
                       highlight=False)
+
+
+@app.command()
+def study(
+    out: Annotated[Path, typer.Argument(help="A folder written by `kartci run` with the line "
+                                              "tracker's grids in it.")],
+) -> None:
+    """Draw the seed's study figures (Figs. 7.1.2-7.1.4, Sec. 7.2) from the line tracker's grid
+    runs in OUT (line_straight_grid, line_circle_grid, line_circle_edge_fast/slow):
+    OUT/study.html, one SVG per figure."""
+    from kartci.robots.line_tracker import figures
+    from kartci.robots.line_tracker import study as st
+
+    if not out.is_dir():
+        raise SpecError(f"{out}: no such folder; run the grids first (`kartci run "
+                        "line_straight_grid line_circle_grid --out OUT`)")
+    svgs: list[str] = []
+    names = [p.name.partition("@")[0] for p in out.iterdir() if "@" in p.name]
+    if "line_straight_grid" in names:
+        panels = st.straight_panels(st.grid(out, "line_straight_grid"))
+        svgs += [figures.responses(p) for p in panels if p.curves]
+    if "line_circle_grid" in names:
+        svgs += [figures.circle_distance(p)
+                 for p in st.circle_panels(st.grid(out, "line_circle_grid"))]
+    edge = [c for n in ("line_circle_edge_fast", "line_circle_edge_slow") if n in names
+            for c in st.grid(out, n)]
+    if edge:
+        svgs += [figures.circle_distance(p) for p in st.circle_panels(edge)]
+    if not svgs:
+        raise SpecError(f"{out}: no line-tracker grid runs in it (line_straight_grid@..., "
+                        "line_circle_grid@..., line_circle_edge_*@...)")
+    html_text = ("<!doctype html><html><head><meta charset='utf-8'><title>line tracker study"
+                 "</title></head><body><h1>The seed's study, run by kartci</h1>"
+                 + "".join(svgs) + "</body></html>\n")
+    (out / "study.html").write_text(html_text, encoding="utf-8")
+    out_console.print(f"wrote {out}/study.html ({len(svgs)} figures)", highlight=False)

@@ -86,9 +86,9 @@ def run(
     from kartci.report.progress import ProgressView
     from kartci.runner import expand, parse_shard, run_jobs
     from kartci.runner import shard as share
+    from kartci.runner.jobs import default_suite
     from kartci.runner.merge import write_marker
     from kartci.runner.outdir import clear_reports, locked, write_manifest
-    from kartci.spec import load_scenario
 
     out = out_dir(out, "latest")
     if jobs is not None and jobs < 1:
@@ -101,8 +101,7 @@ def run(
     if live_view and ((jobs or 1) > 1 or executor is not ExecutorKind.LOCAL):
         raise SpecError("--live serves one run at a time in this process: drop -j / --executor")
     proj = project.current()
-    selected = names or [p.stem for p in proj.own_scenarios()
-                         if "tool" not in load_scenario(p.stem).tags]
+    selected = names or default_suite(proj.own_scenarios())
     if not selected:
         where = ", ".join(str(p) for p in proj.scenarios)
         raise SpecError(f"no scenarios to run: none in {where}; name one (`kartci list` shows "

@@ -19,8 +19,8 @@ Row = dict[str, Any]
 def _odometry(m: Any) -> Row:
     p, q = m.pose.pose.position, m.pose.pose.orientation
     tw = m.twist.twist
-    return {"x": p.x, "y": p.y, "z": p.z, "yaw": yaw_of(q), "vx": tw.linear.x, "vy": tw.linear.y,
-            "wz": tw.angular.z}
+    return {"x": p.x, "y": p.y, "z": p.z, "yaw": yaw_of(q), "qx": q.x, "qy": q.y, "qz": q.z,
+            "qw": q.w, "vx": tw.linear.x, "vy": tw.linear.y, "wz": tw.angular.z}
 
 
 def _joint_state(m: Any) -> Row:

@@ -95,10 +95,12 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     if repeat < 1:
         raise SpecError(f"--repeat {repeat}: expected 1 or more")
     axes = [parse_sweep(s) for s in sweeps or []]
-    points: list[list[tuple[str, str]]] = [list(p) for p in itertools.product(
-        *[[(k, v) for v in values] for k, values in axes])]
     jobs: list[Job] = []
     for name in names:
+        own = [] if axes else [(k, [str(v) for v in vs])
+                               for k, vs in load_scenario(name, overrides).sweep.items()]
+        points: list[list[tuple[str, str]]] = [list(p) for p in itertools.product(
+            *[[(k, v) for v in values] for k, values in axes or own])]
         for point in points:
             spec = load_scenario(name, [*overrides, *(f"{k}={v}" for k, v in point)])
             label = spec.name + _variant(overrides, point)
@@ -110,6 +112,13 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     if twice:
         raise SpecError(f"scenario selected twice: {', '.join(twice)}")
     return jobs
+
+
+def default_suite(paths: list[Path]) -> list[str]:
+    """The scenarios a plain `kartci run` runs: all but `tool` ones and grids (a scenario with
+    its own sweep), which run by name."""
+    return [p.stem for p in paths
+            if "tool" not in (spec := load_scenario(p.stem)).tags and not spec.sweep]
 
 
 def _variant(overrides: list[str], point: list[tuple[str, str]]) -> str:

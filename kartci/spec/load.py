@@ -110,12 +110,17 @@ def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path) -> 
     """`model: <name>` becomes the model's parameters (its URDF a path on the search path), and
     a controller's relative source log a path relative to the scenario file at `path`."""
     model = agent.get("model")
+    given: dict[str, Any] = {}
+    if isinstance(model, dict) and isinstance(model.get("from"), str):
+        # `model: {from: line_tracker, wheel_time_constant_s: 0}`: a model with keys replaced
+        given = {k: v for k, v in model.items() if k != "from"}
+        model = model["from"]
     if isinstance(model, str):
         params = _read_yaml(proj.find_model(model))
         urdf = params.get("urdf")
         if isinstance(urdf, str) and not Path(urdf).is_absolute():
             params["urdf"] = str(proj.model_file(f"{model}/{urdf}"))
-        agent["model"] = params
+        agent["model"] = {**params, **given}
     controller = agent.get("controller")
     source = controller.get("source") if isinstance(controller, dict) else None
     if isinstance(source, dict) and isinstance(source.get("log"), str):

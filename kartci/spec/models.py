@@ -287,6 +287,10 @@ class Scenario(Frozen):
                                            "fails the run (exit 1)")
     tags: tuple[str, ...] = Field((), description="free labels; `tool` keeps a scenario out of "
                                   "a plain `kartci run` (run it by name)")
+    sweep: dict[str, tuple[float | int | bool | str, ...]] = Field(
+        {}, description="a grid: `dotted.key: [values]`, one run per combination when the "
+        "scenario is run by name without `--sweep` (each point judged against its own baseline, "
+        "`<scenario>@<key>=<value>`); a scenario with a sweep stays out of a plain `kartci run`")
 
     @model_validator(mode="before")
     @classmethod

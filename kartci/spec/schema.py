@@ -58,7 +58,7 @@ def scenario_schema() -> dict[str, Any]:
     props = root["properties"]
     props["world"] = _world(props["world"]["description"], worlds, ref, defs)
     agent = defs[_name(props["agents"]["additionalProperties"]["$ref"])]["properties"]
-    agent["model"] = _robot_model(agent["model"]["description"], robots, ref)
+    agent["model"] = _robot_model(agent["model"]["description"], robots, ref, defs)
     agent["controller"] = _controller(agent["controller"]["description"], controllers, ref)
     agent["sensors"] = _sensors(agent["sensors"]["description"], robots, ref)
     props["metrics"] = _metrics(props["metrics"]["description"], metric_sets, ref)
@@ -128,12 +128,22 @@ def _world(description: str, worlds: list[plugins.WorldKind], ref: Any,
     ]}
 
 
-def _robot_model(description: str, robots: list[plugins.RobotKind], ref: Any) -> dict[str, Any]:
+def _robot_model(description: str, robots: list[plugins.RobotKind], ref: Any,
+                 defs: dict[str, Any]) -> dict[str, Any]:
     kinds = [_tagged(ref(r.params), "kind", r.name, f"robot kind `{r.name}`: {r.description}")
              for r in robots]
+    from_folder = [{  # `{from: NAME, KEY: value}`: a model folder's parameters, some replaced
+        "type": "object", "required": ["from"], "additionalProperties": False,
+        "description": f"a `{r.name}` model folder with some keys replaced",
+        "properties": {"from": {"type": "string", "description": "the model folder's name on "
+                                "the project's model path, e.g. `line_tracker`"},
+                       **copy.deepcopy(defs[_name(ref(r.params))].get("properties", {}))}}
+        for r in robots]
     return {"description": description, "anyOf": [
         {"type": "string", "description": "a robot model folder's name on the project's "
          "model path (`<name>/params.yaml`, e.g. `gokart`, `line_tracker`)"},
+        {"anyOf": from_folder, "description": "`{from: NAME, ...}`: a model folder's "
+         "parameters with the keys given here replaced"},
         {"oneOf": kinds, "description": "a robot in full, its kind named by `kind`"},
     ]}
 

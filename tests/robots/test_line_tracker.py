@@ -92,3 +92,34 @@ def test_sonar_stops_the_robot_before_an_obstacle(tmp_path: Path) -> None:
     assert abs(odom["vx"].iloc[-1]) < 0.005
     _, m = compute(log)
     assert m["line_lost"].value == 0.0
+
+
+def _frames(*sets: str) -> list[tuple[int, float, float]]:
+    """(t_ns, left, right) of every line_sensor message in 1 s of line_straight."""
+    from kartci.sim.session import Session
+
+    out = []
+    with Session(load_scenario("line_straight", ["duration_s=1", *sets])) as s:
+        r = s.reset()
+        while True:
+            out += [(r.t_ns, m.left, m.right) for topic, m in r.messages
+                    if topic == "/lt0/line_sensor"]
+            if r.done:
+                break
+            r = s.step()
+    return out
+
+
+def test_cameras_run_on_their_own_clock_and_can_lag_a_frame() -> None:
+    """update_rate_hz 17 (annex model.sdf) gives 17 frames a second whatever the control period;
+    latency_frames 1 publishes each image one frame late."""
+    cam = "agents.lt0.sensors.line_sensor"
+    now = _frames(f"{cam}.update_rate_hz=17")
+    late = _frames(f"{cam}.update_rate_hz=17", f"{cam}.latency_frames=1")
+    assert len(now) == 18  # t = 0, 1/17, ..., 16/17 s and 1 s
+    assert [t for t, *_ in now] == [round(math.ceil(k / 17 / DT - 1e-9) * DT * 1e9)
+                                   for k in range(17)] + [1_000_000_000]
+    # both runs see the same first image; one frame later the lagging one still shows it
+    assert late[0][1:] == late[1][1:] == now[0][1:] != now[1][1:]
+    assert late[1][0] == now[1][0]
+    assert len(_frames()) == math.floor(1 / 0.06) + 1  # default: a frame per control tick

@@ -67,3 +67,21 @@ def test_schema_describes_scenarios() -> None:
     schema = json_schema()
     assert {"world", "agents", "duration_s", "seed"} <= set(schema["properties"])
     assert "anyOf" in schema["properties"]["world"]
+
+
+def test_a_model_from_a_folder_with_keys_replaced() -> None:
+    """`model: {from: line_tracker, KEY: value}` reads the folder's parameters, then replaces."""
+    spec = load_scenario("line_straight_grid")
+    model = spec.agents["lt0"].model
+    assert model.wheel_time_constant_s == 0.0  # type: ignore[attr-defined]
+    assert model.wheel_radius_m == 0.035  # type: ignore[attr-defined]  # from params.yaml
+    assert Path(model.urdf).is_file()
+
+
+def test_a_model_from_an_unknown_folder_names_it(tmp_path: Path) -> None:
+    f = tmp_path / "s.yaml"
+    f.write_text("description: x\nworld: line_lab/straight\nduration_s: 1\nagents:\n  a:\n"
+                 "    model: {from: no_such_robot, wheel_radius_m: 0.1}\n"
+                 "    controller: {type: line_pid}\n")
+    with pytest.raises(SpecError, match="no_such_robot"):
+        load_scenario(f)

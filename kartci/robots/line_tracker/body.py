@@ -41,21 +41,38 @@ class LineTracker(Base):
         self.wheels = [links["left_wheel"], links["right_wheel"]]
         for j in self.wheels:
             pb.changeDynamics(self.body, j, lateralFriction=m.tire_friction, physicsClientId=client)
-        # Of base_link's shapes only the caster sphere touches the floor: make it frictionless.
-        pb.changeDynamics(self.body, -1, lateralFriction=0.0, rollingFriction=0.0,
+        # Of base_link's shapes only the caster sphere touches the floor: it slides (frictionless
+        # by default).
+        pb.changeDynamics(self.body, -1, lateralFriction=m.caster_friction, rollingFriction=0.0,
                           spinningFriction=0.0, physicsClientId=client)
+        self._wheel_inertia(m)
         self._alpha = 1.0 - math.exp(-dt_s / m.wheel_time_constant_s) if (
             m.wheel_time_constant_s > 0) else 1.0
         self.target = np.zeros(2)  # commanded wheel speeds, rad/s (left, right)
         self.actual_target = np.zeros(2)  # after the first-order lag
+        self._fresh = False  # a command not yet applied (set_velocity drive)
+
+    def _wheel_inertia(self, m: LineTrackerModel) -> None:
+        """Mass and inertia overrides of both wheels (the seed's Gazebo defaults, when asked)."""
+        for j in self.wheels:
+            if m.wheel_mass_kg is not None:
+                pb.changeDynamics(self.body, j, mass=m.wheel_mass_kg, physicsClientId=self.client)
+            if m.wheel_inertia_kgm2 is not None:
+                pb.changeDynamics(self.body, j, localInertiaDiagonal=[m.wheel_inertia_kgm2] * 3,
+                                  physicsClientId=self.client)
 
     def command(self, left_radps: float, right_radps: float) -> None:
         """New wheel-speed targets (rad/s: left, right), clamped at the motor's saturation speed."""
         lim = self.model.wheel_speed_limit_radps
         self.target = np.clip([left_radps, right_radps], -lim, lim)
+        self._fresh = True
 
     def pre_step(self) -> None:
-        """Advance the lagged targets by one physics step and hand them to the wheel motors."""
+        """Advance the lagged targets by one physics step and hand them to the wheel motors; or,
+        with the `set_velocity` drive, set a new command's wheel speeds once and free the wheels."""
+        if self.model.wheel_drive == "set_velocity":
+            self._set_velocity()
+            return
         self.actual_target += self._alpha * (self.target - self.actual_target)
         tau = self.model.wheel_torque_limit_nm
         pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
@@ -66,3 +83,15 @@ class LineTracker(Base):
         """Measured wheel speeds, rad/s (left, right)."""
         js = pb.getJointStates(self.body, self.wheels, physicsClientId=self.client)
         return float(js[0][1]), float(js[1][1])
+
+    def _set_velocity(self) -> None:
+        """Gazebo's Joint::SetVelocity: the wheel's speed relative to the chassis, at once, then
+        nothing holds it (motors off: the wheels roll under contact forces alone)."""
+        if self._fresh:
+            for j, w in zip(self.wheels, self.target, strict=True):
+                angle = pb.getJointState(self.body, j, physicsClientId=self.client)[0]
+                pb.resetJointState(self.body, j, angle, float(w), physicsClientId=self.client)
+            self._fresh = False
+        pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
+                                     targetVelocities=[0.0, 0.0], forces=[0.0, 0.0],
+                                     physicsClientId=self.client)

@@ -30,6 +30,23 @@ class LineTrackerModel(RobotParams):
                                  "(dimensionless), multiplied by the floor's friction")
     sensor_point_x_m: float = Field(0.095, description="line-sensor midpoint ahead of "
                                     "base_link, m (annex model.sdf camera pose)")
+    wheel_drive: Literal["motor", "set_velocity"] = Field(
+        "motor", description="`motor`: a torque-limited velocity motor holds each wheel at its "
+        "lagged target every physics step; `set_velocity`: the annex TestSensor.cc's "
+        "`joint->SetVelocity` once per control tick (Gazebo >= 5 sets the wheel's speed relative "
+        "to the chassis at that instant and does not hold it), the wheels roll free in between")
+    wheel_mass_kg: float | None = Field(None, gt=0.0, description="override of each wheel's "
+                                        "mass, kg (None: the URDF's 0.03 kg); the annex "
+                                        "model.sdf wheels have no <inertial>, so Gazebo used "
+                                        "SDF's default 1 kg (Sec. 5.5)")
+    wheel_inertia_kgm2: float | None = Field(None, gt=0.0, description="override of each "
+                                             "wheel's principal inertias, kg m^2 (None: the "
+                                             "URDF's); SDF's default for a link without "
+                                             "<inertial> is 1 kg m^2 about each axis")
+    caster_friction: float = Field(0.0, ge=0.0, description="friction factor of the caster "
+                                   "sphere, a fixed collision of the chassis that slides "
+                                   "(Sec. 5.1.1); 0: frictionless. The annex model.sdf gives it no "
+                                   "<surface>, so ODE used min(1 default, floor 100) = 1")
 
 
 class LineSensorSpec(Frozen):
@@ -43,6 +60,15 @@ class LineSensorSpec(Frozen):
                            "(Sec. 5.2.2: 1.2 rad reproduces the real sensor's +-0.008 m range)")
     resolution_px: int = Field(24, ge=4, le=256, description="rendered image side, pixels")
     noise_std: float = Field(0.001, ge=0.0, description="luminance noise, 1 sigma (0-1 scale)")
+    update_rate_hz: float | None = Field(None, gt=0.0, description="camera frame rate on "
+                                         "its own clock, Hz; the controller reads the latest "
+                                         "frame (annex model.sdf: <update_rate>17 for ts 0.06 s; "
+                                         "Sec. 7.2: at most 300 Hz). None: a frame per control "
+                                         "tick, taken at the tick")
+    latency_frames: int = Field(0, ge=0, le=100, description="frames a published reading "
+                                "lags its image: Gazebo's camera sensor renders in one update and "
+                                "hands the frame to its plugin (Sec. 6.4, annex CameraDump) in "
+                                "the next; 0: published as taken")
 
 
 class SonarSpec(Frozen):

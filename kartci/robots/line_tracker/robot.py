@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections import deque
 from typing import Any
 
 from kartci import geometry
@@ -40,14 +41,18 @@ class LineTrackerRobot(RobotBase):
         self.noise_std, self.odom_every, self.rng = (sensors.line_sensor.noise_std,
                                                      ctx.odom_every, ctx.rng)
         self.end_m = world.end_m()
+        rate = sensors.line_sensor.update_rate_hz
+        self.dt_s, self.frame_dt_s = dt_s, (None if rate is None else 1.0 / rate)
+        self.last_frame = -1
+        self.images: deque[list[float]] = deque(maxlen=sensors.line_sensor.latency_frames + 1)
 
     def static_transforms(self) -> list[Any]:
         """tf of the line sensor, both cameras and the sonar mount."""
         return self.static_tf(self.STATIC)
 
     def sense(self, k: int, t_ns: int, put: Put) -> None:
-        """Odometry and wheel speeds at the odometry rate; the line cameras (with noise) and the
-        sonar at the control rate."""
+        """Odometry and wheel speeds at the odometry rate; the line cameras (with noise) at the
+        control rate or their own, the sonar at the control rate."""
         st = self.body.state()
         if k % self.odom_every == 0:
             self.publish_pose(st, t_ns, put)
@@ -55,14 +60,10 @@ class LineTrackerRobot(RobotBase):
             put("joint_states", joint_state(t_ns, f"{self.name}/base_link",
                                             ["left_wheel_hinge", "right_wheel_hinge"], [],
                                             [wl, wr]), t_ns)
+        if self._camera_due(k):
+            self._frame(st, t_ns, put)
         if k % self.ctrl_every:
-            return  # the line cameras and the sonar run with the controller (seed Sec. 6.6)
-        poses = [self.body.frame_pose(f"line_camera_{s}", st) for s in ("left", "right")]
-        lum = [v + self.noise_std * float(self.rng.standard_normal())
-               for v in self.camera.luminances(poses)]
-        put("line_sensor", msg("kartci_msgs/msg/LineSensor",
-                               header=header(t_ns, f"{self.name}/line_sensor"),
-                               left=lum[0], right=lum[1]), t_ns)
+            return  # the sonar runs with the controller (seed Sec. 6.6)
         if self.sonar is not None:
             s = self.sonar.spec
             put("sonar", msg("sensor_msgs/msg/Range", header=header(t_ns, f"{self.name}/sonar"),
@@ -70,6 +71,26 @@ class LineTrackerRobot(RobotBase):
                              field_of_view=2 * math.atan2(s.cone_radius_m, s.max_range_m),
                              min_range=s.min_range_m, max_range=s.max_range_m,
                              range=self.sonar.range(*self.body.frame_pose("sonar", st))), t_ns)
+
+    def _camera_due(self, k: int) -> bool:
+        """A new camera frame at step k: every control tick, or on the cameras' own clock."""
+        if self.frame_dt_s is None:
+            return k % self.ctrl_every == 0
+        frame = math.floor(k * self.dt_s / self.frame_dt_s + 1e-9)
+        due = frame != self.last_frame
+        self.last_frame = frame
+        return due
+
+    def _frame(self, st: Any, t_ns: int, put: Put) -> None:
+        """Both line cameras' luminances (with noise), as one `line_sensor` message."""
+        poses = [self.body.frame_pose(f"line_camera_{s}", st) for s in ("left", "right")]
+        lum = [v + self.noise_std * float(self.rng.standard_normal())
+               for v in self.camera.luminances(poses)]
+        self.images.append(lum)
+        lum = self.images[0]  # the oldest frame kept: `latency_frames` frames ago, or the first
+        put("line_sensor", msg("kartci_msgs/msg/LineSensor",
+                               header=header(t_ns, f"{self.name}/line_sensor"),
+                               left=lum[0], right=lum[1]), t_ns)
 
     def apply(self, topic: str, m: Any) -> None:
         """`wheel_cmd` (JointState velocities, rad/s: left, right); other topics are ignored."""
