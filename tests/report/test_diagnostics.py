@@ -85,3 +85,17 @@ def test_a_damaged_trace_is_one_clear_error(kart_lap: KartLap, tmp_path: Path) -
     assert "malformed reference trace" in res.stdout + res.stderr
     assert "Traceback" not in res.stdout + res.stderr
     assert (kart_lap.out / "kart_manual" / "run.mcap").is_file()  # nothing destroyed
+
+
+def test_every_shipped_scenario_has_a_small_reference_trace() -> None:
+    from kartci import project
+    from kartci.runner.jobs import default_suite
+
+    proj = project.current()
+    for name in default_suite(proj.own_scenarios()):
+        path = proj.baselines / "traces" / f"{name}.json"
+        assert path.is_file(), f"no reference trace for {name}: run `kartci baseline update`"
+        assert path.stat().st_size < 20_000
+        agents = load_trace(path)
+        assert agents and all(len(f) > 20 and f["t"].is_monotonic_increasing
+                              for f in agents.values())
