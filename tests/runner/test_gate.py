@@ -114,7 +114,8 @@ def test_baseline_update_takes_only_the_last_run_of_a_reused_out(tmp_path: Path,
     assert _run(out, baselines, "line_circle").returncode == 0
     p = kartci("baseline", "update", out, "--baselines", baselines)
     assert p.returncode == 0, p.stderr
-    assert sorted(x.name for x in baselines.iterdir()) == ["line_circle.json"]
+    assert sorted(x.name for x in baselines.glob("*.json")) == ["line_circle.json"]
+    assert sorted(x.name for x in (baselines / "traces").iterdir()) == ["line_circle.json"]
 
 
 def test_a_dangling_baseline_symlink_is_an_error_not_a_pass(tmp_path: Path,
