@@ -13,7 +13,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 
 from kartci.report.figures import Axis, Figure, Role, Series, thin
-from kartci.report.plots import to_svg  # also sets Agg, the SVG settings and the mathtext guard
+from kartci.report.plots import _svg  # also sets Agg, the SVG settings and the mathtext guard
 
 STYLE: dict[Role, dict[str, Any]] = {Role.REFERENCE: {"color": "grey", "ls": "--", "lw": 1.0},
          Role.COMMAND: {"ls": ":", "lw": 0.8}, Role.OUTLINE: {"color": "black", "lw": 0.8},
@@ -87,4 +87,4 @@ def figure_svg(f: Figure) -> str:
     if len(f.series) <= 12 and any(s.role not in (Role.OUTLINE, Role.SHAPE) and s.c is None
                                    for s in f.series):
         ax.legend(loc="best", fontsize=6)
-    return to_svg(fig)
+    return _svg(fig)
