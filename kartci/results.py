@@ -30,6 +30,14 @@ class Plots:
     estimates: dict[str, pd.DataFrame] = field(default_factory=dict)
     # agent -> detected boxes at a few moments: (4, 2) footprint, m, and whether dynamic
     detections: dict[str, list[tuple[np.ndarray, bool]]] = field(default_factory=dict)
+    # racing diagnostics (track kind): complete laps with their three sector times, the distance
+    # from the nearest wheel to a track edge (negative: outside), the driver's commands
+    laps: dict[str, pd.DataFrame] = field(default_factory=dict)  # agent -> lap, time_s, s1..s3
+    track_length_m: float = 0.0
+    margins: dict[str, pd.DataFrame] = field(default_factory=dict)  # agent -> t, margin_m
+    controls: dict[str, pd.DataFrame] = field(default_factory=dict)  # agent -> t, named columns
+    # the baseline's decimated reference trace (kartci.verdict.trace): agent -> t, x, y, speed...
+    reference: dict[str, pd.DataFrame] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -84,4 +92,5 @@ def overlay(base: Plots | None, head: Plots | None) -> Plots | None:
 
     return replace(head, tracks=both("tracks"), wheels=both("wheels"),
                    commands=both("commands"), collisions=both("collisions"),
-                   solves=both("solves"), horizons={})
+                   solves=both("solves"), horizons={}, laps=both("laps"), margins=both("margins"),
+                   controls=both("controls"), reference={})

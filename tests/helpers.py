@@ -8,9 +8,12 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+
+from kartci.results import ScenarioResult
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout
 # Two short line-tracker runs, for tests of running many scenarios rather than one
@@ -47,3 +50,16 @@ def evo(tmp: Path, tool: str, *args: str) -> dict[str, float]:
     with zipfile.ZipFile(out) as z:
         stats: dict[str, float] = json.loads(z.read("stats.json"))
     return stats
+
+
+@dataclass(frozen=True)
+class KartLap:
+    """One kart lap run through the CLI and `baseline update` (fixture `kart_lap`): the run
+    folder, its baselines (with the reference trace), the update's output and the result judged
+    again so that its report overlays the trace."""
+
+    out: Path
+    baselines: Path
+    update: subprocess.CompletedProcess[str]
+    result: ScenarioResult
+

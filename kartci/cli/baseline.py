@@ -24,12 +24,14 @@ def baseline_update(
         help="Scenarios (default: those of the last run in OUT).")] = None,
     baselines: BaselinesOpt = None,
 ) -> None:
-    """Store a run's metrics as the baselines; the only command that writes baselines. Only a
+    """Store a run's metrics as the baselines, and a decimated reference trace of its paths
+    (baselines/traces/, for the report's overlay); the only command that writes baselines. Only a
     complete, current run is taken: a scenario whose last run failed or did not finish is
     refused, and with no names only the scenarios of the last run in OUT are taken."""
     from kartci.runner.outdir import locked, read_manifest, valid_label
-    from kartci.runner.run import check_complete
+    from kartci.runner.run import check_complete, reference_plots
     from kartci.verdict import load, read_metrics, update
+    from kartci.verdict.trace import trace_path, write_trace
 
     if not out.is_dir():
         raise SpecError(f"{out}: no such folder; run `kartci run` first")
@@ -47,11 +49,17 @@ def baseline_update(
             check_complete(folder)
             load(target / f"{label}.json")
             checked.append((label, read_metrics(folder / "metrics.json")))
-        for label, values in checked:
+        # the traces' plots read the logs: after the cheap checks, still before any write
+        traced = [(label, values, reference_plots(out / label)) for label, values in checked]
+        for label, values, drawn in traced:
             changes = update(target / f"{label}.json", label, values)
             moved = [c for c in changes if c.kind != "unchanged"]
             out_console.print(f"{label}: {len(moved)} of {len(changes)} metrics changed",
                               highlight=False, markup=False)
             for c in moved:
                 out_console.print(f"  {c.kind:8s} {c.metric}: {exact(c.old)} -> {exact(c.new)}",
+                                  highlight=False, markup=False)
+            if drawn is not None and drawn.tracks:
+                size = write_trace(trace_path(target, label), drawn)
+                out_console.print(f"  reference trace {trace_path(target, label)} ({size} bytes)",
                                   highlight=False, markup=False)

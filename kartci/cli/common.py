@@ -117,16 +117,21 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
 
 
 def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-            ci: bool = True) -> None:
+            ci: bool = True, history: Path | None = None) -> None:
     """Write every report, print the verdicts and (unless `ci` is off, as for a shard, whose
     merge reports for it) the CI outputs; exit with the gating code. A report that cannot be
     written is exit 2, and no earlier report stays in its place (write_all removes them
     first)."""
     from kartci.report import write_all
-    from kartci.report.ci import annotation_lines, append_step_summary, in_github_actions
+    from kartci.report.ci import (
+        annotation_lines,
+        append_step_summary,
+        in_github_actions,
+        scenario_files,
+    )
 
     try:
-        paths = write_all(results, out, words)
+        paths = write_all(results, out, words, history)
     except (KartciError, OSError):
         raise
     except Exception as err:  # a report that cannot be drawn: bad input, not a regression
@@ -136,7 +141,7 @@ def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     if ci:
         append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
     if ci and in_github_actions():
-        for line in annotation_lines(results):
+        for line in annotation_lines(results, files=scenario_files(results)):
             typer.echo(line)
     code = exit_code(results)
     out_console.print(f"report: {paths['html']}  (exit {code})", highlight=False)

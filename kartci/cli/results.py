@@ -26,6 +26,10 @@ def merge(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")],
     baselines: BaselinesOpt = None,
     strict: StrictOpt = None,
+    history: Annotated[Path | None, typer.Option(
+        help="Folder of earlier commits' summary.json (oldest first by name, as on the "
+             "kartci-history branch): report.html plots each metric across them and this run; "
+             "a missing folder draws no history.")] = None,
 ) -> None:
     """Join partial results into one run: copy the scenario folders into OUT, then judge and
     report them exactly as an unsharded run would (same summary, verdicts, exit code)."""
@@ -36,7 +40,7 @@ def merge(
         clear_reports(out)
         results = join(dirs, out, baselines_dir(baselines), strict_mode(strict))
         write_manifest(out, "merge", [r.name for r in results])
-        finish(results, out)
+        finish(results, out, history=history)
 
 
 @app.command("compare")
@@ -84,3 +88,18 @@ def report(out: Annotated[Path, typer.Argument(help="A folder written by `kartci
         if manifest_labels(out) is None:
             write_manifest(out, "report", [r.name for r in results])
         finish(results, out)
+
+
+@app.command()
+def history(
+    summaries: Annotated[list[Path], typer.Argument(
+        help="summary.json files of successive commits, oldest first (CI keeps them on the "
+             "kartci-history branch).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for history.html.")] = Path(),
+) -> None:
+    """Every metric of every scenario across commits (asv-style), as OUT/history.html."""
+    from kartci.report.history import write_history
+
+    path = write_history(list(summaries), out)
+    typer.echo(f"history: {path} ({len(summaries)} commits)")
+

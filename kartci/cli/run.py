@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Annotated
 
 import typer
@@ -22,6 +24,20 @@ from kartci.cli.common import (
 )
 from kartci.errors import SpecError
 from kartci.runner.executors import ExecutorKind
+
+
+@contextmanager
+def live_server(on: bool, port: int, rate: float) -> Iterator[None]:
+    """The --live server around the runs, when asked for."""
+    if not on:
+        yield
+        return
+    from kartci.live import serving
+
+    with serving(port, rate) as view:
+        err_console.print(f"live: ws://127.0.0.1:{view.port} (Foxglove: Open connection, "
+                          "Foxglove WebSocket)", highlight=False, markup=False)
+        yield
 
 
 @app.command()
@@ -53,6 +69,13 @@ def run(
         "--timeout-s", help="Wall-clock limit per run, s: a slower run is an error (held "
                             "within a second, even inside a slow controller step).")] = None,
     strict: StrictOpt = None,
+    live_view: Annotated[bool, typer.Option(
+        "--live", help="Serve each run to Foxglove as it runs (WebSocket on 127.0.0.1, paced "
+                       "to real time; one run at a time).")] = False,
+    live_port: Annotated[int, typer.Option(
+        help="Port of the --live server (0: any free port).")] = 8765,
+    live_rate: Annotated[float, typer.Option(
+        help="--live pace: sim seconds per wall second (0: as fast as it runs).")] = 1.0,
 ) -> None:
     """Run scenarios, record each as OUT/<scenario>/run.mcap, score and judge them.
 
@@ -75,6 +98,8 @@ def run(
     if ray_address and executor is not ExecutorKind.RAY:
         raise SpecError("--ray-address needs --executor ray")
     part = parse_shard(shard) if shard else None
+    if live_view and ((jobs or 1) > 1 or executor is not ExecutorKind.LOCAL):
+        raise SpecError("--live serves one run at a time in this process: drop -j / --executor")
     proj = project.current()
     selected = names or default_suite(proj.own_scenarios())
     if not selected:
@@ -92,7 +117,8 @@ def run(
         clear_reports(out)
         write_marker(out, index, total, labels)
         write_manifest(out, "run", labels)
-        with ProgressView(todo, err_console, live) as view:
+        with live_server(live_view, live_port, live_rate), \
+                ProgressView(todo, err_console, live) as view:
             results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
                                executor=executor, ray_address=ray_address, timeout_s=timeout_s,
                                strict=strict_mode(strict), on_event=view)

@@ -11,6 +11,7 @@ from typing import Any, BinaryIO
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys.store import Typestore
 
+from kartci.logs.qos import offered_qos_profiles
 from kartci.logs.types import typestore
 
 
@@ -39,7 +40,7 @@ class McapLogWriter:
         self._channels: dict[str, int] = {}
         self._seq: dict[int, int] = {}
 
-    def _channel(self, topic: str, typename: str) -> int:
+    def _channel(self, topic: str, typename: str, latched: bool) -> int:
         cid = self._channels.get(topic)
         if cid is None:
             sid = self._schemas.get(typename)
@@ -47,13 +48,16 @@ class McapLogWriter:
                 text, _ = self._store.generate_msgdef(typename, ros_version=2)
                 sid = self._writer.register_schema(typename, "ros2msg", text.encode())
                 self._schemas[typename] = sid
-            cid = self._writer.register_channel(topic, "cdr", sid)
+            cid = self._writer.register_channel(
+                topic, "cdr", sid, metadata={"offered_qos_profiles": offered_qos_profiles(latched)})
             self._channels[topic] = cid
         return cid
 
-    def write(self, topic: str, message: Any, t_ns: int) -> None:
+    def write(self, topic: str, message: Any, t_ns: int, latched: bool = False) -> None:
+        """Append one message; a topic's first message decides its QoS (`latched`: published
+        once, transient-local, like /tf_static)."""
         typename = message.__msgtype__
-        cid = self._channel(topic, typename)
+        cid = self._channel(topic, typename, latched)
         data = self._store.serialize_cdr(message, typename)
         seq = self._seq.get(cid, 0)
         self._seq[cid] = seq + 1

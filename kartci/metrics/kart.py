@@ -30,16 +30,32 @@ def kart_track(track: Track, odom: pd.DataFrame) -> pd.DataFrame:
                          "s_total": total, "yaw": odom["yaw"].to_numpy()})
 
 
+def crossing_time(t: np.ndarray, total: np.ndarray, distance_m: float) -> float:
+    """When the unwrapped progress `total` (m) first reached `distance_m` (it must), interpolated
+    between samples: lap lines for the metrics, sector lines for the report's lap table."""
+    i = int(np.argmax(total >= distance_m))
+    a, b = total[i - 1], total[i]
+    frac = (distance_m - a) / (b - a) if b != a else 0.0
+    return float(t[i - 1] + frac * (t[i] - t[i - 1]))
+
+
+def wheel_margins_m(track: Track, tr: pd.DataFrame, wheels_xy_m: np.ndarray) -> np.ndarray:
+    """Per `kart_track` row, how far inside the track the wheel nearest an edge is (m; negative
+    when it is outside), the quantity behind `off_track_s`."""
+    yaw, x, y = tr["yaw"].to_numpy(), tr["x"].to_numpy(), tr["y"].to_numpy()
+    margin = np.full(len(tr), np.inf)
+    for wx, wy in wheels_xy_m:
+        px = x + wx * np.cos(yaw) - wy * np.sin(yaw)
+        py = y + wx * np.sin(yaw) + wy * np.cos(yaw)
+        _, lat, w_right, w_left = track.project(np.column_stack([px, py]))
+        margin = np.minimum(margin, np.minimum(w_left - lat, lat + w_right))
+    return margin
+
+
 def lap_crossings(t: np.ndarray, total: np.ndarray, length_m: float) -> list[float]:
     """Times (s) at which the unwrapped progress `total` (m) passes each whole lap."""
-    crossings = []
-    for lap in range(1, int(max(total.max(), 0) // length_m) + 1):
-        i = int(np.argmax(total >= lap * length_m))
-        # interpolate the crossing time between samples
-        a, b = total[i - 1], total[i]
-        frac = (lap * length_m - a) / (b - a) if b != a else 0.0
-        crossings.append(float(t[i - 1] + frac * (t[i] - t[i - 1])))
-    return crossings
+    return [crossing_time(t, total, lap * length_m)
+            for lap in range(1, int(max(total.max(), 0) // length_m) + 1)]
 
 
 def kart_metrics(scenario: Scenario, agent: str, track: Track, tr: pd.DataFrame,

@@ -35,15 +35,32 @@ def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
     }
 
 
-def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN) -> dict[str, Path]:
-    """report.html, summary.md, summary.json and junit.xml in `out`. The old ones are removed
+def _history(results: list[ScenarioResult], folder: Path | None) -> tuple[list[str], Any] | None:
+    """Earlier commits' summaries in `folder` (sorted by name, oldest first) and this run; None
+    when there are none (no folder yet: the first run on main)."""
+    from kartci.report.history import collect, load_summary
+
+    earlier = sorted(folder.glob("*.json")) if folder is not None and folder.is_dir() else []
+    if not earlier:
+        return None
+    return collect([*((p.stem, load_summary(p)) for p in earlier),
+                    ("this run", summary_json(results))])
+
+
+def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN,
+              history: Path | None = None) -> dict[str, Path]:
+    """report.html (interactive), report-static.html (SVG, no script), summary.md, summary.json
+    and junit.xml in `out`. The old ones are removed
     first: a report that fails half-way leaves some missing, never an earlier one standing."""
     out.mkdir(parents=True, exist_ok=True)
-    paths = {"html": out / "report.html", "markdown": out / "summary.md",
+    paths = {"html": out / "report.html", "static": out / "report-static.html",
+             "markdown": out / "summary.md",
              "json": out / "summary.json", "junit": out / "junit.xml"}
     for path in paths.values():
         path.unlink(missing_ok=True)
-    write_text_atomic(paths["html"], report_html(results, words))
+    write_text_atomic(paths["html"], report_html(results, words,
+                                                 history=_history(results, history)))
+    write_text_atomic(paths["static"], report_html(results, words, static=True))
     write_text_atomic(paths["markdown"], summary_md(results, words))
     write_json_atomic(paths["json"], summary_json(results))
     write_text_atomic(paths["junit"], junit_xml(results, str(paths["html"]), words))

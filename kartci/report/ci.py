@@ -49,9 +49,31 @@ def _escape(text: str, prop: bool = False) -> str:
     return text.replace(":", "%3A").replace(",", "%2C") if prop else text
 
 
-def annotation_lines(results: list[ScenarioResult], limit: int = MAX_ANNOTATIONS) -> list[str]:
+def scenario_files(results: list[ScenarioResult], root: Path | None = None) -> dict[str, str]:
+    """Each scenario's YAML file relative to `root` (the repository: $GITHUB_WORKSPACE, else the
+    working directory), for annotations anchored to it; a scenario found elsewhere (installed
+    with kartci) or not at all gets none."""
+    from kartci import project
+    from kartci.errors import KartciError
+
+    base = (root or Path(os.environ.get("GITHUB_WORKSPACE") or Path.cwd())).resolve()
+    out = {}
+    for r in results:
+        try:
+            path = project.current().find_scenario(r.name.split("@", 1)[0]).resolve()
+        except KartciError:
+            continue
+        if path.is_relative_to(base):
+            out[r.name] = path.relative_to(base).as_posix()
+    return out
+
+
+def annotation_lines(results: list[ScenarioResult], limit: int = MAX_ANNOTATIONS,
+                     files: dict[str, str] | None = None) -> list[str]:
     """Workflow commands for errors, failed criteria, regressions (::error) and missing
-    metrics (::warning), largest first; past `limit`, one plain line says how many more."""
+    metrics (::warning), largest first, each anchored to its scenario's file when `files` names
+    it; past `limit`, one plain line says how many more."""
+    where = files or {}
     items: list[tuple[float, str, str, str]] = []  # (-size, kind, title, message)
     for r in results:
         if r.error:
@@ -71,12 +93,19 @@ def annotation_lines(results: list[ScenarioResult], limit: int = MAX_ANNOTATIONS
                               f"{num(v.baseline, v.unit)} (delta {delta(v)}, tolerance "
                               f"{num(v.tolerance)})"))
     items.sort(key=lambda x: x[0])
-    lines = [f"::{kind} title={_escape(title, True)}::{_escape(msg)}"
+    lines = [f"::{kind} {_anchor(where, title)}title={_escape(title, True)}::{_escape(msg)}"
              for _, kind, title, msg in items[:limit]]
     if len(items) > limit:
         lines.append(f"kartci: {len(items) - limit} more problems not annotated; see the job "
                      "summary or report.html")
     return lines
+
+
+def _anchor(files: dict[str, str], title: str) -> str:
+    """`file=...,line=1,` for the scenario a title names (titles start `kartci <name>:`)."""
+    name = title.removeprefix("kartci ").split(":", 1)[0]
+    path = files.get(name)
+    return f"file={_escape(path, True)},line=1," if path else ""
 
 
 def in_github_actions() -> bool:

@@ -4,9 +4,13 @@ from __future__ import annotations
 
 import html
 from datetime import UTC, datetime
+from typing import Any
 
-from kartci.report import plots as figs
+from kartci.report.figures import scenario_figures
+from kartci.report.interactive import body_assets, figures_block, head_assets
+from kartci.report.laps import lap_tables
 from kartci.report.markdown import VERDICT_WORD
+from kartci.report.static import figure_svg
 from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code
 
@@ -16,11 +20,21 @@ table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding
 text-align:right}th{background:#f3f3f3}td:first-child{text-align:left;font-family:monospace}
 .pass,.improved{color:#176f2c}.regressed,.failed,.error,.missing{color:#b00020;font-weight:bold}
 .new{color:#555}.figs{display:flex;flex-wrap:wrap;gap:1em}.figs svg{max-width:560px;height:auto}
+.kfigs{display:flex;flex-wrap:wrap;gap:1em}.kfig{width:570px}.ktitle{font-weight:bold;
+text-align:center;font-size:14px}.kinfo{font-size:12px}table.laps td.best{font-weight:bold;
+color:#176f2c}table.laps tr.ideal td{color:#555;font-style:italic}caption{text-align:left}
 section{border-top:2px solid #ddd;margin-top:1.5em}code{background:#f6f6f6;padding:0 3px}
 """
 
 
-def _scenario(r: ScenarioResult, words: Wording) -> str:
+HELP = ("<p>Figures: hover to read values (the time cursor is shared by a scenario's plots and "
+        "shown as a dot on the view from above), wheel to zoom, drag to zoom to a range, "
+        "shift+drag to pan, double-click to reset. Dashed grey: the baseline's reference "
+        "trace; red dotted lines and crosses: collisions and solver failures. "
+        '<a href="report-static.html">Static version</a> (no script).</p>')
+
+
+def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
     st = r.status.value
     out = [f'<section id="{html.escape(r.name)}"><h2>{html.escape(r.name)} '
            f'<span class="{st}">{MARK[r.status]} {st}</span></h2>',
@@ -52,33 +66,44 @@ def _scenario(r: ScenarioResult, words: Wording) -> str:
                        f"<td>{num(c.value)}</td><td class=\"{cls}\">{cls}</td></tr>")
         out.append("</table>")
     if r.plots is not None:
-        out.append('<div class="figs">')
-        if r.plots.kind == "track":
-            out += [figs.top_view(r.plots), figs.speed(r.plots), figs.wheel_speeds(r.plots)]
-            if r.plots.solves:
-                out.append(figs.solve_times(r.plots))
-            if r.plots.estimates or r.plots.detections:
-                out += [figs.localization(r.plots), figs.localization_error(r.plots)]
+        out.append(lap_tables(r.plots))
+        figures = scenario_figures(r.plots)
+        if static:
+            out.append('<div class="figs">' + "".join(figure_svg(f) for f in figures) + "</div>")
         else:
-            out += [figs.top_view(r.plots), figs.tracking_error(r.plots),
-                    figs.wheel_speeds(r.plots)]
-        out.append("</div>")
+            out.append(figures_block(r.name, figures))
     out.append("</section>")
     return "\n".join(out)
 
 
-def report_html(results: list[ScenarioResult], words: Wording = RUN) -> str:
-    """report.html, self-contained: the verdict, a table of scenarios, and each scenario's metrics,
-    criteria and figures (inline SVG)."""
+def _history(results: list[ScenarioResult], history: tuple[list[str], Any]) -> str:
+    """The metric history of this run's scenarios, the run itself as the newest point."""
+    from kartci.report.history import history_sections
+
+    labels, values = history
+    return (f'<section id="metric-history"><h2>Metric history</h2><p>{len(labels) - 1} earlier '
+            "commits of main, then this run (hover a point for its commit).</p>"
+            f"{history_sections(labels, values, {r.name for r in results}, level=3)}</section>")
+
+
+def report_html(results: list[ScenarioResult], words: Wording = RUN,
+                static: bool = False, history: tuple[list[str], Any] | None = None) -> str:
+    """report.html, self-contained and offline: the verdict, a table of scenarios, and each
+    scenario's metrics, criteria, lap tables and figures: interactive (uPlot, inlined once), or
+    `static` SVG with no script (report-static.html, for e-mail)."""
     code = exit_code(results)
     rows = "".join(f'<tr><td><a href="#{html.escape(r.name)}">{html.escape(r.name)}</a></td>'
                    f'<td class="{r.status.value}">{MARK[r.status]} {r.status.value}</td></tr>'
                    for r in results)
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    body = "\n".join(_scenario(r, words) for r in results)
+    body = "\n".join(_scenario(r, words, static) for r in results)
+    if history is not None and not static:
+        body += _history(results, history)
     title = f"{words.title} report"
     return (f"<!doctype html><html><head><meta charset=\"utf-8\"><title>{html.escape(title)}"
-            f"</title><style>{CSS}</style></head><body><h1>{html.escape(title)}: "
+            f"</title><style>{CSS}</style>{'' if static else head_assets()}</head><body>"
+            f"<h1>{html.escape(title)}: "
             f"{VERDICT_WORD[code]}</h1><p>written {stamp}; exit code {code}</p>"
-            f"<table><tr><th>scenario</th><th>status</th></tr>{rows}</table>{body}"
-            "</body></html>\n")
+            f"<table><tr><th>scenario</th><th>status</th></tr>{rows}</table>"
+            f"{'' if static else HELP}"
+            f"{body}{'' if static else body_assets()}</body></html>\n")

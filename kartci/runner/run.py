@@ -16,6 +16,7 @@ import tempfile
 import time
 import traceback
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +35,7 @@ from kartci.sim.session import describe
 from kartci.spec import Scenario
 from kartci.spec.models import LogSource
 from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
+from kartci.verdict.trace import load_trace, trace_path
 
 LOG_NAME = "run.mcap"
 ERROR_NAME = "error.json"  # marks a scenario whose last run failed (older outputs are kept)
@@ -185,6 +187,12 @@ def plots(folder: Path, scenario: Scenario) -> Plots | None:
     return result
 
 
+def reference_plots(folder: Path) -> Plots | None:
+    """What a reference trace is made of: the plots of a complete run folder."""
+    scenario, _ = _recorded(folder)
+    return plots(folder, scenario)
+
+
 def failed_reason(folder: Path) -> str | None:
     """Why a folder's last run failed, or None when it is not marked failed."""
     marker = folder / ERROR_NAME
@@ -225,10 +233,11 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
         return ScenarioResult(name, "", error=reason)
     try:
         baseline = load(baselines / f"{name}.json")
+        reference = load_trace(trace_path(baselines, name)) if with_plots else {}
     except KartciError as err:
         return ScenarioResult(name, "", error=str(err))
     try:
-        return _judge(folder, baseline, with_plots)
+        return _judge(folder, baseline, with_plots, reference)
     except Exception as err:  # this scenario only: the others are still judged
         error = str(err) if isinstance(err, KartciError) else (
             f"cannot judge {name}: {type(err).__name__}: {err}")
@@ -237,8 +246,8 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
         return ScenarioResult(name, "", error=one_line(error))
 
 
-def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None,
-           with_plots: bool) -> ScenarioResult:
+def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, with_plots: bool,
+           reference: dict[str, pd.DataFrame]) -> ScenarioResult:
     scenario, _ = _recorded(folder)
     values = read_metrics(folder / "metrics.json")
     verdicts = compare(values, baseline)
@@ -248,9 +257,11 @@ def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None,
     if not isinstance(run, dict):
         raise LogError(f"{run_path}: expected a JSON object")
     warnings = run.get("warnings")
+    drawn = plots(folder, scenario) if with_plots else None
+    if drawn is not None:
+        drawn = replace(drawn, reference=reference)
     return ScenarioResult(
-        folder.name, scenario.description, verdicts, crit, None, run,
-        plots(folder, scenario) if with_plots else None,
+        folder.name, scenario.description, verdicts, crit, None, run, drawn,
         warnings=tuple(one_line(str(w)) for w in warnings) if isinstance(warnings, list) else ())
 
 

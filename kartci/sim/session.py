@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import contextlib
 import json
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -35,12 +36,16 @@ from kartci.plugins import AgentContext
 from kartci.project import did_you_mean
 from kartci.sim.messages import tf_message
 from kartci.sim.robot import Put, Robot, RobotContext, SimWorld
+from kartci.sim.urdf import robot_descriptions
 from kartci.spec import Scenario
 
 SCENARIO_TOPIC = "/kartci/scenario"
 REPLACED_TOPIC = "/kartci/replaced_agents"  # std_msgs/String, JSON {agent: "module.Class"}
 
 Message = tuple[str, Any]  # (absolute topic, ROS 2 message)
+Tap = Callable[[str, Any, int, bool], None]  # (topic, message, t_ns, latched)
+# Taps every Session started in this context gets (`kartci run --live`, see kartci.live)
+LIVE_TAPS: ContextVar[tuple[Tap, ...]] = ContextVar("kartci_live_taps", default=())
 
 
 @dataclass(frozen=True)
@@ -215,6 +220,7 @@ class Bus:
         """Route messages to the log and to the robots' agents and nodes, by the topics they
         read."""
         self.log, self.count = log, 0
+        self.taps: list[Tap] = []  # also sent here (the live view)
         self.pending: list[Message] = []
         # full topic -> the agents reading it, and the name each asked for it by
         self.readers: dict[str, list[tuple[Any, str]]] = {}
@@ -224,13 +230,17 @@ class Bus:
                     full = want if want.startswith("/") else f"/{r.name}/{want}"
                     self.readers.setdefault(full, []).append((agent, want))
 
-    def put(self, topic: str, m: Any, t_ns: int, record: bool = True) -> None:
+    def put(self, topic: str, m: Any, t_ns: int, record: bool = True,
+            latched: bool = False) -> None:
         """Publish one message (absolute topic) at sim time `t_ns`; `record=False`: only to
-        its readers, and not at all when nothing reads it."""
+        its readers, and not at all when nothing reads it; `latched` for what is published
+        once at the start (recorded transient-local)."""
         if not record and topic not in self.readers:
             return
         if self.log is not None and record:
-            self.log.write(topic, m, t_ns)
+            self.log.write(topic, m, t_ns, latched)
+        for tap in self.taps if record else ():
+            tap(topic, m, t_ns, latched)
         self.count += 1
         self.pending.append((topic, m))
         for agent, want in self.readers.get(topic, ()):
@@ -270,12 +280,16 @@ class Session:
         scenario: The validated scenario (see `kartci.load_scenario`).
         log_path: Where to write the MCAP log; None records nothing.
         agents: Agent objects by agent name, replacing those agents' controllers.
+        taps: Called with every message as it is published (topic, message, t_ns, latched),
+            after it is logged: the live view's server is one.
     """
 
     def __init__(self, scenario: Scenario, log_path: Path | None = None,
-                 agents: Mapping[str, object] | None = None) -> None:
+                 agents: Mapping[str, object] | None = None,
+                 taps: tuple[Tap, ...] = ()) -> None:
         """Check the agent objects; nothing is built before `reset()`."""
         self.scenario = scenario
+        self.taps = taps or LIVE_TAPS.get()
         self.log_path = log_path
         self.agents = check_agents(scenario, agents)
         self.replaced = {name: describe(a) for name, a in self.agents.items()}
@@ -325,15 +339,19 @@ class Session:
                 self._log = McapLogWriter(self.log_path)
             bus = self._bus = Bus(self._log, robots, self._nodes)
             self._puts = [bus.putter(r.name) for r in robots]
+            bus.taps = list(self.taps)
             bus.put(SCENARIO_TOPIC, msg("std_msgs/msg/String",
-                                        data=self.scenario.model_dump_json()), 0)
+                                        data=self.scenario.model_dump_json()), 0, True)
             if self.replaced:
                 bus.put(REPLACED_TOPIC, msg("std_msgs/msg/String",
-                                            data=json.dumps(self.replaced, sort_keys=True)), 0)
+                                            data=json.dumps(self.replaced, sort_keys=True)), 0,
+                        True)
             for topic, m in self._world.static_messages():
-                bus.put(topic, m, 0)
+                bus.put(topic, m, 0, True)
+            for topic, m in robot_descriptions(self.scenario):
+                bus.put(topic, m, 0, True)
             bus.put("/tf_static", tf_message([t for r in robots
-                                              for t in r.static_transforms()]), 0)
+                                              for t in r.static_transforms()]), 0, True)
             return self._tick()
         except BaseException:
             self._fail()

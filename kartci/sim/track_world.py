@@ -3,16 +3,13 @@ track and its obstacles at t = 0, and the floor's friction under each wheel."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from kartci.logs import msg
 from kartci.sim.blocks import Block
 from kartci.sim.line_lab import COURSE_TOPIC, path_message
-from kartci.sim.messages import WORLD_FRAME, pose
+from kartci.sim.markers import CUBE, TRACK_MARKERS_TOPIC, array, marker, track_markers
 from kartci.sim.world import World
 from kartci.spec.models import Pose2D, TrackWorldParams, WorldParams
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, load_track
@@ -38,12 +35,16 @@ class TrackWorld(World):
         return x, y, yaw + start.heading_rad
 
     def static_messages(self) -> list[tuple[str, Any]]:
-        """The course, the track itself (the log is self-contained) and the obstacles."""
-        xy = self.track.xy[:: max(1, len(self.track.xy) // 400)]
+        """The course, the track itself (the log is self-contained), the obstacles, and markers
+        of the track for Foxglove and RViz."""
+        step = max(1, len(self.track.xy) // 400)
+        xy = self.track.xy[::step]
+        left, right = (edge[::step] for edge in self.track.bounds())
         return [(COURSE_TOPIC, path_message(xy)),
                 (TRACK_TOPIC, msg("std_msgs/msg/String",
                                   data=self.track_file.read_text(encoding="utf-8"))),
-                (OBSTACLES_TOPIC, obstacle_markers(self.spec.obstacles))]
+                (OBSTACLES_TOPIC, obstacle_markers(self.spec.obstacles)),
+                (TRACK_MARKERS_TOPIC, track_markers(xy, left, right))]
 
     def friction_at(self, x: float, y: float) -> float:
         """Floor friction under a point: the zone it is in, else the world's floor."""
@@ -56,25 +57,6 @@ class TrackWorld(World):
 
 def obstacle_markers(obstacles: Any) -> Any:
     """Static obstacles as CUBE markers (ground truth; Foxglove draws them too)."""
-    stamp = msg("builtin_interfaces/msg/Time", sec=0, nanosec=0)
-    markers = []
-    for i, b in enumerate(obstacles):
-        q = (0.0, 0.0, math.sin(b.yaw_rad / 2), math.cos(b.yaw_rad / 2))
-        markers.append(msg(
-            "visualization_msgs/msg/Marker",
-            header=msg("std_msgs/msg/Header", stamp=stamp, frame_id=WORLD_FRAME),
-            ns="obstacles", id=i, type=1, action=0,
-            pose=pose((b.center_m[0], b.center_m[1], b.size_m[2] / 2), q),
-            scale=msg("geometry_msgs/msg/Vector3", x=b.size_m[0], y=b.size_m[1],
-                      z=b.size_m[2]),
-            color=msg("std_msgs/msg/ColorRGBA", r=0.8, g=0.3, b=0.1, a=1.0),
-            lifetime=msg("builtin_interfaces/msg/Duration", sec=0, nanosec=0),
-            frame_locked=False, points=[], colors=[], texture_resource="",
-            texture=msg("sensor_msgs/msg/CompressedImage",
-                        header=msg("std_msgs/msg/Header", stamp=stamp, frame_id=""),
-                        format="", data=np.zeros(0, np.uint8)),
-            uv_coordinates=[], text="", mesh_resource="",
-            mesh_file=msg("visualization_msgs/msg/MeshFile", filename="",
-                          data=np.zeros(0, np.uint8)),
-            mesh_use_embedded_materials=False))
-    return msg("visualization_msgs/msg/MarkerArray", markers=markers)
+    return array([marker("obstacles", i, CUBE, xyz=(b.center_m[0], b.center_m[1], b.size_m[2] / 2),
+                         yaw_rad=b.yaw_rad, scale=b.size_m, rgba=(0.8, 0.3, 0.1, 1.0))
+                  for i, b in enumerate(obstacles)])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import re
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -92,4 +93,27 @@ def physics_urdf(path: Path) -> Path:
     out = Path(tempfile.gettempdir()) / "kartci-urdf" / f"{path.stem}-{digest}.urdf"
     if not out.exists():  # content-addressed: parallel writers write the same bytes
         write_text_atomic(out, text)
+    return out
+
+
+_LINK_REF = re.compile(r'(<link\s+name=|<parent\s+link=|<child\s+link=)(["\'])([^"\']+)\2')
+
+
+def prefixed_urdf(text: str, namespace: str) -> str:
+    """A URDF whose links are named as the robot's tf frames: `<namespace>/<link>`."""
+    return _LINK_REF.sub(lambda m: f"{m[1]}{m[2]}{namespace}/{m[3]}{m[2]}", text)
+
+
+def robot_descriptions(scenario: Any) -> list[tuple[str, Any]]:
+    """`/<agent>/robot_description` (std_msgs/String, the URDF with tf-prefixed links) of every
+    agent whose model has a URDF: what Foxglove's 3D panel and robot_state_publisher read."""
+    from kartci.logs import msg
+
+    out = []
+    for name, spec in scenario.agents.items():
+        if getattr(spec.model, "urdf", None) is None:
+            continue
+        text = urdf_path(spec.model).read_text(encoding="utf-8")
+        out.append((f"/{name}/robot_description",
+                    msg("std_msgs/msg/String", data=prefixed_urdf(text, name))))
     return out

@@ -157,7 +157,7 @@ def test_baseline_cycle_and_a_tightened_baseline_fails(tmp_path: Path) -> None:
     assert "cross_track_rms_m" in worse.stdout and "regressed" in worse.stdout
     assert (base / "line_straight.json").read_text() == before  # untouched by the run
     html = (out / "report.html").read_text()
-    assert "cross_track_rms_m" in html and 'class="regressed"' in html and "<svg" in html
+    assert "cross_track_rms_m" in html and 'class="regressed"' in html and 'class="kfigs"' in html
     md = (out / "summary.md").read_text()
     assert "`cross_track_rms_m`" in md and "regressed" in md
     summary = json.loads((out / "summary.json").read_text())

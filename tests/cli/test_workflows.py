@@ -69,12 +69,29 @@ def test_actionlint_passes_on_every_workflow(tmp_path: Path) -> None:
     assert p.returncode == 0, p.stdout + p.stderr
 
 
+def _triggers(doc: dict[Any, Any]) -> Any:
+    return doc["on"] if "on" in doc else doc[True]  # YAML 1.1 reads a bare `on` as true
+
+
+COMMENT = "kartci-comment.yml"
+
+
 @pytest.mark.parametrize("name", sorted(TEXTS))
 def test_least_privilege_pinned_actions_and_overwritable_uploads(name: str) -> None:
     doc = _load(TEXTS[name])
-    triggers = doc["on"] if "on" in doc else doc[True]  # YAML 1.1 reads a bare `on` as true
-    assert "pull_request" in triggers and "pull_request_target" not in triggers
-    assert doc["permissions"] == {"contents": "read"}
+    triggers = _triggers(doc)
+    assert "pull_request_target" not in triggers
+    if name == COMMENT:
+        assert set(triggers) == {"workflow_run"} and doc["permissions"] == {}
+    else:  # what runs a pull request's code can read, never write
+        assert "pull_request" in triggers and doc["permissions"] == {"contents": "read"}
+        for job in doc["jobs"].values():  # a job that may write runs on pushes to main only
+            assert "permissions" not in job or (
+                job["permissions"] == {"contents": "write"}
+                and "github.event_name == 'push' && github.ref == 'refs/heads/main'"
+                in job["if"]
+                and not any(s.get("uses", "").startswith("actions/checkout@")
+                            and s["with"].get("ref") for s in job["steps"]))
     steps = [s for job in doc["jobs"].values() for s in job["steps"]]
     assert all(s["with"]["persist-credentials"] is False for s in steps
                if s.get("uses", "").startswith("actions/checkout@"))
@@ -87,6 +104,30 @@ def test_least_privilege_pinned_actions_and_overwritable_uploads(name: str) -> N
         m = re.fullmatch(r"([\w-]+/[\w-]+)@([0-9a-f]{40}) # (v\d+\.\d+\.\d+)", line)
         assert m is not None, f"not pinned by commit with the version in a comment: {line}"
         assert PINS[m.group(1)] == (m.group(2), m.group(3)), line
+
+
+def test_the_comment_workflow_never_runs_the_pull_requests_code() -> None:
+    """The comment job writes pull-request comments only, after "kartci CI", from its report
+    artifact: no checkout, no install, no kartci, no expression in a script."""
+    doc = _load(TEXTS[COMMENT])
+    assert _triggers(doc)["workflow_run"] == {"workflows": [_load(TEXTS["ci.yml"])["name"]],
+                                              "types": ["completed"]}
+    [job] = doc["jobs"].values()
+    assert job["permissions"] == {"actions": "read", "pull-requests": "write"}
+    assert "github.event.workflow_run.event == 'pull_request'" in job["if"]
+    uses = [s["uses"].split("@")[0] for s in job["steps"] if "uses" in s]
+    assert uses == ["actions/download-artifact"]
+    [down] = [s for s in job["steps"] if "uses" in s]
+    merge = _load(TEXTS["ci.yml"])["jobs"]["merge"]["steps"]
+    uploaded = {s["with"]["name"] for s in merge if "upload-artifact" in s.get("uses", "")}
+    assert down["with"]["name"] in uploaded
+    assert down["with"]["run-id"] == "${{ github.event.workflow_run.id }}"
+    scripts = [s["run"] for s in job["steps"] if "run" in s]
+    assert scripts and not any("${{" in r for r in scripts)  # untrusted text: env vars only
+    commands = r"(^|[;&|{]|\$\()\s*(pip3?|python3?|kartci|bash|sh|source|\.|make|npm)\s"
+    assert not re.search(commands, "\n".join(scripts), re.MULTILINE)
+    assert re.search(commands, "x=$(python3 report/x.py)\nkartci run\n", re.MULTILINE)
+    assert all("PATCH" in r and "POST" in r and "<!-- kartci-report -->" in r for r in scripts)
 
 
 def _expand(text: str, values: dict[str, str]) -> str:

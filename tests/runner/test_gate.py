@@ -114,7 +114,8 @@ def test_baseline_update_takes_only_the_last_run_of_a_reused_out(tmp_path: Path,
     assert _run(out, baselines, "line_circle").returncode == 0
     p = kartci("baseline", "update", out, "--baselines", baselines)
     assert p.returncode == 0, p.stderr
-    assert sorted(x.name for x in baselines.iterdir()) == ["line_circle.json"]
+    assert sorted(x.name for x in baselines.glob("*.json")) == ["line_circle.json"]
+    assert sorted(x.name for x in (baselines / "traces").iterdir()) == ["line_circle.json"]
 
 
 def test_a_dangling_baseline_symlink_is_an_error_not_a_pass(tmp_path: Path,
@@ -227,7 +228,8 @@ def test_a_report_that_cannot_be_written_is_exit_2_and_leaves_no_old_report(
     monkeypatch.setattr("kartci.report.report_html", boom)
     with pytest.raises(RunError, match="writing the reports"):
         finish(ok, tmp_path, ci=False)
-    for name in ("report.html", "summary.md", "summary.json", "junit.xml"):
+    for name in ("report.html", "report-static.html", "summary.md", "summary.json",
+                 "junit.xml"):
         assert not (tmp_path / name).exists()
 
 

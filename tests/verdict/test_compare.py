@@ -6,11 +6,11 @@ import json
 from pathlib import Path
 
 import pytest
-from helpers import PAIR, QUICK, kartci
+from helpers import PAIR, QUICK, ROOT, kartci
 from junitparser import JUnitXml
 
 from kartci.metrics.base import Direction
-from kartci.report.ci import annotation_lines, truncate
+from kartci.report.ci import annotation_lines, scenario_files, truncate
 from kartci.report.markdown import summary_md
 from kartci.results import ScenarioResult
 from kartci.verdict import MetricVerdict, Status
@@ -57,7 +57,9 @@ def test_a_worse_head_exits_1_and_every_output_names_the_regression(runs: Path) 
     metric = "cross_track_rms_m"
     html = (out / "report.html").read_text()
     assert "kartci compare report" in html and f"<td>{metric}</td>" in html
-    assert 'class="regressed"' in html and html.count("<svg") == 6  # 3 overlaid plots each
+    assert 'class="regressed"' in html and html.count('class="kfigs"') == 2
+    static = (out / "report-static.html").read_text()
+    assert static.count("<svg") == 6  # 3 overlaid plots each
     md = (out / "summary.md").read_text()
     assert f"`{metric}`" in md and "| base |" in md and "regressed" in md
     assert step_summary.read_text() == "earlier step\n" + md  # appended, not replaced
@@ -70,7 +72,7 @@ def test_a_worse_head_exits_1_and_every_output_names_the_regression(runs: Path) 
         assert sorted((f.message or "").split()[0] for f in c.result) == regressed
     assert all(any(metric in (f.text or "") for f in c.result) for c in cases)
     assert f"report: {out / 'report.html'}" in (cases[0].system_out or "")
-    notes = [line for line in p.stdout.splitlines() if line.startswith("::error title=")]
+    notes = [line for line in p.stdout.splitlines() if line.startswith("::error file=kartci/")]
     assert 0 < len(notes) <= 10 and any(metric in n for n in notes)
 
 
@@ -84,6 +86,16 @@ def test_annotations_stop_at_ten_and_say_how_many_more() -> None:
     assert len(lines) == 11 and lines[-1].startswith("kartci: 2 more")
     assert "m11" in lines[0]  # the largest regression first
     assert "title=kartci s%3A m11 regressed" in lines[0]  # ':' escaped in a property
+
+
+def test_annotations_are_anchored_to_the_scenario_file() -> None:
+    r = ScenarioResult("line_circle@kp=20", "", [_v("m", 2.0, 0.0, 1.0)])
+    files = scenario_files([r], ROOT)
+    assert files == {"line_circle@kp=20": "kartci/data/scenarios/line_circle.yaml"}
+    [line] = annotation_lines([r], files=files)
+    assert line.startswith("::error file=kartci/data/scenarios/line_circle.yaml,line=1,title=")
+    assert scenario_files([r], ROOT / "tests") == {}  # not in that repository: no anchor
+    assert scenario_files([ScenarioResult("no_such", "")], ROOT) == {}
 
 
 def test_summary_puts_the_largest_regression_first_and_truncates_with_a_note() -> None:

@@ -1,5 +1,6 @@
 """What a report draws for a go-kart run: paths on the track, speed, wheel speeds, obstacles,
-MPCC horizons and solve times, read back from the log."""
+MPCC horizons and solve times, and the racing diagnostics (laps and sectors, track-limit margin,
+the driver's commands), read back from the log."""
 
 from __future__ import annotations
 
@@ -9,16 +10,40 @@ import pandas as pd
 from kartci.logs.reader import messages
 from kartci.logs.types import yaw_of
 from kartci.metrics import recorded_track
-from kartci.metrics.kart import kart_track
+from kartci.metrics.kart import crossing_time, kart_track, wheel_margins_m
 from kartci.metrics.race import rect
 from kartci.metrics.trajectory import Trajectory, TrajectoryError, ape_errors, associate
 from kartci.report.data import PlotContext, wheel_series
 from kartci.results import Plots
+from kartci.robots.gokart.params import GokartModel
+from kartci.track import Track
+
+SECTORS = 3
+CONTROLS = ("steering_wheel_angle_rad", "acceleration_mps2", "brake_mps2")
+
+
+def lap_table(track: Track, tr: pd.DataFrame) -> pd.DataFrame:
+    """Each complete lap: its time and the times of its sectors (the track split in three by
+    distance), from the same interpolated line crossings as the lap metrics."""
+    t, total = tr["t"].to_numpy(), tr["s_total"].to_numpy()
+    length = track.length_m
+    rows = []
+    start = 0.0  # the first lap runs from the start of the run, as `lap_times_s` counts it
+    for lap in range(1, int(max(total.max(), 0) // length) + 1):
+        marks = [crossing_time(t, total, (lap - 1) * length + k * length / SECTORS)
+                 for k in range(1, SECTORS)]
+        end = crossing_time(t, total, lap * length)
+        # the first lap's first sector starts at the run's start, like its lap time
+        edges = [start, *(m if m >= start else start for m in marks), end]
+        rows.append({"lap": lap, "time_s": end - start,
+                     **{f"s{k + 1}_s": edges[k + 1] - edges[k] for k in range(SECTORS)}})
+        start = end
+    return pd.DataFrame(rows, columns=["lap", "time_s", *(f"s{k + 1}_s" for k in range(SECTORS))])
 
 
 def kart_plots(ctx: PlotContext) -> Plots:
     """What a go-kart report draws: paths along the recorded track, wheel speeds, collisions,
-    obstacles, a few MPCC horizons and solve times."""
+    obstacles, a few MPCC horizons and solve times, laps and sectors, margins and commands."""
     t, scenario = ctx.tables, ctx.scenario
     track = recorded_track(t, ctx.path)
     tracks = {a: kart_track(track, odom) for a in scenario.agents
@@ -27,7 +52,7 @@ def kart_plots(ctx: PlotContext) -> Plots:
                                                  "rear_right_wheel_joint"))
     obstacles = [rect(b.center_m[0], b.center_m[1], b.size_m[0], b.size_m[1], b.yaw_rad)
                  for b in getattr(scenario.world, "obstacles", ())]
-    horizons, solves = {}, {}
+    horizons, solves, laps, margins, controls = {}, {}, {}, {}, {}
     for agent in scenario.agents:
         plans = t.get(f"/{agent}/mpcc/horizon")
         if plans is not None and len(plans):  # a few moments, evenly spread
@@ -37,8 +62,18 @@ def kart_plots(ctx: PlotContext) -> Plots:
         stats = t.get(f"/{agent}/mpcc/stats")
         if stats is not None:
             solves[agent] = stats[["t", "solve_ms", "success"]]
+        cmd = t.get(f"/{agent}/cmd")
+        if cmd is not None and not cmd.empty:
+            controls[agent] = cmd[["t", *CONTROLS]].reset_index(drop=True)
+        model = scenario.agents[agent].model
+        if agent in tracks and isinstance(model, GokartModel):
+            tr = tracks[agent]
+            laps[agent] = lap_table(track, tr)
+            margins[agent] = pd.DataFrame({"t": tr["t"], "margin_m": wheel_margins_m(
+                track, tr, np.asarray(model.wheel_xy_m))})
     return Plots("track", track.xy, list(track.bounds()), tracks, wheels, commands, collisions,
-                 obstacles=obstacles, horizons=horizons, solves=solves,
+                 obstacles=obstacles, horizons=horizons, solves=solves, laps=laps,
+                 track_length_m=track.length_m, margins=margins, controls=controls,
                  estimates=estimates(ctx), detections=detections(ctx))
 
 

@@ -16,6 +16,7 @@ from kartci.robots.gokart.params import GokartModel, KartSensors
 from kartci.sim import lidar as lidar_mod
 from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
+from kartci.sim.markers import COLLISION_MARKERS, collision_marker
 from kartci.sim.messages import WORLD_FRAME, joint_state, tf_message, transform
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
@@ -78,6 +79,7 @@ class KartRobot(RobotBase):
         self._slip = noise.WheelSlip(sensors.wheels, ctx.rng, ctx.odom_every * dt_s, 4)
         self._scans = 0
         self.contacts: dict[str, _Contact] = {}
+        self.collisions_marked = 0
         self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
 
     def static_transforms(self) -> list[Any]:
@@ -247,6 +249,9 @@ class KartRobot(RobotBase):
                              duration_s=(c.last_ns - c.start_ns) * 1e-9,
                              position=msg("geometry_msgs/msg/Point", x=c.position[0],
                                           y=c.position[1], z=c.position[2])), c.start_ns)
+        put(COLLISION_MARKERS, collision_marker(self.collisions_marked, c.start_ns, other,
+                                                c.position), c.start_ns)
+        self.collisions_marked += 1
 
     def apply(self, topic: str, m: Any) -> None:
         """Commands the kart understands: `cmd` (kartci_msgs/KartCommand, the seed's format),
