@@ -341,17 +341,17 @@ class Session:
             self._puts = [bus.putter(r.name) for r in robots]
             bus.taps = list(self.taps)
             bus.put(SCENARIO_TOPIC, msg("std_msgs/msg/String",
-                                        data=self.scenario.model_dump_json()), 0, True)
+                                        data=self.scenario.model_dump_json()), 0, latched=True)
             if self.replaced:
                 bus.put(REPLACED_TOPIC, msg("std_msgs/msg/String",
                                             data=json.dumps(self.replaced, sort_keys=True)), 0,
-                        True)
+                        latched=True)
             for topic, m in self._world.static_messages():
-                bus.put(topic, m, 0, True)
+                bus.put(topic, m, 0, latched=True)
             for topic, m in robot_descriptions(self.scenario):
-                bus.put(topic, m, 0, True)
+                bus.put(topic, m, 0, latched=True)
             bus.put("/tf_static", tf_message([t for r in robots
-                                              for t in r.static_transforms()]), 0, True)
+                                              for t in r.static_transforms()]), 0, latched=True)
             return self._tick()
         except BaseException:
             self._fail()

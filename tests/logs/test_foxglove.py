@@ -71,7 +71,7 @@ def test_markers_draw_the_track_obstacles_and_collisions(logs: dict[str, Path]) 
     assert len(obstacles.markers) >= 1 and all(m.type == 1 for m in obstacles.markers)
     collisions = msgs["/kart0/collision"]
     marks = [m for a in msgs["/kart0/collision_markers"] for m in a.markers]
-    assert len(collisions) == 2 and len(marks) == 4  # a sphere and a label each
+    assert len(collisions) >= 1 and len(marks) == 2 * len(collisions)  # a sphere and a label
     spheres = [m for m in marks if m.type == 2]
     assert [(s.pose.position.x, s.pose.position.y) for s in spheres] == [
         (c.position.x, c.position.y) for c in collisions]

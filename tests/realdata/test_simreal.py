@@ -57,7 +57,8 @@ def test_simreal_command_writes_a_judged_report(kart_logs: dict[float, Path], ka
     assert m["simreal_ape_window_rmse_m"] <= m["simreal_ape_window_max_m"]
     assert "simreal_speed_rms_mps" in m and "simreal_yaw_rate_rms_radps" in m
     html = (out / "report.html").read_text(encoding="utf-8")
-    assert "sim" in html and "<svg" in html
+    assert "sim, whole log" in html and "sim, windows" in html  # both sim paths drawn
+    assert "<svg" in (out / "report-static.html").read_text(encoding="utf-8")
     # gateable: a baseline at a tenth of this divergence fails it
     assert kartci("baseline", "update", out, "--baselines", baselines).returncode == 0
     path = baselines / "synth_kart_simreal.json"
