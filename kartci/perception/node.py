@@ -72,7 +72,7 @@ class ObstacleDetector:
                               sp.map_clearance_m, sp.max_range_m)
         t_s = stamp * 1e-9
         self.tracker.update(t_s, clusters(pts, sp.cluster_gap_m, sp.min_points))
-        self.tracker.prune(t_s, sp.keep_static_s, sp.keep_dynamic_s)
+        self.tracker.prune(t_s, sp.keep_static_s, sp.keep_dynamic_s, sp.established_hits)
         shown = [tr for tr in self.tracker.tracks if tr.hits >= sp.confirm_hits]
         return [("obstacle_detector/detections", self._detections(stamp, shown)),
                 ("obstacle_detector/markers", self._markers(stamp, shown))]
