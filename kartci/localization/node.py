@@ -52,7 +52,7 @@ class LocalizationNode:
                                             spec.max_correspondence_m, spec.max_iterations,
                                             spec.vgicp_voxel_m)
         self.ekf: PlanarEkf | None = None
-        self.dead_reckoning = np.zeros(3)  # odom -> base_link: wheels and gyro only
+        self.dead_reckoning = np.zeros(3)  # odom -> base_link: wheels, gyro, filtered vy
         self.v_mps = self.w_radps = 0.0
         self.w_prev: float | None = None  # the last corrected yaw rate: yaw acceleration
         self.t_imu_ns: int | None = None
