@@ -18,7 +18,7 @@ import numpy as np
 from kartci import project
 from kartci.agents.base import Outbox
 from kartci.localization.deskew import deskew
-from kartci.localization.ekf import Noise, PlanarEkf, wrap
+from kartci.localization.ekf import BIAS, VY, Noise, PlanarEkf, wrap
 from kartci.localization.params import LocalizationParams
 from kartci.localization.registration import MapMatcher, Match, pose_matrix
 from kartci.logs.types import WORLD_FRAME, header, msg, stamp_ns
@@ -46,13 +46,15 @@ class LocalizationNode:
         self.wheel_radius_m = ctx.model.rear_wheel_radius_m
         self.inputs = (TRACK_TOPIC, "/tf_static", "imu", "joint_states", "velodyne_points")
         self.mount = np.array([0.0, 0.0, spec.sensor_height_m])  # velodyne_link in base_link
+        self.imu_xy = np.zeros(2)  # imu_link in base_link, from /tf_static (lever arm)
         self.z_m = 0.0  # base_link's height, from registration
         self.matcher = MapMatcher.from_file(map_path(spec.map), spec.map_voxel_m, spec.method,
                                             spec.max_correspondence_m, spec.max_iterations,
                                             spec.vgicp_voxel_m)
         self.ekf: PlanarEkf | None = None
-        self.dead_reckoning = np.zeros(3)  # odom -> base_link: wheels and gyro only
+        self.dead_reckoning = np.zeros(3)  # odom -> base_link: wheels, gyro, filtered vy
         self.v_mps = self.w_radps = 0.0
+        self.w_prev: float | None = None  # the last corrected yaw rate: yaw acceleration
         self.t_imu_ns: int | None = None
         self.scan: tuple[int, np.ndarray] | None = None
         self.scans = 0
@@ -66,16 +68,19 @@ class LocalizationNode:
             self._start(track_from_text(message.data, TRACK_TOPIC))
         elif topic == "/tf_static":
             for tf in message.transforms:
+                t = tf.transform.translation
                 if tf.child_frame_id == f"{self.ns}/velodyne_link":
-                    t = tf.transform.translation
                     self.mount = np.array([t.x, t.y, t.z])
+                elif tf.child_frame_id == f"{self.ns}/imu_link":
+                    self.imu_xy = np.array([t.x, t.y])
         elif topic == "joint_states":
             names = list(message.name)
             if all(n in names for n in REAR):
                 self.v_mps = self.wheel_radius_m * float(np.mean(
                     [message.velocity[names.index(n)] for n in REAR]))
         elif topic == "imu":
-            self._predict(stamp_ns(message.header), float(message.angular_velocity.z))
+            self._predict(stamp_ns(message.header), float(message.angular_velocity.z),
+                          float(message.linear_acceleration.y))
         elif topic == "velodyne_points":
             self.scan = (stamp_ns(message.header), cloud_xyz(message))
 
@@ -86,18 +91,27 @@ class LocalizationNode:
         self.ekf = PlanarEkf(x + g.error_xy_m[0], y + g.error_xy_m[1], yaw + g.error_yaw_rad,
                              g.std_xy_m, g.std_yaw_rad,
                              Noise(s.wheel_speed_std_mps, s.gyro_std_radps,
-                                   s.gyro_bias_walk_radps_per_sqrt_s, s.lateral_slip_std_mps))
+                                   s.gyro_bias_walk_radps_per_sqrt_s, s.accel_std_mps2))
 
-    def _predict(self, t_ns: int, gyro_radps: float) -> None:
+    def _predict(self, t_ns: int, gyro_radps: float, accel_y_mps2: float) -> None:
+        """One IMU sample: the lateral acceleration moved from imu_link to base_link
+        (a_base = a_imu - yaw accel x lever - centripetal), then the filter's prediction."""
         if self.ekf is None:
             return
         dt = 0.0 if self.t_imu_ns is None else (t_ns - self.t_imu_ns) * 1e-9
         self.t_imu_ns = t_ns
-        self.ekf.predict(self.v_mps, gyro_radps, dt)
-        self.w_radps = gyro_radps - float(self.ekf.s[3])
+        w = gyro_radps - float(self.ekf.s[BIAS])
+        alpha = 0.0 if self.w_prev is None or dt <= 0 else (w - self.w_prev) / dt
+        self.w_prev = w
+        rx, ry = self.imu_xy
+        lat_accel = accel_y_mps2 - alpha * rx + w * w * ry
+        self.ekf.predict(self.v_mps, gyro_radps, dt, lat_accel)
+        self.w_radps = gyro_radps - float(self.ekf.s[BIAS])
+        vy = float(self.ekf.s[VY])
         x, y, yaw = self.dead_reckoning
-        self.dead_reckoning = np.array([x + self.v_mps * math.cos(yaw) * dt,
-                                        y + self.v_mps * math.sin(yaw) * dt,
+        c, s = math.cos(yaw), math.sin(yaw)
+        self.dead_reckoning = np.array([x + (self.v_mps * c - vy * s) * dt,
+                                        y + (self.v_mps * s + vy * c) * dt,
                                         wrap(yaw + self.w_radps * dt)])
 
     def step(self, t_ns: int) -> Outbox:
@@ -120,13 +134,15 @@ class LocalizationNode:
         far = np.einsum("ij,ij->i", xyz[:, :2], xyz[:, :2]) >= s.min_range_m**2
         xyz = xyz[far & np.isfinite(xyz).all(axis=1)]
         if s.deskew:
-            xyz = deskew(xyz, self.v_mps, self.w_radps, SCAN_RATE_HZ)
+            mx, my, _ = self.mount  # the sensor's own velocity: base_link's + w x mount
+            xyz = deskew(xyz, self.v_mps - self.w_radps * my, self.w_radps, SCAN_RATE_HZ,
+                         float(self.ekf.s[VY]) + self.w_radps * mx)
         self.scans += 1
         out: Outbox = []
         if (self.scans - 1) % s.cloud_every == 0:
             out.append(("localization/cloud", _cloud(t_ns, f"{self.ns}/velodyne_link", xyz)))
         if s.registration:
-            x, y, yaw, _ = self.ekf.s
+            x, y, yaw = self.ekf.s[:3]
             c, sn = math.cos(yaw), math.sin(yaw)
             mx, my, mz = self.mount
             guess = pose_matrix(x + c * mx - sn * my, y + sn * mx + c * my, self.z_m + mz, yaw)
@@ -162,29 +178,29 @@ class LocalizationNode:
 
     def _odometry(self, t_ns: int) -> Any:
         assert self.ekf is not None
-        x, y, yaw, _ = self.ekf.s
+        x, y, yaw, vy = self.ekf.s[:4]
         P = self.ekf.P
         pose_cov = np.zeros((6, 6))
         pose_cov[np.ix_([0, 1, 5], [0, 1, 5])] = P[:3, :3]
         pose_cov[2, 2] = pose_cov[3, 3] = pose_cov[4, 4] = 1e-4  # flat floor: z, roll, pitch
         twist_cov = np.zeros((6, 6))
         twist_cov[0, 0] = (self.spec.wheel_speed_std_mps + 0.05 * abs(self.v_mps)) ** 2
-        twist_cov[1, 1] = self.spec.lateral_slip_std_mps**2
-        twist_cov[5, 5] = self.spec.gyro_std_radps**2 + P[3, 3]
+        twist_cov[1, 1] = P[VY, VY]
+        twist_cov[5, 5] = self.spec.gyro_std_radps**2 + P[BIAS, BIAS]
         return msg("nav_msgs/msg/Odometry", header=header(t_ns, WORLD_FRAME),
                    child_frame_id=f"{self.ns}/localization/base_link",
                    pose=msg("geometry_msgs/msg/PoseWithCovariance",
                             pose=_pose(x, y, self.z_m, yaw), covariance=pose_cov.ravel()),
                    twist=msg("geometry_msgs/msg/TwistWithCovariance",
                              twist=msg("geometry_msgs/msg/Twist",
-                                       linear=_vec(self.v_mps, 0.0, 0.0),
+                                       linear=_vec(self.v_mps, vy, 0.0),
                                        angular=_vec(0.0, 0.0, self.w_radps)),
                              covariance=twist_cov.ravel()))
 
     def _tf(self, t_ns: int) -> Any:
         """map -> odom (the registration's correction), odom -> base_link (dead reckoning)."""
         assert self.ekf is not None
-        x, y, yaw, _ = self.ekf.s
+        x, y, yaw = self.ekf.s[:3]
         ox, oy, oyaw = self.dead_reckoning
         c_yaw = wrap(yaw - oyaw)  # map <- odom = map <- base * (odom <- base)^-1
         c, s = math.cos(c_yaw), math.sin(c_yaw)

@@ -76,8 +76,9 @@ class LocalizationParams(NodeParams):
                                   "rad/s")
     gyro_bias_walk_radps_per_sqrt_s: float = Field(0.001, gt=0.0, description="the filter's "
                                                    "model of the gyro bias random walk")
-    lateral_slip_std_mps: float = Field(0.1, ge=0.0, description="sideways slip sigma in the "
-                                        "prediction, m/s")
+    accel_std_mps2: float = Field(0.8, gt=0.0, description="accelerometer sigma per sample in "
+                                  "the lateral-velocity prediction, m/s^2 (the kart's IRIMU-V2: "
+                                  "1% of its 8 g range, Table 3.6)")
     sensor_height_m: float = Field(1.154, description="velodyne_link above base_link, m, "
                                    "until /tf_static says (the registration's initial z)")
     cloud_every: int = Field(10, ge=1, description="publish every Nth deskewed scan "

@@ -38,7 +38,7 @@ class ObstacleDetector:
         self.mask = MapMask(read_ply(map_path(spec.map)), spec.ground_m, spec.top_m)
         self.tracker = Tracker(spec.gate_m, spec.dynamic_mps, spec.dynamic_m)
         self.mount = np.array([0.0, 0.0, spec.sensor_height_m])
-        self.pose: tuple[float, float, float, float, float, float] | None = None
+        self.pose: tuple[float, float, float, float, float, float, float] | None = None
         self.scan: tuple[int, np.ndarray] | None = None
 
     def on_message(self, topic: str, message: Any) -> None:
@@ -51,7 +51,7 @@ class ObstacleDetector:
         elif topic == self.spec.pose_topic:
             p, tw = message.pose.pose.position, message.twist.twist
             self.pose = (p.x, p.y, p.z, yaw_of(message.pose.pose.orientation),
-                         float(tw.linear.x), float(tw.angular.z))
+                         float(tw.linear.x), float(tw.linear.y), float(tw.angular.z))
         elif topic == "velodyne_points":
             self.scan = (stamp_ns(message.header), cloud_xyz(message))
 
@@ -61,8 +61,9 @@ class ObstacleDetector:
             return []
         stamp, xyz = self.scan
         self.scan = None
-        x, y, z, yaw, v, w = self.pose
-        xyz = deskew(xyz[np.isfinite(xyz).all(axis=1)], v, w, SCAN_RATE_HZ) + self.mount
+        x, y, z, yaw, v, vy, w = self.pose
+        xyz = deskew(xyz[np.isfinite(xyz).all(axis=1)], v - w * self.mount[1], w, SCAN_RATE_HZ,
+                     vy + w * self.mount[0]) + self.mount
         c, s = math.cos(yaw), math.sin(yaw)
         world = np.column_stack([x + c * xyz[:, 0] - s * xyz[:, 1],
                                  y + s * xyz[:, 0] + c * xyz[:, 1], z + xyz[:, 2]])
@@ -71,7 +72,7 @@ class ObstacleDetector:
                               sp.map_clearance_m, sp.max_range_m)
         t_s = stamp * 1e-9
         self.tracker.update(t_s, clusters(pts, sp.cluster_gap_m, sp.min_points))
-        self.tracker.prune(t_s, sp.keep_static_s, sp.keep_dynamic_s)
+        self.tracker.prune(t_s, sp.keep_static_s, sp.keep_dynamic_s, sp.established_hits)
         shown = [tr for tr in self.tracker.tracks if tr.hits >= sp.confirm_hits]
         return [("obstacle_detector/detections", self._detections(stamp, shown)),
                 ("obstacle_detector/markers", self._markers(stamp, shown))]

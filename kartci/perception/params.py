@@ -41,3 +41,7 @@ class DetectorParams(NodeParams):
                                  "is dropped, s (a box the beams pass over when close)")
     keep_dynamic_s: float = Field(0.5, ge=0.0, description="a dynamic track unseen this long "
                                   "is dropped, s")
+    established_hits: int = Field(10, ge=1, description="a static track seen in fewer scans "
+                                  "is dropped like a dynamic one: fragments of a passing kart "
+                                  "(seen a few scans) must not stay as boxes for keep_static_s; "
+                                  "a real box is seen for seconds before the kart is close")

@@ -73,10 +73,12 @@ class Tracker:
         tr.moved = tr.moved or (tr.speed_mps > self.dynamic_mps and float(
             np.hypot(*(tr.xy - tr.origin))) > self.dynamic_m)
 
-    def prune(self, t_s: float, keep_static_s: float, keep_dynamic_s: float) -> None:
-        """Drop tracks unseen for too long (dynamic ones sooner)."""
+    def prune(self, t_s: float, keep_static_s: float, keep_dynamic_s: float,
+              established_hits: int = 1) -> None:
+        """Drop tracks unseen for too long: dynamic ones and static ones seen in fewer than
+        `established_hits` scans sooner."""
         self.tracks = [tr for tr in self.tracks if t_s - tr.t_s <= (
-            keep_dynamic_s if tr.moved else keep_static_s)]
+            keep_dynamic_s if tr.moved or tr.hits < established_hits else keep_static_s)]
 
     def heading(self, tr: Track) -> float:
         """A moving track's heading is its velocity's; a static one's its box's."""

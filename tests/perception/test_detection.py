@@ -66,6 +66,25 @@ def test_tracks_tell_moving_from_standing() -> None:
     assert tr.heading(by_x[0]) == pytest.approx(math.pi / 2, abs=0.1)
 
 
+def test_a_briefly_seen_fragment_is_dropped_sooner_than_an_established_box() -> None:
+    """A box seen for 2 s and a fragment seen in 3 scans, both then unseen for 1 s: with
+    `established_hits` 10 the fragment goes after keep_dynamic_s (0.5 s), the box stays for
+    keep_static_s (3 s); with 1 (no distinction) both stay."""
+    def tracker(established: int) -> list[float]:
+        tr = Tracker(1.0, 0.5, 1.0)
+        for k in range(20):
+            boxes = [box(_faces(5.0, 0.0, 0.5, 0.5, 0.0))]
+            if k < 3:
+                boxes.append(box(_faces(0.0, 5.0, 0.5, 0.5, 0.0)))
+            tr.update(0.1 * k, boxes)
+        tr.update(2.9, [])
+        tr.prune(2.9, 3.0, 0.5, established)
+        return sorted(round(float(track.xy[0]), 1) for track in tr.tracks)
+
+    assert tracker(10) == [5.0]
+    assert tracker(1) == [0.0, 5.0]
+
+
 def test_detection_tally_by_hand() -> None:
     """Truth: two static boxes in range, one far away, one dynamic kart in range. Detections:
     one static box 0.2 m off, the kart called static, one ghost."""
