@@ -101,7 +101,3 @@ class PlanarEkf:
         self.P[:3, 3:] = 0.0
         self.P[3:, :3] = 0.0
 
-    def shift(self, dx: float, dy: float) -> None:
-        """Move the estimate without touching P (a kidnap the filter is not told about)."""
-        self.s[0] += dx
-        self.s[1] += dy

@@ -59,7 +59,6 @@ class LocalizationNode:
         self.scan: tuple[int, np.ndarray] | None = None
         self.scans = 0
         self.outliers: list[np.ndarray] = []
-        self.kidnapped = False
 
     def on_message(self, topic: str, message: Any) -> None:
         """Track: start the filter at the guess; joint states: wheel speed; IMU: predict;
@@ -119,10 +118,6 @@ class LocalizationNode:
         if self.ekf is None:
             return []
         out: Outbox = []
-        k = self.spec.kidnap
-        if k is not None and not self.kidnapped and t_ns * 1e-9 >= k.at_s:
-            self.kidnapped = True
-            self.ekf.shift(*k.offset_m)
         if self.scan is not None:
             out += self._register(*self.scan)
             self.scan = None

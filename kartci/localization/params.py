@@ -23,16 +23,6 @@ class InitialGuess(Frozen):
                                "rad")
 
 
-class Kidnap(Frozen):
-    """A robustness test: at `at_s` the filter's estimate is displaced by `offset_m` without
-    its knowledge (the kart's belief is carried away; equivalent for the estimator to the kart
-    being carried while its belief stays)."""
-
-    at_s: float = Field(gt=0.0, description="sim time of the displacement, s")
-    offset_m: tuple[float, float] = Field((0.0, 1.0), description="displacement of the "
-                                          "estimate (x, y), m, map frame")
-
-
 class LocalizationParams(NodeParams):
     """Lidar + IMU + wheel-odometry localization against the world's map."""
 
@@ -84,5 +74,3 @@ class LocalizationParams(NodeParams):
     cloud_every: int = Field(10, ge=1, description="publish every Nth deskewed scan "
                              "(`localization/cloud`) to the log")
     initial: InitialGuess = Field(InitialGuess(), description="the initial guess")
-    kidnap: Kidnap | None = Field(None, description="displace the estimate once (robustness "
-                                  "scenario)")

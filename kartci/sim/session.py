@@ -303,6 +303,7 @@ class Session:
         self._bus: Bus | None = None
         self._puts: list[Put] = []
         self._nodes: dict[str, list[NodeRun]] = {}
+        self._carried: set[str] = set()
         self._started = self._closed = self._failed = False
 
     @property
@@ -335,6 +336,11 @@ class Session:
                                       self.log_path.parent if self.log_path else None)
             self._nodes = build_nodes(self.scenario)
             robots = self._world.robots
+            for r in robots:
+                if self.scenario.agents[r.name].carry is not None and not (
+                        hasattr(r, "reinitialise") and hasattr(r, "body")):
+                    raise SpecError(f"agents.{r.name}.carry: a {type(r).__name__} cannot be "
+                                    "re-placed mid-run (it has no reinitialise())")
             if self.log_path is not None:
                 self._log = McapLogWriter(self.log_path)
             bus = self._bus = Bus(self._log, robots, self._nodes)
@@ -385,6 +391,7 @@ class Session:
         """Sense and control at the current step; ends the run when it is over."""
         k, t_ns = self.k, self.t_ns
         for r, put in zip(self.world.robots, self._puts, strict=True):
+            self._carry(r, t_ns)
             r.sense(k, t_ns, put)
             for node in self._nodes.get(r.name, ()):
                 if k % node.every == 0:
@@ -402,6 +409,18 @@ class Session:
             self._finish()
         assert self._bus is not None
         return StepResult(k, t_ns, self._bus.take(), self.done, self.finished_course)
+
+    def _carry(self, r: Robot, t_ns: int) -> None:
+        """Carry a robot whose `carry` time has come: its pose jumps, its speed and yaw rate are
+        kept; its sensors and agents are not told."""
+        c = self.scenario.agents[r.name].carry
+        if c is None or r.name in self._carried or t_ns < round(c.at_s * 1e9):
+            return
+        self._carried.add(r.name)
+        st = r.body.state()  # type: ignore[attr-defined]  # checked in reset()
+        x, y, _ = st.xyz
+        r.reinitialise(x + c.offset_m[0], y + c.offset_m[1],  # type: ignore[attr-defined]
+                       st.yaw + c.yaw_rad, st.v_body[0], st.w_body[2])
 
     def _finish(self) -> None:
         for r, put in zip(self.world.robots, self._puts, strict=True):

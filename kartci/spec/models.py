@@ -219,6 +219,15 @@ class Pose2D(Frozen):
                                "that point, rad; counter-clockwise is positive")
 
 
+class Carry(Frozen):
+    """The robot carried once, without its knowledge (a kidnap): its pose jumps, its motion
+    is kept."""
+
+    at_s: float = Field(ge=0.0, description="when, sim time, s")
+    offset_m: tuple[float, float] = Field(description="the jump (x, y) in the world frame, m")
+    yaw_rad: float = Field(0.0, description="turned by this much too, rad")
+
+
 class AgentSpec(Frozen):
     """One robot in the scenario: its model, its controller, where it starts, its sensors."""
 
@@ -234,6 +243,8 @@ class AgentSpec(Frozen):
     nodes: dict[str, SerializeAsAny[NodeParams]] = Field(
         {}, description="nodes beside the controller (localization, obstacle_detector, ...): "
         "{NAME: {...}}, each a registered node and its parameters (`kartci plugins`)")
+    carry: Carry | None = Field(None, description="carry the robot once mid-run (a kidnap): "
+                                "for robots that can be re-placed (go-kart, line tracker)")
 
 
 # --- scenario ---------------------------------------------------------------------------------

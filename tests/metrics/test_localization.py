@@ -81,7 +81,7 @@ def test_metrics_equal_evo_on_the_runs_trajectories(lap: tuple[Path, dict[str, M
 def test_kidnap_without_registration_is_a_regression(tmp_path: Path) -> None:
     """The kidnap scenario, shortened; the same with registration turned off: the estimate
     never comes back, and the comparison (what `kartci compare` judges with) says regressed."""
-    short = ["duration_s=2.5", "agents.kart0.nodes.localization.kidnap.at_s=1"]
+    short = ["duration_s=2.5", "agents.kart0.carry.at_s=1"]
     b = _run(tmp_path / "base", "localization_kidnap", short)
     h = _run(tmp_path / "head", "localization_kidnap",
              [*short, "agents.kart0.nodes.localization.registration=false"])
