@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
-
-import numpy as np
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from kartci.verdict import CriterionResult, MetricVerdict, Status, worst
+
+if TYPE_CHECKING:  # the report data's types; a verdict needs neither library
+    import numpy as np
+    import pandas as pd
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from kartci.cli.common import (
     strict_mode,
 )
 from kartci.errors import SpecError
-from kartci.runner.executors import ExecutorKind
+from kartci.runner.kinds import ExecutorKind
 
 
 @contextmanager

@@ -8,17 +8,18 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from kartci import plugins
 from kartci.errors import LogError
-from kartci.logs import tables
 from kartci.metrics.base import Direction, Metric, MetricDef
 from kartci.spec import Scenario, scenario_from_json
 from kartci.spec.models import MetricParams
-from kartci.track import TRACK_TOPIC, Track, track_from_text
+
+if TYPE_CHECKING:  # pandas, the log readers and scipy load when a log is scored, not before
+    import pandas as pd
+
+    from kartci.track import Track
 
 T = TypeVar("T")
 
@@ -94,6 +95,8 @@ def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
 
 def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
     """The track a run log recorded on /kartci/track, so laps are scored from the log alone."""
+    from kartci.track import TRACK_TOPIC, track_from_text
+
     table = log_tables.get(TRACK_TOPIC)
     if table is None or getattr(table, "empty", True):
         raise LogError(f"{path}: no {TRACK_TOPIC} message; cannot score laps")
@@ -102,6 +105,8 @@ def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
 
 def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
     """All metrics of a run log, keyed by name (single agent) or `agent.name` (several)."""
+    from kartci.logs import tables
+
     log_tables = tables(log_path)
     scenario = recorded_scenario(log_tables, log_path)
     many = len(scenario.agents) > 1

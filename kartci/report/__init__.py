@@ -3,15 +3,31 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from kartci.atomic import write_text_atomic
-from kartci.report.html import report_html
-from kartci.report.junit import junit_xml
-from kartci.report.markdown import summary_md
+from kartci.atomic import write_json_atomic, write_text_atomic
 from kartci.report.tables import COMPARE, RUN, Wording
 from kartci.results import ScenarioResult, exit_code
-from kartci.verdict import write_json_atomic
+
+if TYPE_CHECKING:
+    from kartci.report.html import report_html
+    from kartci.report.junit import junit_xml
+    from kartci.report.markdown import summary_md
+
+
+def __getattr__(name: str) -> Any:
+    """The writers load on first use (report_html brings matplotlib and the figures), so a
+    command that prints a table starts fast."""
+    if name == "report_html":
+        from kartci.report.html import report_html
+        return report_html
+    if name == "junit_xml":
+        from kartci.report.junit import junit_xml
+        return junit_xml
+    if name == "summary_md":
+        from kartci.report.markdown import summary_md
+        return summary_md
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
@@ -58,6 +74,10 @@ def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN,
              "json": out / "summary.json", "junit": out / "junit.xml"}
     for path in paths.values():
         path.unlink(missing_ok=True)
+    from kartci.report.html import report_html
+    from kartci.report.junit import junit_xml
+    from kartci.report.markdown import summary_md
+
     write_text_atomic(paths["html"], report_html(results, words,
                                                  history=_history(results, history)))
     write_text_atomic(paths["static"], report_html(results, words, static=True))

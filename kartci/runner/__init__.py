@@ -1,18 +1,43 @@
-"""Running many scenarios: validate, simulate, score, judge; serial, pooled, sharded or on Ray."""
+"""Running many scenarios: validate, simulate, score, judge; serial, pooled, sharded or on Ray.
 
-from kartci.runner.executors import Event, EventKind, ExecutorKind
-from kartci.runner.jobs import Job, Outcome, expand, parse_shard, shard
-from kartci.runner.run import (
-    ERROR_NAME,
-    LOG_NAME,
-    default_baselines,
-    evaluate,
-    rescore,
-    run_one,
-    scenario_folders,
-    score,
-)
-from kartci.runner.suite import run_jobs
+The names below load their module on first use, so `kartci --help` or `kartci.runner.kinds`
+does not import the simulator."""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from kartci.runner.executors import Event, EventKind
+    from kartci.runner.jobs import Job, Outcome, expand, parse_shard, shard
+    from kartci.runner.kinds import ExecutorKind
+    from kartci.runner.run import (
+        ERROR_NAME,
+        LOG_NAME,
+        default_baselines,
+        evaluate,
+        rescore,
+        run_one,
+        scenario_folders,
+        score,
+    )
+    from kartci.runner.suite import run_jobs
+
+_WHERE = {"Event": "executors", "EventKind": "executors", "ExecutorKind": "kinds",
+          "Job": "jobs", "Outcome": "jobs", "expand": "jobs", "parse_shard": "jobs",
+          "shard": "jobs", "ERROR_NAME": "run", "LOG_NAME": "run", "default_baselines": "run",
+          "evaluate": "run", "rescore": "run", "run_one": "run", "scenario_folders": "run",
+          "score": "run", "run_jobs": "suite"}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported from its module on first use."""
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"kartci.runner.{where}"), name)
+
 
 __all__ = ["ERROR_NAME", "LOG_NAME", "Event", "EventKind", "ExecutorKind", "Job", "Outcome",
            "default_baselines", "evaluate", "expand", "parse_shard", "rescore", "run_jobs",

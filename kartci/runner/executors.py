@@ -25,16 +25,10 @@ from enum import StrEnum
 from typing import Any
 
 from kartci.runner.jobs import Context, Job, Outcome, run_job
+from kartci.runner.kinds import ExecutorKind
 from kartci.runner.run import STAGE_PREFIX, mark_failed
 
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
-
-
-class ExecutorKind(StrEnum):
-    """Where jobs run (`--executor`)."""
-
-    LOCAL = "local"  # this process with -j 1, a process pool with -j N
-    RAY = "ray"  # one Ray task per job, local Ray or a cluster
 
 
 class EventKind(StrEnum):

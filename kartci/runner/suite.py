@@ -6,8 +6,9 @@ import shutil
 from pathlib import Path
 
 from kartci.results import ScenarioResult
-from kartci.runner.executors import Event, ExecutorKind, Listener, execute
+from kartci.runner.executors import Event, Listener, execute
 from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome
+from kartci.runner.kinds import ExecutorKind
 
 
 def _ignore(_: Event) -> None:
