@@ -225,7 +225,7 @@ def test_a_report_that_cannot_be_written_is_exit_2_and_leaves_no_old_report(
     def boom(*args: object) -> str:
         raise ValueError("cannot draw")
 
-    monkeypatch.setattr("kartci.report.report_html", boom)
+    monkeypatch.setattr("kartci.report.html.report_html", boom)
     with pytest.raises(RunError, match="writing the reports"):
         finish(ok, tmp_path, ci=False)
     for name in ("report.html", "report-static.html", "summary.md", "summary.json",
