@@ -17,7 +17,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar
 
 from kartci.agents.base import Agent
 from kartci.errors import SpecError
@@ -71,42 +71,44 @@ class AgentContext:
     run_dir: Path | None = None  # where the run's files go (a controller's own output files)
 
 
+P = TypeVar("P", ControllerParams, NodeParams)
+
+
 @dataclass(frozen=True)
-class Controller:
-    """A controller type: its parameter model and a factory `(params, context) -> Agent`."""
+class _AgentType(Generic[P]):
+    """What controllers and nodes share: a parameter model, a factory
+    `(params, context) -> Agent` and the robot kinds it works with (empty: any)."""
 
     name: str
-    params: type[ControllerParams]
+    params: type[P]
     factory: Callable[[Any, AgentContext], Agent]
-    robots: tuple[str, ...] = ()  # robot kinds it can drive; empty: any
+    robots: tuple[str, ...] = ()
     description: str = ""
+    works_on: ClassVar[str] = "works with"  # the verb of the wrong-robot error
 
-    def build(self, params: ControllerParams, ctx: AgentContext) -> Agent:
-        """The agent for one robot; a SpecError when the controller cannot drive its kind."""
+    def build(self, params: P, ctx: AgentContext) -> Agent:
+        """The agent for one robot; a SpecError when it cannot work with that robot's kind."""
         if self.robots and ctx.model.kind not in self.robots:
-            raise SpecError(f"agent {ctx.name}: controller {self.name} drives "
-                            f"{' or '.join(self.robots)} robots, not {ctx.model.kind}")
+            raise SpecError(f"agent {ctx.name}: {type(self).__name__.lower()} {self.name} "
+                            f"{self.works_on} {' or '.join(self.robots)} robots, not "
+                            f"{ctx.model.kind}")
         return self.factory(params, ctx)
 
 
 @dataclass(frozen=True)
-class Node:
+class Controller(_AgentType[ControllerParams]):
+    """A controller type: what drives a robot (`agents.<name>.controller: {type: NAME}`)."""
+
+    works_on: ClassVar[str] = "drives"
+
+
+@dataclass(frozen=True)
+class Node(_AgentType[NodeParams]):
     """A node type: a helper that runs beside a robot's controller (localization, a detector),
     as an `Agent` in the robot's namespace, stepped before the controller at the same tick so
     the controller reads its output. A scenario lists them: `agents.<name>.nodes: {NAME: {...}}`."""
 
-    name: str
-    params: type[NodeParams]
-    factory: Callable[[Any, AgentContext], Agent]
-    robots: tuple[str, ...] = ()  # robot kinds it runs on; empty: any
-    description: str = ""
-
-    def build(self, params: NodeParams, ctx: AgentContext) -> Agent:
-        """The node's agent for one robot; a SpecError when it cannot run on that kind."""
-        if self.robots and ctx.model.kind not in self.robots:
-            raise SpecError(f"agent {ctx.name}: node {self.name} runs on "
-                            f"{' or '.join(self.robots)} robots, not {ctx.model.kind}")
-        return self.factory(params, ctx)
+    works_on: ClassVar[str] = "runs on"
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,7 @@ from kartci.sim.messages import tf_message
 from kartci.sim.robot import Put, Robot, RobotContext, SimWorld
 from kartci.sim.urdf import robot_descriptions
 from kartci.spec import Scenario
+from kartci.spec.models import Carry
 
 SCENARIO_TOPIC = "/kartci/scenario"
 REPLACED_TOPIC = "/kartci/replaced_agents"  # std_msgs/String, JSON {agent: "module.Class"}
@@ -303,7 +304,7 @@ class Session:
         self._bus: Bus | None = None
         self._puts: list[Put] = []
         self._nodes: dict[str, list[NodeRun]] = {}
-        self._carried: set[str] = set()
+        self._carries: dict[str, Carry] = {}  # robots still to be carried, by name
         self._started = self._closed = self._failed = False
 
     @property
@@ -336,9 +337,11 @@ class Session:
                                       self.log_path.parent if self.log_path else None)
             self._nodes = build_nodes(self.scenario)
             robots = self._world.robots
+            self._carries = {r.name: c for r in robots
+                             if (c := self.scenario.agents[r.name].carry) is not None}
             for r in robots:
-                if self.scenario.agents[r.name].carry is not None and not (
-                        hasattr(r, "reinitialise") and hasattr(r, "body")):
+                if r.name in self._carries and not (hasattr(r, "reinitialise")
+                                                    and hasattr(r, "body")):
                     raise SpecError(f"agents.{r.name}.carry: a {type(r).__name__} cannot be "
                                     "re-placed mid-run (it has no reinitialise())")
             if self.log_path is not None:
@@ -413,10 +416,10 @@ class Session:
     def _carry(self, r: Robot, t_ns: int) -> None:
         """Carry a robot whose `carry` time has come: its pose jumps, its speed and yaw rate are
         kept; its sensors and agents are not told."""
-        c = self.scenario.agents[r.name].carry
-        if c is None or r.name in self._carried or t_ns < round(c.at_s * 1e9):
+        c = self._carries.get(r.name)
+        if c is None or t_ns < round(c.at_s * 1e9):
             return
-        self._carried.add(r.name)
+        del self._carries[r.name]
         st = r.body.state()  # type: ignore[attr-defined]  # checked in reset()
         x, y, _ = st.xyz
         r.reinitialise(x + c.offset_m[0], y + c.offset_m[1],  # type: ignore[attr-defined]
