@@ -53,6 +53,9 @@ class ScenarioResult:
     error: str | None = None
     run: dict[str, Any] = field(default_factory=dict)  # sim_time_s, wall_s, rtf, log
     plots: Plots | None = None
+    # the plots drawn as SVG for report-static.html, where the run was judged: in a worker with
+    # -j N, so that drawing them overlaps other runs instead of following the last one
+    static_figures: tuple[str, ...] | None = None
     # gate failures beyond metrics and criteria (strict mode: no baseline, a metric not in it)
     problems: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()  # worth a reader's attention, not a failure

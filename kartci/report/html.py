@@ -10,7 +10,7 @@ from kartci.report.figures import scenario_figures
 from kartci.report.interactive import body_assets, figures_block, head_assets
 from kartci.report.laps import lap_tables
 from kartci.report.markdown import VERDICT_WORD
-from kartci.report.static import figure_svg
+from kartci.report.static import scenario_svgs
 from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code
 
@@ -67,11 +67,11 @@ def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
         out.append("</table>")
     if r.plots is not None:
         out.append(lap_tables(r.plots))
-        figures = scenario_figures(r.plots)
         if static:
-            out.append('<div class="figs">' + "".join(figure_svg(f) for f in figures) + "</div>")
+            svgs = r.static_figures if r.static_figures is not None else scenario_svgs(r.plots)
+            out.append('<div class="figs">' + "".join(svgs) + "</div>")
         else:
-            out.append(figures_block(r.name, figures))
+            out.append(figures_block(r.name, scenario_figures(r.plots)))
     out.append("</section>")
     return "\n".join(out)
 

@@ -27,8 +27,11 @@ def _finish(fig: Figure, ax: Axes, xlabel: str, ylabel: str, title: str) -> str:
 
 
 def _svg(fig: Figure) -> str:
+    """The figure as SVG text; laid out once (tight_layout), not cropped with
+    bbox_inches="tight", which draws every figure twice (a third of the static report's time)."""
+    fig.tight_layout()
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
+    fig.savefig(buf, format="svg", metadata={"Date": None})
     plt.close(fig)
     text = buf.getvalue()
     return text[text.index("<svg"):]

@@ -12,8 +12,9 @@ from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 
-from kartci.report.figures import Axis, Figure, Role, Series, thin
+from kartci.report.figures import Axis, Figure, Role, Series, scenario_figures, thin
 from kartci.report.plots import _svg  # also sets Agg, the SVG settings and the mathtext guard
+from kartci.results import Plots
 
 STYLE: dict[Role, dict[str, Any]] = {Role.REFERENCE: {"color": "grey", "ls": "--", "lw": 1.0},
          Role.COMMAND: {"ls": ":", "lw": 0.8}, Role.OUTLINE: {"color": "black", "lw": 0.8},
@@ -88,3 +89,8 @@ def figure_svg(f: Figure) -> str:
                                    for s in f.series):
         ax.legend(loc="best", fontsize=6)
     return _svg(fig)
+
+
+def scenario_svgs(plots: Plots) -> tuple[str, ...]:
+    """A scenario's figures as inline SVG, in the order the report shows them."""
+    return tuple(figure_svg(f) for f in scenario_figures(plots))

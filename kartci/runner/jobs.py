@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -56,6 +56,7 @@ class Outcome:
     error: str | None = None
     result: ScenarioResult | None = None  # the judged run (repeat 0) only
     run: dict[str, Any] = field(default_factory=dict)  # run.json facts
+    job_s: float = 0.0  # wall time of the whole job (simulate, score, judge, draw), s
 
     @classmethod
     def failed(cls, job: Job, error: str) -> Outcome:
@@ -208,8 +209,12 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
     except Exception as err:  # a crashing controller must not take the suite down
         return Outcome.failed(job, one_line(failure_text(err)))
     if job.repeat != 0:
-        return Outcome(job, None, None, run)
+        return Outcome(job, None, None, run, time.perf_counter() - start)
     result = evaluate(ctx.out / job.folder, ctx.baselines)
+    if result.plots is not None:
+        from kartci.report.static import scenario_svgs
+
+        result = replace(result, static_figures=scenario_svgs(result.plots))
     if ctx.strict:
         result = require_baselines(result, ctx.out, ctx.baselines)
-    return Outcome(job, result.error, result, run)
+    return Outcome(job, result.error, result, run, time.perf_counter() - start)

@@ -6,6 +6,7 @@ import shutil
 from pathlib import Path
 
 from kartci.results import ScenarioResult
+from kartci.runner import costs
 from kartci.runner.executors import Event, Listener, execute
 from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome
 from kartci.runner.kinds import ExecutorKind
@@ -24,11 +25,10 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
     a baseline, or with a metric its baseline lacks, fails (see runner.gate)."""
     emit = on_event or _ignore
     ctx = Context(out, baselines, timeout_s, strict)
-    # Longest first: a cheap schedule that keeps the last worker from running alone.
-    order = sorted(jobs, key=lambda j: -j.spec.duration_s)
     outcomes: dict[str, Outcome] = {}
-    for outcome in execute(order, ctx, emit, workers, executor, ray_address):
+    for outcome in execute(costs.order(jobs), ctx, emit, workers, executor, ray_address):
         outcomes[outcome.job.folder] = outcome
+    costs.remember(outcomes.values())
     results = []
     for job in (j for j in jobs if j.repeat == 0):
         main = outcomes[job.folder]
