@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import stat
 from collections import defaultdict
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -10,7 +11,7 @@ from typing import Any
 import pandas as pd
 
 from kartci.errors import LogError
-from kartci.logs.reader import messages
+from kartci.logs.reader import open_log
 from kartci.logs.types import stamp_ns, yaw_of
 
 Row = dict[str, Any]
@@ -74,11 +75,50 @@ def _row(path: Path, topic: str, t_ns: int, m: Any, flat: Callable[[Any], Row]) 
                        f"that type ({err})") from err
 
 
+_File = tuple[int, int, int, int]  # device, inode, size, mtime: a log is written once, by rename
+_LAST: dict[_File, tuple[frozenset[str] | None, dict[str, pd.DataFrame]]] = {}
+
+
 def tables(path: Path, wanted: Sequence[str] | None = None) -> dict[str, pd.DataFrame]:
-    """`t` (s, from the header stamp when there is one, else log time) plus flattened fields."""
+    """`t` (s, from the header stamp when there is one, else log time) plus flattened fields,
+    for the wanted topics (default: every topic of a type in FLATTENERS; the others, tf and
+    point clouds, are not decoded at all).
+
+    A run is scored, then judged and drawn, each reading its log: the last log file read in
+    full is kept and handed out again as copies (a subset for `wanted`), so a job decodes its
+    log once."""
+    key = _identity(path)
+    want = None if wanted is None else frozenset(wanted)
+    if key is not None and key in _LAST:
+        have, read = _LAST[key]
+        if have is None or have == want:
+            return {t: df.copy() for t, df in read.items() if want is None or t in want}
+    read = _read(path, wanted)
+    if key is not None and want is None:
+        _LAST.clear()
+        _LAST[key] = (None, read)
+        return {t: df.copy() for t, df in read.items()}
+    return read
+
+
+def _identity(path: Path) -> _File | None:
+    """A regular file's identity; None for a folder (a rosbag2 folder can change inside)."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None  # open_log names the problem
+    if not stat.S_ISREG(st.st_mode):
+        return None
+    return st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns
+
+
+def _read(path: Path, wanted: Sequence[str] | None) -> dict[str, pd.DataFrame]:
     rows: dict[str, list[Row]] = defaultdict(list)
-    for topic, t_ns, m in messages(path, wanted):
-        flat = FLATTENERS.get(m.__msgtype__)
-        if flat is not None:
-            rows[topic].append(_row(path, topic, t_ns, m, flat))
+    with open_log(path) as log:
+        if wanted is None:
+            wanted = [t.topic for t in log.topics() if t.msgtype in FLATTENERS]
+        for topic, t_ns, m in log.messages(wanted):
+            flat = FLATTENERS.get(m.__msgtype__)
+            if flat is not None:
+                rows[topic].append(_row(path, topic, t_ns, m, flat))
     return {topic: pd.DataFrame(r) for topic, r in rows.items()}

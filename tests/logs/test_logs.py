@@ -57,6 +57,25 @@ def test_mcap_round_trip_through_rosbags_and_mcap(tmp_path: Path) -> None:
     assert df["t"].tolist() == pytest.approx([0.0, 0.01, 0.02, 0.03, 0.04])
 
 
+def test_tables_read_once_are_copies_and_a_rewritten_log_is_read_again(tmp_path: Path) -> None:
+    """Scoring, judging and drawing a run each read its log; the second read comes from memory
+    (a subset for named topics), as copies a caller may change, and a log replaced by rename
+    (a new file) is decoded afresh."""
+    path = tmp_path / "run.mcap"
+    _write_sample(path)
+    first = tables(path)
+    first["/lt0/sonar"]["range"] *= 100  # a caller changing its copy
+    assert tables(path)["/lt0/sonar"]["range"].tolist() == pytest.approx([1, 2, 3, 4, 5])
+    assert list(tables(path, ["/lt0/line_sensor"])) == ["/lt0/line_sensor"]
+    other = tmp_path / "other.mcap"
+    with McapLogWriter(other) as log:
+        log.write("/lt0/sonar", msg("sensor_msgs/msg/Range", header=header(0, "lt0/sonar"),
+                                    radiation_type=0, field_of_view=0.5, min_range=0.02,
+                                    max_range=4.0, range=9.0), 0)
+    other.replace(path)
+    assert tables(path)["/lt0/sonar"]["range"].tolist() == [9.0]
+
+
 def test_failed_write_leaves_no_log(tmp_path: Path) -> None:
     path = tmp_path / "run.mcap"
     with pytest.raises(RuntimeError), McapLogWriter(path):
