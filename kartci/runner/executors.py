@@ -112,38 +112,77 @@ def _work(job: Job, ctx: Context) -> Outcome:
 
 class _Workers:
     """Spawned worker processes (fresh interpreters, as on any OS), each given one run at a
-    time so that no run waits behind a busy worker while another is free."""
+    time so that no run waits behind a busy worker while another is free. A dispatcher thread
+    hands out runs the moment a worker is free: this process's own run (and its scoring and
+    drawing) reports progress only now and then, and a worker must not idle until it does."""
 
-    def __init__(self, ctx: Context, emit: Listener, n: int) -> None:
-        self.ctx, self.emit, self.slots = ctx, emit, n
+    def __init__(self, ctx: Context, emit: Listener, n: int, todo: deque[Job]) -> None:
+        self.ctx, self.emit, self.slots, self.todo = ctx, emit, n, todo
         mpc = mp.get_context("spawn")
         self.events = mpc.Queue()
         self.ex = ProcessPoolExecutor(max_workers=n, mp_context=mpc, initializer=_init_worker,
                                       initargs=(self.events, os.getpid()))
+        self.lock = threading.Lock()  # guards todo, running and slots
         self.running: dict[Future[Outcome], Job] = {}
         self.finished: deque[Outcome] = deque()
+        self.closed = threading.Event()
+        self.dispatcher = threading.Thread(target=self._dispatch, name="kartci-dispatch",
+                                           daemon=True)
+        self.dispatcher.start()
 
-    def tick(self, todo: deque[Job]) -> None:
-        """Relay the workers' events, collect finished runs, hand out new ones."""
+    def take(self) -> Job | None:
+        """The next run for this process, if any is left."""
+        with self.lock:
+            return self.todo.popleft() if self.todo else None
+
+    def busy(self) -> bool:
+        """Runs are still out with the workers (or finished and not yet collected)."""
+        with self.lock:
+            return bool(self.running or self.finished)
+
+    def _dispatch(self) -> None:
+        while not self.closed.is_set():
+            with self.lock:
+                while self.todo and len(self.running) < self.slots:
+                    try:
+                        self.running[self.ex.submit(_work, self.todo[0], self.ctx)] = self.todo[0]
+                    except (BrokenProcessPool, RuntimeError):  # no workers: this process does
+                        self.slots = 0  # the rest
+                        break
+                    self.todo.popleft()
+                pending = [f for f in self.running if not f.done()]
+            if pending:
+                wait(pending, timeout=0.1, return_when=FIRST_COMPLETED)
+            else:
+                self.closed.wait(0.05)
+
+    def tick(self) -> None:
+        """Relay the workers' events and collect finished runs (in the calling thread)."""
         while True:
             try:
                 kind, folder, t = self.events.get_nowait()
             except queue_mod.Empty:
                 break
             self.emit(Event(kind, folder, t))
-        for fut in [f for f in self.running if f.done()]:
-            outcome = _outcome(fut, self.running.pop(fut), self.ctx)
+        with self.lock:
+            done = [(f, self.running.pop(f)) for f in [f for f in self.running if f.done()]]
+        for fut, job in done:
+            outcome = _outcome(fut, job, self.ctx)
             self.emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
             self.finished.append(outcome)
-        while todo and len(self.running) < self.slots:
-            try:
-                self.running[self.ex.submit(_work, todo[0], self.ctx)] = todo[0]
-            except BrokenProcessPool:  # the workers cannot start: this process does the rest
-                self.slots = 0
-                break
-            todo.popleft()
+
+    def wait_any(self, timeout_s: float) -> None:
+        """Block until a worker's run ends or `timeout_s` passes."""
+        with self.lock:
+            pending = list(self.running)
+        if pending:
+            wait(pending, timeout=timeout_s, return_when=FIRST_COMPLETED)
+        else:
+            time.sleep(timeout_s)
 
     def close(self) -> None:
+        self.closed.set()
+        self.dispatcher.join()
         self.ex.shutdown(wait=True, cancel_futures=True)
         self.events.close()
 
@@ -154,17 +193,22 @@ def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Ite
     takes the next run whenever it is free. A hard crash (a segfault) in a run done here ends
     the whole command, as with -j 1; in a worker it is an error for that run only."""
     todo = deque(jobs)
-    others = _Workers(ctx, emit, workers - 1)
+    mine: Job | None = todo.popleft()  # before the dispatcher gives it to a worker
+    others = _Workers(ctx, emit, workers - 1, todo)
     try:
-        while todo or others.running or others.finished:
-            mine = todo.popleft() if todo else None
-            others.tick(todo)
+        while True:
+            others.tick()
             while others.finished:
                 yield others.finished.popleft()
             if mine is not None:
-                yield _here(mine, ctx, emit, lambda: others.tick(todo))
-            elif others.running:
-                wait(others.running, timeout=0.2, return_when=FIRST_COMPLETED)
+                yield _here(mine, ctx, emit, others.tick)
+            elif others.busy():
+                others.wait_any(0.2)
+            else:
+                with others.lock:
+                    if not others.todo:
+                        break
+            mine = others.take()
     finally:
         others.close()
 
