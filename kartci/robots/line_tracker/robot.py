@@ -14,6 +14,7 @@ from kartci.logs import header, msg
 from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineTrackerSensors
 from kartci.robots.line_tracker.sensors import LineCamera, Sonar
+from kartci.sim.body import BodyState
 from kartci.sim.line_lab import LineLab
 from kartci.sim.messages import joint_state
 from kartci.sim.robot import Put, RobotContext
@@ -47,6 +48,14 @@ class LineTrackerRobot(RobotBase):
         self.dt_s, self.frame_dt_s = dt_s, (None if rate is None else 1.0 / rate)
         self.last_frame = -1
         self.images: deque[list[float]] = deque(maxlen=sensors.line_sensor.latency_frames + 1)
+        self._st: BodyState | None = None  # base_link's state since the last physics step
+
+    def _state(self) -> BodyState:
+        """base_link's state, read from PyBullet once per physics step and only at steps where a
+        sensor or done() needs it (most steps between control ticks need none)."""
+        if self._st is None:
+            self._st = self.body.state()
+        return self._st
 
     def static_transforms(self) -> list[Any]:
         """tf of the line sensor, both cameras and the sonar mount."""
@@ -55,15 +64,14 @@ class LineTrackerRobot(RobotBase):
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         """Odometry and wheel speeds at the odometry rate; the line cameras (with noise) at the
         control rate or their own, the sonar at the control rate."""
-        st = self.body.state()
         if k % self.odom_every == 0:
-            self.publish_pose(st, t_ns, put)
+            self.publish_pose(self._state(), t_ns, put)
             wl, wr = self.body.wheel_speeds()
             put("joint_states", joint_state(t_ns, f"{self.name}/base_link",
                                             ["left_wheel_hinge", "right_wheel_hinge"], [],
                                             [wl, wr]), t_ns)
         if self._camera_due(k):
-            self._frame(st, t_ns, put)
+            self._frame(self._state(), t_ns, put)
         if k % self.ctrl_every:
             return  # the sonar runs with the controller (seed Sec. 6.6)
         if self.sonar is not None:
@@ -72,7 +80,8 @@ class LineTrackerRobot(RobotBase):
                              radiation_type=0,
                              field_of_view=2 * math.atan2(s.cone_radius_m, s.max_range_m),
                              min_range=s.min_range_m, max_range=s.max_range_m,
-                             range=self.sonar.range(*self.body.frame_pose("sonar", st))), t_ns)
+                             range=self.sonar.range(*self.body.frame_pose("sonar", self._state()))),
+                t_ns)
 
     def _camera_due(self, k: int) -> bool:
         """A new camera frame at step k: every control tick, or on the cameras' own clock."""
@@ -101,6 +110,7 @@ class LineTrackerRobot(RobotBase):
 
     def pre_step(self, k: int) -> None:
         """Wheel motors, from the latest command through their lag."""
+        self._st = None  # the body moves in this step
         self.body.pre_step()
 
     def post_step(self, t_ns: int, put: Put) -> None:
@@ -114,6 +124,7 @@ class LineTrackerRobot(RobotBase):
         """Continue from a recorded state (kartci simreal's windows): pose and motion of the
         body, wheels and their lagged speed targets rolling at that speed."""
         body = self.body
+        self._st = None
         body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
         half = body.urdf_separation_m / 2
         wheels = [(v_mps - yaw_rate_radps * half) / body.urdf_radius_m,
@@ -125,6 +136,6 @@ class LineTrackerRobot(RobotBase):
         """Past the end of a straight course (checked at the odometry rate)."""
         if self.end_m is None or k % self.odom_every:
             return False
-        pt = self.body.frame_pose("line_sensor")[0][:2]
+        pt = self.body.frame_pose("line_sensor", self._state())[0][:2]
         return bool(geometry.progress_m(self.world.spec.course, pt[None, :])[0]
                     > self.end_m + 0.02)
