@@ -39,7 +39,7 @@ class LineTrackerRobot(RobotBase):
         super().__init__(ctx.name, ctx.agent, every(ctx.agent.period_s, dt_s), self.body.frames)
         sensors = spec.sensors
         assert isinstance(sensors, LineTrackerSensors)  # validated by the robot kind
-        self.camera = LineCamera(world.client, sensors.line_sensor, world.spec)
+        self.camera = LineCamera(world.client, sensors.line_sensor, world.spec, world)
         self.sonar = Sonar(world.client, sensors.sonar) if sensors.sonar.enabled else None
         self.noise_std, self.odom_every, self.rng = (sensors.line_sensor.noise_std,
                                                      ctx.odom_every, ctx.rng)
