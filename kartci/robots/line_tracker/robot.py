@@ -49,6 +49,7 @@ class LineTrackerRobot(RobotBase):
         self.last_frame = -1
         self.images: deque[list[float]] = deque(maxlen=sensors.line_sensor.latency_frames + 1)
         self._st: BodyState | None = None  # base_link's state since the last physics step
+        self._rot: np.ndarray | None = None  # and its rotation matrix
 
     def _state(self) -> BodyState:
         """base_link's state, read from PyBullet once per physics step and only at steps where a
@@ -56,6 +57,15 @@ class LineTrackerRobot(RobotBase):
         if self._st is None:
             self._st = self.body.state()
         return self._st
+
+    def _pose(self, frame: str) -> tuple[np.ndarray, np.ndarray]:
+        """World position and rotation of a fixed frame (as `Base.frame_pose`), with base_link's
+        rotation matrix made once per step for all the frames read."""
+        st = self._state()
+        if self._rot is None:
+            self._rot = st.rotation
+        rel_pos, rel_rot = self.body.frames[frame]
+        return np.asarray(st.xyz) + self._rot @ rel_pos, self._rot @ rel_rot
 
     def static_transforms(self) -> list[Any]:
         """tf of the line sensor, both cameras and the sonar mount."""
@@ -71,7 +81,7 @@ class LineTrackerRobot(RobotBase):
                                             ["left_wheel_hinge", "right_wheel_hinge"], [],
                                             [wl, wr]), t_ns)
         if self._camera_due(k):
-            self._frame(self._state(), t_ns, put)
+            self._frame(t_ns, put)
         if k % self.ctrl_every:
             return  # the sonar runs with the controller (seed Sec. 6.6)
         if self.sonar is not None:
@@ -80,8 +90,7 @@ class LineTrackerRobot(RobotBase):
                              radiation_type=0,
                              field_of_view=2 * math.atan2(s.cone_radius_m, s.max_range_m),
                              min_range=s.min_range_m, max_range=s.max_range_m,
-                             range=self.sonar.range(*self.body.frame_pose("sonar", self._state()))),
-                t_ns)
+                             range=self.sonar.range(*self._pose("sonar"))), t_ns)
 
     def _camera_due(self, k: int) -> bool:
         """A new camera frame at step k: every control tick, or on the cameras' own clock."""
@@ -92,9 +101,9 @@ class LineTrackerRobot(RobotBase):
         self.last_frame = frame
         return due
 
-    def _frame(self, st: Any, t_ns: int, put: Put) -> None:
+    def _frame(self, t_ns: int, put: Put) -> None:
         """Both line cameras' luminances (with noise), as one `line_sensor` message."""
-        poses = [self.body.frame_pose(f"line_camera_{s}", st) for s in ("left", "right")]
+        poses = [self._pose(f"line_camera_{s}") for s in ("left", "right")]
         lum = [v + self.noise_std * float(self.rng.standard_normal())
                for v in self.camera.luminances(poses)]
         self.images.append(lum)
@@ -110,7 +119,7 @@ class LineTrackerRobot(RobotBase):
 
     def pre_step(self, k: int) -> None:
         """Wheel motors, from the latest command through their lag."""
-        self._st = None  # the body moves in this step
+        self._st = self._rot = None  # the body moves in this step
         self.body.pre_step()
 
     def post_step(self, t_ns: int, put: Put) -> None:
@@ -124,7 +133,7 @@ class LineTrackerRobot(RobotBase):
         """Continue from a recorded state (kartci simreal's windows): pose and motion of the
         body, wheels and their lagged speed targets rolling at that speed."""
         body = self.body
-        self._st = None
+        self._st = self._rot = None
         body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
         half = body.urdf_separation_m / 2
         wheels = [(v_mps - yaw_rate_radps * half) / body.urdf_radius_m,
@@ -136,6 +145,6 @@ class LineTrackerRobot(RobotBase):
         """Past the end of a straight course (checked at the odometry rate)."""
         if self.end_m is None or k % self.odom_every:
             return False
-        pt = self.body.frame_pose("line_sensor", self._state())[0][:2]
+        pt = self._pose("line_sensor")[0][:2]
         return bool(geometry.progress_m(self.world.spec.course, pt[None, :])[0]
                     > self.end_m + 0.02)

@@ -42,6 +42,8 @@ class LineCamera:
         uu, vv = np.meshgrid(u, u)
         self._tan_half = math.tan(spec.fov_rad / 2)
         self._uv = np.stack([uu.ravel(), vv.ravel()], axis=1) * self._tan_half
+        self._corners = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]]
+                                 ) * self._tan_half  # the image's corner rays, as `_uv`
         self._proj = pb.computeProjectionMatrixFOV(math.degrees(spec.fov_rad), 1.0, NEAR_M, FAR_M)
 
     def luminance(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
@@ -57,14 +59,18 @@ class LineCamera:
 
     def _geometric(self, poses: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
                    ) -> list[float]:
-        grounds, pixel = [], 0.0
-        for pos, rot in poses:
-            # one ray per pixel, world frame; elementwise, not `@`: BLAS kernels differ by CPU
-            dirs = self._uv[:, :1] * rot[:, 1] + self._uv[:, 1:] * rot[:, 2] + rot[:, 0]
-            grounds.append(pos[:2] - (pos[2] / dirs[:, 2])[:, None] * dirs[:, :2])
-            pixel = max(pixel, 2.0 * pos[2] * self._tan_half / GEOMETRIC_GRID_PX)
+        pos = np.array([p for p, _ in poses])
+        rot = np.array([r for _, r in poses])
+        # one ray per pixel and camera, world frame; elementwise, not `@`: BLAS kernels differ by
+        # CPU
+        dirs = (self._uv[:, :1] * rot[:, None, :, 1] + self._uv[:, 1:] * rot[:, None, :, 2]
+                + rot[:, None, :, 0])
+        grounds = pos[:, None, :2] - (pos[:, None, 2:] / dirs[:, :, 2:]) * dirs[:, :, :2]
+        pixel = 0.0
+        for z in pos[:, 2].tolist():
+            pixel = max(pixel, 2.0 * z * self._tan_half / GEOMETRIC_GRID_PX)
         ink = geometry.ink_coverage(self.world.course, self.world.line_width_m,
-                                    np.concatenate(grounds), pixel)
+                                    grounds.reshape(-1, 2), pixel)
         means = ink.reshape(len(poses), -1).mean(axis=1)
         return [float(self.world.light_level * (1.0 - m)) for m in means]
 
@@ -73,9 +79,7 @@ class LineCamera:
         """x-y box (m) around all the camera can see of the floor and anything on it: its four
         corner rays where they meet the floor, and the point below the camera (what sits above
         the floor is seen nearer to it); (None, None) when a corner ray misses the floor."""
-        t = self._tan_half
-        dirs = np.array([rot[:, 0] + a * t * rot[:, 1] + b * t * rot[:, 2]
-                         for a in (-1.0, 1.0) for b in (-1.0, 1.0)])
+        dirs = rot[:, 0] + self._corners[:, :1] * rot[:, 1] + self._corners[:, 1:] * rot[:, 2]
         if pos[2] <= 0.0 or np.any(dirs[:, 2] >= -1e-6):
             return None, None
         pts = np.vstack([pos[:2] - (pos[2] / dirs[:, 2])[:, None] * dirs[:, :2], pos[None, :2]])
