@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from kartci import geometry
 from kartci._bullet import pb
@@ -116,18 +115,23 @@ class LineArcs:
             xy = np.asarray(pts)[:, :2]
             lo.append(xy.min(axis=0))
             hi.append(xy.max(axis=0))
-        self.lo, self.hi = np.array(lo), np.array(hi)
+        (self.x0, self.y0), (self.x1, self.y1) = np.array(lo).T, np.array(hi).T
         self.shown = np.ones(len(self.bodies), dtype=bool)
 
-    def show(self, lo: NDArray[np.float64] | None, hi: NDArray[np.float64] | None) -> None:
-        """Show only the arcs whose bounding box meets the box lo..hi (x, y, m); all for None."""
-        want = (np.ones(len(self.bodies), dtype=bool) if lo is None or hi is None else
-                np.all((self.lo <= hi) & (self.hi >= lo), axis=1))
-        for i in np.flatnonzero(want != self.shown):
+    def show(self, box: tuple[float, float, float, float] | None) -> None:
+        """Show only the arcs whose bounding box meets `box` (x0, y0, x1, y1, m); all for None."""
+        if box is None:
+            want = np.ones(len(self.bodies), dtype=bool)
+        else:
+            x0, y0, x1, y1 = box
+            want = (self.x0 <= x1) & (self.y0 <= y1) & (self.x1 >= x0) & (self.y1 >= y0)
+        changed = want != self.shown
+        if not changed.any():
+            return
+        for i in np.flatnonzero(changed).tolist():
             pb.changeVisualShape(self.bodies[i], -1, rgbaColor=[0, 0, 0, float(want[i])],
                                  physicsClientId=self.client)
         self.shown = want
-
 
 def path_message(pts: Any) -> Any:
     """A polyline as nav_msgs/Path in the world frame."""
