@@ -139,7 +139,7 @@ class LineTrackerRobot(RobotBase):
         wheels = [(v_mps - yaw_rate_radps * half) / body.urdf_radius_m,
                   (v_mps + yaw_rate_radps * half) / body.urdf_radius_m]
         self.body.spin(self.body.wheels, wheels)
-        self.body.actual_target = np.array(wheels)
+        self.body.actual_target = [float(w) for w in wheels]
 
     def done(self, k: int) -> bool:
         """Past the end of a straight course (checked at the odometry rate)."""
