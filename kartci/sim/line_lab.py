@@ -21,15 +21,21 @@ class LineLab(World):
     """A floor with the line (a straight strip or a ring) and obstacles."""
 
     spec: LineLabWorld
-    _ring: tuple[int, list[list[float]], list[int]] | None = None  # body, vertices, indices
-    _arcs: LineArcs | None = None
+    # what a rendered line camera redraws cheaply (kartci.robots.line_tracker.render): the floor's
+    # box (visual body id, x-y corners lo, hi), the ring's body, vertices and triangle indices
+    # (None for a straight line), and the scene made from them on the first rendered frame
+    floor_box: tuple[int, tuple[float, float], tuple[float, float]]
+    ring: tuple[int, list[list[float]], list[int]] | None = None
+    render_scene: Any = None
 
     def build(self) -> int:
         """Floor around the course with a 1 m margin, the line (visual only, no collision) and
         obstacle boxes."""
         spec = self.spec
         pts = geometry.polyline(spec.course)
-        floor = self._floor(pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0, spec.floor_friction)
+        lo, hi = pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0
+        floor = self._floor(lo, hi, spec.floor_friction)
+        self.floor_box = (floor, (float(lo[0]), float(lo[1])), (float(hi[0]), float(hi[1])))
         self._line(spec)
         for i, b in enumerate(spec.obstacles):
             self.names[self._box(b.center_m, b.size_m, b.yaw_rad)] = f"obstacle_{i}"
@@ -73,65 +79,8 @@ class LineLab(World):
             idx += [i, n + i, n + j, i, n + j, j]  # counter-clockwise seen from above
         vis = pb.createVisualShape(pb.GEOM_MESH, vertices=verts, indices=idx,
                                    rgbaColor=[0, 0, 0, 1], physicsClientId=c)
-        self._ring = (pb.createMultiBody(0, -1, vis, physicsClientId=c), verts, idx)
+        self.ring = (pb.createMultiBody(0, -1, vis, physicsClientId=c), verts, idx)
 
-    def line_arcs(self) -> LineArcs | None:
-        """The ring split into arcs the renderer can skip (None for a straight line, whose box
-        is cheap): made on first use, after every other body, so only rendered runs pay for them
-        and no body id moves."""
-        if self._arcs is None and self._ring is not None:
-            self._arcs = LineArcs(self.client, *self._ring)
-        return self._arcs
-
-
-
-class LineArcs:
-    """The ring's triangles as `ARCS` visual-only bodies of consecutive chords, the same
-    vertices, in the same order. PyBullet's TinyRenderer transforms every triangle of every
-    visible shape per image and skips shapes with alpha 0; a line camera's footprint covers one
-    or two arcs, so hiding the whole ring and showing only the arcs near the footprint gives the
-    same pixels (every other triangle projects outside the image) for ~1/20 of the triangles."""
-
-    ARCS = 36  # 10 degrees each: 6 cm of line at r = 0.36 m, 2.5x a camera's footprint
-
-    def __init__(self, client: int, ring: int, verts: list[list[float]], idx: list[int]) -> None:
-        self.client = client
-        pb.changeVisualShape(ring, -1, rgbaColor=[0, 0, 0, 0], physicsClientId=client)
-        tris = len(idx) // 3
-        per = -(-tris // self.ARCS)
-        self.bodies: list[int] = []
-        lo, hi = [], []
-        for start in range(0, tris, per):
-            part = idx[3 * start:3 * min(start + per, tris)]
-            used = sorted(set(part))
-            local = {v: i for i, v in enumerate(used)}
-            pts = [verts[v] for v in used]
-            vis = pb.createVisualShape(pb.GEOM_MESH, vertices=pts,
-                                       indices=[local[v] for v in part],
-                                       rgbaColor=[0, 0, 0, 1], physicsClientId=client)
-            # maximal coordinates: a static object costs the physics step less than a multibody
-            self.bodies.append(pb.createMultiBody(0, -1, vis, useMaximalCoordinates=True,
-                                                  physicsClientId=client))
-            xy = np.asarray(pts)[:, :2]
-            lo.append(xy.min(axis=0))
-            hi.append(xy.max(axis=0))
-        (self.x0, self.y0), (self.x1, self.y1) = np.array(lo).T, np.array(hi).T
-        self.shown = np.ones(len(self.bodies), dtype=bool)
-
-    def show(self, box: tuple[float, float, float, float] | None) -> None:
-        """Show only the arcs whose bounding box meets `box` (x0, y0, x1, y1, m); all for None."""
-        if box is None:
-            want = np.ones(len(self.bodies), dtype=bool)
-        else:
-            x0, y0, x1, y1 = box
-            want = (self.x0 <= x1) & (self.y0 <= y1) & (self.x1 >= x0) & (self.y1 >= y0)
-        changed = want != self.shown
-        if not changed.any():
-            return
-        for i in np.flatnonzero(changed).tolist():
-            pb.changeVisualShape(self.bodies[i], -1, rgbaColor=[0, 0, 0, float(want[i])],
-                                 physicsClientId=self.client)
-        self.shown = want
 
 def path_message(pts: Any) -> Any:
     """A polyline as nav_msgs/Path in the world frame."""

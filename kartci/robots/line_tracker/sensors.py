@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from kartci import geometry
 from kartci._bullet import pb
 from kartci.robots.line_tracker.params import LineSensorSpec, SonarSpec
+from kartci.robots.line_tracker.render import RenderScene
 from kartci.sim.line_lab import LineLab
 from kartci.sim.world import SENSED_GROUPS
 from kartci.spec.models import LineLabWorld
@@ -30,8 +31,8 @@ class LineCamera:
 
     `geometric` samples the floor seen through each pixel and measures the ink under it exactly;
     `rendered` asks PyBullet's TinyRenderer for the image. Both see the same light level.
-    Given the `lab` it renders in, a rendered camera draws only the arcs of a ring line near its
-    footprint (the same pixels, a fraction of the triangles).
+    Given the `lab` it renders in, a rendered camera draws the lab's `RenderScene`: the same
+    pixels for a fraction of the triangles.
     """
 
     def __init__(self, client: int, spec: LineSensorSpec, world: LineLabWorld,
@@ -96,9 +97,8 @@ class LineCamera:
 
     def _rendered(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
         n = self.spec.resolution_px
-        arcs = self.lab.line_arcs() if self.lab is not None else None
-        if arcs is not None:
-            arcs.show(self._footprint(pos, rot))
+        if self.lab is not None:
+            RenderScene.of(self.lab).show(self._footprint(pos, rot))
         view = pb.computeViewMatrix(pos.tolist(), (pos + 0.01 * rot[:, 0]).tolist(),
                                     rot[:, 2].tolist())
         img = pb.getCameraImage(n, n, view, self._proj, renderer=pb.ER_TINY_RENDERER,

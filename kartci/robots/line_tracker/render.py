@@ -1,0 +1,87 @@
+"""The line lab as the rendered line cameras draw it: the same pixels for fewer triangles.
+
+PyBullet's TinyRenderer transforms and rasterises every triangle of every visible shape for each
+image, and skips shapes with alpha 0. A line camera sees ~2.5 cm of floor, so:
+- the 720-triangle ring is hidden and redrawn as `ARCS` visual-only bodies of consecutive chords
+  (the same vertices, each triangle's in the same order), and only the arcs near the camera's
+  footprint are shown: every other triangle projects outside the image;
+- the floor's box, whose top face is two triangles each tested against every pixel, is hidden
+  and redrawn as one triangle of the same colour in the same plane (z = 0) that contains it.
+The new bodies are static (maximal coordinates) and made after every other body, on the first
+rendered frame: geometric runs never have them, and no body id moves.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from kartci._bullet import pb
+from kartci.sim.line_lab import LineLab
+
+ARCS = 36  # 10 degrees each: 6 cm of line at r = 0.36 m, 2.5x a camera's footprint
+Box = tuple[float, float, float, float]  # x0, y0, x1, y1 (m)
+
+
+def _static_visual(client: int, verts: list[list[float]], idx: list[int],
+                   rgba: list[float]) -> int:
+    vis = pb.createVisualShape(pb.GEOM_MESH, vertices=verts, indices=idx, rgbaColor=rgba,
+                               physicsClientId=client)
+    # maximal coordinates: a static object costs the physics step less than a multibody
+    return int(pb.createMultiBody(0, -1, vis, useMaximalCoordinates=True,
+                                  physicsClientId=client))
+
+
+class RenderScene:
+    """The lab's floor as one triangle and its ring as arcs shown only near the camera."""
+
+    def __init__(self, lab: LineLab) -> None:
+        c = self.client = lab.client
+        body, (x0, y0), (x1, y1) = lab.floor_box
+        pb.changeVisualShape(body, -1, rgbaColor=[1, 1, 1, 0], physicsClientId=c)
+        w, h = x1 - x0, y1 - y0  # legs of 6 w and 6 h: the floor lies at 1/6-1/3 of each
+        _static_visual(c, [[x0 - w, y0 - h, 0.0], [x0 + 5 * w, y0 - h, 0.0],
+                           [x0 - w, y0 + 5 * h, 0.0]], [0, 1, 2], [1, 1, 1, 1])
+        self.bodies: list[int] = []
+        lo: list[np.ndarray] = []
+        hi: list[np.ndarray] = []
+        if lab.ring is not None:
+            ring, verts, idx = lab.ring
+            pb.changeVisualShape(ring, -1, rgbaColor=[0, 0, 0, 0], physicsClientId=c)
+            tris = len(idx) // 3
+            per = -(-tris // ARCS)
+            for start in range(0, tris, per):
+                part = idx[3 * start:3 * min(start + per, tris)]
+                used = sorted(set(part))
+                local = {v: i for i, v in enumerate(used)}
+                pts = [verts[v] for v in used]
+                self.bodies.append(_static_visual(c, pts, [local[v] for v in part],
+                                                  [0, 0, 0, 1]))
+                xy = np.asarray(pts)[:, :2]
+                lo.append(xy.min(axis=0))
+                hi.append(xy.max(axis=0))
+        box_lo, box_hi = np.array(lo).reshape(-1, 2).T, np.array(hi).reshape(-1, 2).T
+        self.x0, self.y0, self.x1, self.y1 = box_lo[0], box_lo[1], box_hi[0], box_hi[1]
+        self.shown = np.ones(len(self.bodies), dtype=bool)
+
+    @classmethod
+    def of(cls, lab: LineLab) -> RenderScene:
+        """The lab's scene, made once and shared by every camera in it."""
+        if lab.render_scene is None:
+            lab.render_scene = cls(lab)
+        scene: RenderScene = lab.render_scene
+        return scene
+
+    def show(self, box: Box | None) -> None:
+        """Show only the arcs whose bounding box meets `box`; all of them for None."""
+        if box is None:
+            want = np.ones(len(self.bodies), dtype=bool)
+        else:
+            x0, y0, x1, y1 = box
+            want = (self.x0 <= x1) & (self.y0 <= y1) & (self.x1 >= x0) & (self.y1 >= y0)
+        changed = want != self.shown
+        if not changed.any():
+            return
+        for i in np.flatnonzero(changed).tolist():
+            pb.changeVisualShape(self.bodies[i], -1, rgbaColor=[0, 0, 0, float(want[i])],
+                                 physicsClientId=self.client)
+        self.shown = want
