@@ -39,7 +39,7 @@ def _poses() -> list[tuple[np.ndarray, np.ndarray]]:
 def test_the_render_scene_gives_the_full_scenes_pixels() -> None:
     spec = load_scenario("line_circle")
     sensor = LineSensorSpec(mode="rendered")
-    full, cheap = LineLab(spec.world, DT), LineLab(spec.world, DT)  # type: ignore[arg-type]
+    full, cheap = LineLab(spec.world, DT), LineLab(spec.world, DT)
     try:
         plain = LineCamera(full.client, sensor, full.spec)  # no lab: the whole scene
         scened = LineCamera(cheap.client, sensor, cheap.spec, cheap)
