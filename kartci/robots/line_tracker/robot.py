@@ -20,6 +20,7 @@ from kartci.sim.messages import joint_state
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.urdf import urdf_path
+from kartci.spec.models import StraightCourse
 
 
 class LineTrackerRobot(RobotBase):
@@ -146,5 +147,8 @@ class LineTrackerRobot(RobotBase):
         if self.end_m is None or k % self.odom_every:
             return False
         pt = self._pose("line_sensor")[0][:2]
-        return bool(geometry.progress_m(self.world.spec.course, pt[None, :])[0]
-                    > self.end_m + 0.02)
+        course = self.world.spec.course
+        if (isinstance(course, StraightCourse)
+                and math.dist(pt.tolist(), course.start_m) < self.end_m + 0.02 - 1e-6):
+            return False  # progress along the line is at most the distance from its start
+        return bool(geometry.progress_m(course, pt[None, :])[0] > self.end_m + 0.02)
