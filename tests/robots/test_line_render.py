@@ -7,10 +7,13 @@ import math
 
 import numpy as np
 
+from kartci._bullet import pb
+from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineSensorSpec
-from kartci.robots.line_tracker.render import RenderScene
+from kartci.robots.line_tracker.render import RenderScene, unseen_links
 from kartci.robots.line_tracker.sensors import LineCamera
 from kartci.sim.line_lab import LineLab
+from kartci.sim.urdf import fixed_frames, urdf_path
 from kartci.spec import load_scenario
 from kartci.spec.models import CircleCourse
 
@@ -53,3 +56,38 @@ def test_the_render_scene_gives_the_full_scenes_pixels() -> None:
     finally:
         full.close()
         cheap.close()
+
+
+def test_the_robots_own_cameras_never_see_its_chassis_or_wheels() -> None:
+    """Hiding the links `unseen_links` names leaves the robot's own camera readings unchanged
+    (robot placed around the ring, wheels turned); a near-180-degree camera sees everything."""
+    spec = load_scenario("line_circle")
+    agent = spec.agents["lt0"]
+    urdf = urdf_path(agent.model)
+    cams = [fixed_frames(urdf)[f"line_camera_{s}"] for s in ("left", "right")]
+    assert unseen_links(urdf, cams, 2.9) == []
+    names = unseen_links(urdf, cams, 1.2)
+    assert sorted(names) == ["base_link", "left_wheel", "right_wheel"]
+    sensor = LineSensorSpec(mode="rendered")
+    labs = [LineLab(spec.world, DT), LineLab(spec.world, DT)]
+    try:
+        robots = [LineTracker(lab.client, agent, lab.spec, urdf.parent, DT) for lab in labs]
+        cameras = [LineCamera(lab.client, sensor, lab.spec) for lab in labs]
+        for name in names:
+            pb.changeVisualShape(robots[1].body, robots[1].link_index[name],
+                                 rgbaColor=[0, 0, 0, 0], physicsClientId=labs[1].client)
+        start = robots[0].state()
+        for k in range(8):
+            readings = []
+            for robot, camera in zip(robots, cameras, strict=True):
+                robot.reset_pose(np.asarray(start.xyz) + np.array([0.01 * k, -0.02 * k, 0.0]),
+                                 pb.getQuaternionFromEuler([0.0, 0.02 * k, 0.8 * k]))
+                robot.spin(robot.wheels, [1.0, -1.0])
+                pb.stepSimulation(physicsClientId=robot.client)  # wheels turn, body settles
+                st = robot.state()
+                readings.append([camera.luminance(*robot.frame_pose(f"line_camera_{s}", st))
+                                 for s in ("left", "right")])
+            assert readings[0] == readings[1]
+    finally:
+        for lab in labs:
+            lab.close()

@@ -34,9 +34,10 @@ class LineTracker(Base):
                 pb.getQuaternionFromEuler([0, 0, yaw]), flags=pb.URDF_USE_INERTIA_FROM_FILE,
                 physicsClientId=client))
         super().__init__(client, body, fixed_frames(model_dir / m.urdf))
-        links = {pb.getJointInfo(self.body, j, physicsClientId=client)[12].decode(): j
-                 for j in range(pb.getNumJoints(self.body, physicsClientId=client))}
-        self.wheels = [links["left_wheel"], links["right_wheel"]]
+        self.link_index = {"base_link": -1} | {  # PyBullet's link index of each URDF link
+            pb.getJointInfo(self.body, j, physicsClientId=client)[12].decode(): j
+            for j in range(pb.getNumJoints(self.body, physicsClientId=client))}
+        self.wheels = [self.link_index["left_wheel"], self.link_index["right_wheel"]]
         for j in self.wheels:
             pb.changeDynamics(self.body, j, lateralFriction=m.tire_friction, physicsClientId=client)
         # Of base_link's shapes only the caster sphere touches the floor: it slides (frictionless

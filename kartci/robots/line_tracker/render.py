@@ -13,10 +13,15 @@ rendered frame: geometric runs never have them, and no body id moves.
 
 from __future__ import annotations
 
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
 import numpy as np
 
 from kartci._bullet import pb
 from kartci.sim.line_lab import LineLab
+from kartci.sim.urdf import fixed_frames
 
 ARCS = 36  # 10 degrees each: 6 cm of line at r = 0.36 m, 2.5x a camera's footprint
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 (m)
@@ -85,3 +90,76 @@ class RenderScene:
             pb.changeVisualShape(self.bodies[i], -1, rgbaColor=[0, 0, 0, float(want[i])],
                                  physicsClientId=self.client)
         self.shown = want
+
+
+def _radius(geometry: ET.Element | None) -> float | None:
+    """Radius of a sphere around a URDF visual's geometry, about its origin; None for a mesh."""
+    shape = geometry[0] if geometry is not None and len(geometry) else None
+    if shape is None:
+        return None
+    f = {k: float(v) for k, v in shape.attrib.items() if k in ("radius", "length")}
+    if shape.tag == "box":
+        return 0.5 * float(np.linalg.norm(np.fromstring(shape.get("size", ""), sep=" ")))
+    if shape.tag == "sphere":
+        return f["radius"]
+    if shape.tag == "cylinder":
+        return math.hypot(f["radius"], f["length"] / 2)
+    if shape.tag == "capsule":
+        return f["radius"] + f["length"] / 2
+    return None
+
+
+def _spheres(urdf: Path) -> dict[str, list[tuple[np.ndarray, float] | None]]:
+    """Bounding spheres (centre in base_link, radius, m) of each link's visuals, for links fixed to
+    base_link or turning on a joint of one (a wheel: about its joint's origin, whatever its
+    angle); None for a visual that cannot be bounded (a mesh). Other links are left out."""
+    root = ET.parse(urdf).getroot()
+    frames = fixed_frames(urdf)
+    turning = {}
+    for joint in root.iter("joint"):
+        parent, child, origin = joint.find("parent"), joint.find("child"), joint.find("origin")
+        if (joint.get("type") in ("revolute", "continuous") and parent is not None
+                and child is not None and parent.get("link") in frames):
+            ppos, prot = frames[parent.get("link", "")]
+            xyz = np.fromstring(origin.get("xyz", "0 0 0") if origin is not None else "0 0 0",
+                                sep=" ")
+            turning[child.get("link", "")] = ppos + prot @ xyz
+    out: dict[str, list[tuple[np.ndarray, float] | None]] = {}
+    for link in root.iter("link"):
+        name = link.get("name", "")
+        if name not in frames and name not in turning:
+            continue
+        out[name] = []
+        for vis in link.findall("visual"):
+            origin = vis.find("origin")
+            xyz = np.fromstring(origin.get("xyz", "0 0 0") if origin is not None else "0 0 0",
+                                sep=" ")
+            r = _radius(vis.find("geometry"))
+            if r is None:
+                out[name].append(None)
+            elif name in frames:
+                pos, rot = frames[name]
+                out[name].append((pos + rot @ xyz, r))
+            else:  # the visual swings about the joint's origin
+                out[name].append((turning[name], r + float(np.linalg.norm(xyz))))
+    return out
+
+
+def unseen_links(urdf: Path, cameras: list[tuple[np.ndarray, np.ndarray]], fov_rad: float
+                 ) -> list[str]:
+    """Links of a robot that none of its own cameras (pose in base_link, looking along x, square
+    images) can ever see: every visual's bounding sphere lies behind each camera or outside one of
+    its four side planes (1 mm slack). The robot is rigid but for turning joints, so this holds in
+    every pose; the renderer may skip such links for these cameras."""
+    t = math.tan(fov_rad / 2)
+    norm = math.sqrt(1 + t * t)
+
+    def outside(c: np.ndarray, r: float) -> bool:
+        for pos, rot in cameras:
+            x, y, z = (rot.T @ (c - pos)).tolist()
+            if not (x + r < 0.0 or max(abs(y), abs(z)) - t * x > (r + 0.001) * norm):
+                return False
+        return True
+
+    return [name for name, spheres in _spheres(urdf).items()
+            if spheres and all(s is not None and outside(*s) for s in spheres)]

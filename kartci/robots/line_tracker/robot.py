@@ -9,10 +9,12 @@ from typing import Any
 import numpy as np
 
 from kartci import geometry
+from kartci._bullet import pb
 from kartci.errors import SpecError
 from kartci.logs import header, msg
 from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineTrackerSensors
+from kartci.robots.line_tracker.render import unseen_links
 from kartci.robots.line_tracker.sensors import LineCamera, Sonar
 from kartci.sim.body import BodyState
 from kartci.sim.line_lab import LineLab
@@ -41,6 +43,12 @@ class LineTrackerRobot(RobotBase):
         sensors = spec.sensors
         assert isinstance(sensors, LineTrackerSensors)  # validated by the robot kind
         self.camera = LineCamera(world.client, sensors.line_sensor, world.spec, world)
+        self._unseen: list[int] = []  # own links the rendered cameras never see, to hide
+        if sensors.line_sensor.mode == "rendered":
+            cams = [self.body.frames[f"line_camera_{s}"] for s in ("left", "right")]
+            self._unseen = [self.body.link_index[n] for n in unseen_links(
+                urdf_path(spec.model), cams, sensors.line_sensor.fov_rad)
+                if n in self.body.link_index]
         self.sonar = Sonar(world.client, sensors.sonar) if sensors.sonar.enabled else None
         self.noise_std, self.odom_every, self.rng = (sensors.line_sensor.noise_std,
                                                      ctx.odom_every, ctx.rng)
@@ -104,6 +112,12 @@ class LineTrackerRobot(RobotBase):
 
     def _frame(self, t_ns: int, put: Put) -> None:
         """Both line cameras' luminances (with noise), as one `line_sensor` message."""
+        if self._unseen and all(r is self for r in self.world.robots):
+            # the renderer skips links with alpha 0; no other robot's camera is here to see them
+            for link in self._unseen:
+                pb.changeVisualShape(self.body.body, link, rgbaColor=[0, 0, 0, 0],
+                                     physicsClientId=self.world.client)
+        self._unseen = []
         poses = [self._pose(f"line_camera_{s}") for s in ("left", "right")]
         lum = [v + self.noise_std * float(self.rng.standard_normal())
                for v in self.camera.luminances(poses)]
