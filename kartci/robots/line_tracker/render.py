@@ -32,8 +32,12 @@ def _static_visual(client: int, verts: list[list[float]], idx: list[int],
     vis = pb.createVisualShape(pb.GEOM_MESH, vertices=verts, indices=idx, rgbaColor=rgba,
                                physicsClientId=client)
     # maximal coordinates: a static object costs the physics step less than a multibody
-    return int(pb.createMultiBody(0, -1, vis, useMaximalCoordinates=True,
+    body = int(pb.createMultiBody(0, -1, vis, useMaximalCoordinates=True,
                                   physicsClientId=client))
+    # in no collision group: nothing can pair with it or hit it with a ray, whatever PyBullet
+    # puts in place of the missing collision shape
+    pb.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=client)
+    return body
 
 
 class RenderScene:
