@@ -97,20 +97,22 @@ class RenderScene:
 
 
 def _radius(geometry: ET.Element | None) -> float | None:
-    """Radius of a sphere around a URDF visual's geometry, about its origin; None for a mesh."""
+    """Radius of a sphere around a URDF visual's geometry, about its origin; None for a mesh or
+    anything it cannot read (such a link is never hidden)."""
     shape = geometry[0] if geometry is not None and len(geometry) else None
-    if shape is None:
+    try:
+        if shape is None:
+            return None
+        if shape.tag == "box":
+            size = [float(v) for v in shape.get("size", "").split()]
+            return 0.5 * math.sqrt(sum(v * v for v in size)) if len(size) == 3 else None
+        r, length = float(shape.get("radius", "nan")), float(shape.get("length", "0"))
+    except ValueError:
         return None
-    f = {k: float(v) for k, v in shape.attrib.items() if k in ("radius", "length")}
-    if shape.tag == "box":
-        return 0.5 * float(np.linalg.norm(np.fromstring(shape.get("size", ""), sep=" ")))
-    if shape.tag == "sphere":
-        return f["radius"]
-    if shape.tag == "cylinder":
-        return math.hypot(f["radius"], f["length"] / 2)
-    if shape.tag == "capsule":
-        return f["radius"] + f["length"] / 2
-    return None
+    if not (math.isfinite(r) and math.isfinite(length)):
+        return None
+    return {"sphere": r, "cylinder": math.hypot(r, length / 2),
+            "capsule": r + length / 2}.get(shape.tag)
 
 
 def _spheres(urdf: Path) -> dict[str, list[tuple[np.ndarray, float] | None]]:
