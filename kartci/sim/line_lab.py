@@ -21,13 +21,21 @@ class LineLab(World):
     """A floor with the line (a straight strip or a ring) and obstacles."""
 
     spec: LineLabWorld
+    # what a rendered line camera redraws cheaply (kartci.robots.line_tracker.render): the floor's
+    # box (visual body id, x-y corners lo, hi), the ring's body, vertices and triangle indices
+    # (None for a straight line), and the scene made from them on the first rendered frame
+    floor_box: tuple[int, tuple[float, float], tuple[float, float]]
+    ring: tuple[int, list[list[float]], list[int]] | None = None
+    render_scene: Any = None
 
     def build(self) -> int:
         """Floor around the course with a 1 m margin, the line (visual only, no collision) and
         obstacle boxes."""
         spec = self.spec
         pts = geometry.polyline(spec.course)
-        floor = self._floor(pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0, spec.floor_friction)
+        lo, hi = pts.min(axis=0) - 1.0, pts.max(axis=0) + 1.0
+        floor = self._floor(lo, hi, spec.floor_friction)
+        self.floor_box = (floor, (float(lo[0]), float(lo[1])), (float(hi[0]), float(hi[1])))
         self._line(spec)
         for i, b in enumerate(spec.obstacles):
             self.names[self._box(b.center_m, b.size_m, b.yaw_rad)] = f"obstacle_{i}"
@@ -71,8 +79,7 @@ class LineLab(World):
             idx += [i, n + i, n + j, i, n + j, j]  # counter-clockwise seen from above
         vis = pb.createVisualShape(pb.GEOM_MESH, vertices=verts, indices=idx,
                                    rgbaColor=[0, 0, 0, 1], physicsClientId=c)
-        pb.createMultiBody(0, -1, vis, physicsClientId=c)
-
+        self.ring = (pb.createMultiBody(0, -1, vis, physicsClientId=c), verts, idx)
 
 
 def path_message(pts: Any) -> Any:

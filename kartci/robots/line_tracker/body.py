@@ -5,8 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import numpy as np
-
 from kartci import geometry
 from kartci._bullet import pb, quiet_c_output
 from kartci.errors import SpecError
@@ -36,9 +34,10 @@ class LineTracker(Base):
                 pb.getQuaternionFromEuler([0, 0, yaw]), flags=pb.URDF_USE_INERTIA_FROM_FILE,
                 physicsClientId=client))
         super().__init__(client, body, fixed_frames(model_dir / m.urdf))
-        links = {pb.getJointInfo(self.body, j, physicsClientId=client)[12].decode(): j
-                 for j in range(pb.getNumJoints(self.body, physicsClientId=client))}
-        self.wheels = [links["left_wheel"], links["right_wheel"]]
+        self.link_index = {"base_link": -1} | {  # PyBullet's link index of each URDF link
+            pb.getJointInfo(self.body, j, physicsClientId=client)[12].decode(): j
+            for j in range(pb.getNumJoints(self.body, physicsClientId=client))}
+        self.wheels = [self.link_index["left_wheel"], self.link_index["right_wheel"]]
         for j in self.wheels:
             pb.changeDynamics(self.body, j, lateralFriction=m.tire_friction, physicsClientId=client)
         # Of base_link's shapes only the caster sphere touches the floor: it slides (frictionless
@@ -48,8 +47,11 @@ class LineTracker(Base):
         self._wheel_inertia(m)
         self._alpha = 1.0 - math.exp(-dt_s / m.wheel_time_constant_s) if (
             m.wheel_time_constant_s > 0) else 1.0
-        self.target = np.zeros(2)  # commanded wheel speeds, rad/s (left, right)
-        self.actual_target = np.zeros(2)  # after the first-order lag
+        # plain floats, not numpy: the lag runs every physics step (same IEEE operations)
+        self.target = [0.0, 0.0]  # commanded wheel speeds, rad/s (left, right)
+        self.actual_target = [0.0, 0.0]  # after the first-order lag
+        self._forces = [m.wheel_torque_limit_nm] * 2
+        self._set_velocity_drive = m.wheel_drive == "set_velocity"
         left, right = (pb.getJointInfo(self.body, j, physicsClientId=client)[14][1]
                        for j in self.wheels)
         # the URDF's wheels; a model whose radius or separation differs moves as that robot
@@ -79,20 +81,20 @@ class LineTracker(Base):
             half = self.urdf_separation_m / 2
             left_radps = (v - w * half) / self.urdf_radius_m
             right_radps = (v + w * half) / self.urdf_radius_m
-        self.target = np.clip([left_radps, right_radps], -lim, lim)
+        self.target = [min(max(left_radps, -lim), lim), min(max(right_radps, -lim), lim)]
         self._fresh = True
 
     def pre_step(self) -> None:
         """Advance the lagged targets by one physics step and hand them to the wheel motors; or,
         with the `set_velocity` drive, set a new command's wheel speeds once and free the wheels."""
-        if self.model.wheel_drive == "set_velocity":
+        if self._set_velocity_drive:
             self._set_velocity()
             return
-        self.actual_target += self._alpha * (self.target - self.actual_target)
-        tau = self.model.wheel_torque_limit_nm
+        (a0, a1), (t0, t1), alpha = self.actual_target, self.target, self._alpha
+        self.actual_target = [a0 + alpha * (t0 - a0), a1 + alpha * (t1 - a1)]
         pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
-                                     targetVelocities=self.actual_target.tolist(),
-                                     forces=[tau, tau], physicsClientId=self.client)
+                                     targetVelocities=self.actual_target,
+                                     forces=self._forces, physicsClientId=self.client)
 
     def wheel_speeds(self) -> tuple[float, float]:
         """Measured wheel speeds, rad/s (left, right)."""

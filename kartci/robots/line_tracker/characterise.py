@@ -57,7 +57,7 @@ def sweep(scenario: Scenario, agent: str, offsets_m: np.ndarray, fov_rad: float 
     try:
         robot = LineTracker(world.client, spec, lab,
                             urdf_path(spec.model).parent, scenario.physics.dt_s)
-        camera = LineCamera(world.client, sensor, lab)
+        camera = LineCamera(world.client, sensor, lab, world)
         start = robot.state()
         yaw = float(pb.getEulerFromQuaternion(start.quat)[2])
         normal = np.array([-np.sin(yaw), np.cos(yaw), 0.0])

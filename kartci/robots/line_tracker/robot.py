@@ -9,16 +9,20 @@ from typing import Any
 import numpy as np
 
 from kartci import geometry
+from kartci._bullet import pb
 from kartci.errors import SpecError
 from kartci.logs import header, msg
 from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineTrackerSensors
+from kartci.robots.line_tracker.render import unseen_links
 from kartci.robots.line_tracker.sensors import LineCamera, Sonar
+from kartci.sim.body import BodyState
 from kartci.sim.line_lab import LineLab
 from kartci.sim.messages import joint_state
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.urdf import urdf_path
+from kartci.spec.models import StraightCourse
 
 
 class LineTrackerRobot(RobotBase):
@@ -38,7 +42,13 @@ class LineTrackerRobot(RobotBase):
         super().__init__(ctx.name, ctx.agent, every(ctx.agent.period_s, dt_s), self.body.frames)
         sensors = spec.sensors
         assert isinstance(sensors, LineTrackerSensors)  # validated by the robot kind
-        self.camera = LineCamera(world.client, sensors.line_sensor, world.spec)
+        self.camera = LineCamera(world.client, sensors.line_sensor, world.spec, world)
+        self._unseen: list[int] = []  # own links the rendered cameras never see, to hide
+        if sensors.line_sensor.mode == "rendered":
+            cams = [self.body.frames[f"line_camera_{s}"] for s in ("left", "right")]
+            self._unseen = [self.body.link_index[n] for n in unseen_links(
+                urdf_path(spec.model), cams, sensors.line_sensor.fov_rad)
+                if n in self.body.link_index]
         self.sonar = Sonar(world.client, sensors.sonar) if sensors.sonar.enabled else None
         self.noise_std, self.odom_every, self.rng = (sensors.line_sensor.noise_std,
                                                      ctx.odom_every, ctx.rng)
@@ -47,6 +57,24 @@ class LineTrackerRobot(RobotBase):
         self.dt_s, self.frame_dt_s = dt_s, (None if rate is None else 1.0 / rate)
         self.last_frame = -1
         self.images: deque[list[float]] = deque(maxlen=sensors.line_sensor.latency_frames + 1)
+        self._st: BodyState | None = None  # base_link's state since the last physics step
+        self._rot: np.ndarray | None = None  # and its rotation matrix
+
+    def _state(self) -> BodyState:
+        """base_link's state, read from PyBullet once per physics step and only at steps where a
+        sensor or done() needs it (most steps between control ticks need none)."""
+        if self._st is None:
+            self._st = self.body.state()
+        return self._st
+
+    def _pose(self, frame: str) -> tuple[np.ndarray, np.ndarray]:
+        """World position and rotation of a fixed frame (as `Base.frame_pose`), with base_link's
+        rotation matrix made once per step for all the frames read."""
+        st = self._state()
+        if self._rot is None:
+            self._rot = st.rotation
+        rel_pos, rel_rot = self.body.frames[frame]
+        return np.asarray(st.xyz) + self._rot @ rel_pos, self._rot @ rel_rot
 
     def static_transforms(self) -> list[Any]:
         """tf of the line sensor, both cameras and the sonar mount."""
@@ -55,15 +83,14 @@ class LineTrackerRobot(RobotBase):
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         """Odometry and wheel speeds at the odometry rate; the line cameras (with noise) at the
         control rate or their own, the sonar at the control rate."""
-        st = self.body.state()
         if k % self.odom_every == 0:
-            self.publish_pose(st, t_ns, put)
+            self.publish_pose(self._state(), t_ns, put)
             wl, wr = self.body.wheel_speeds()
             put("joint_states", joint_state(t_ns, f"{self.name}/base_link",
                                             ["left_wheel_hinge", "right_wheel_hinge"], [],
                                             [wl, wr]), t_ns)
         if self._camera_due(k):
-            self._frame(st, t_ns, put)
+            self._frame(t_ns, put)
         if k % self.ctrl_every:
             return  # the sonar runs with the controller (seed Sec. 6.6)
         if self.sonar is not None:
@@ -72,7 +99,7 @@ class LineTrackerRobot(RobotBase):
                              radiation_type=0,
                              field_of_view=2 * math.atan2(s.cone_radius_m, s.max_range_m),
                              min_range=s.min_range_m, max_range=s.max_range_m,
-                             range=self.sonar.range(*self.body.frame_pose("sonar", st))), t_ns)
+                             range=self.sonar.range(*self._pose("sonar"))), t_ns)
 
     def _camera_due(self, k: int) -> bool:
         """A new camera frame at step k: every control tick, or on the cameras' own clock."""
@@ -83,9 +110,15 @@ class LineTrackerRobot(RobotBase):
         self.last_frame = frame
         return due
 
-    def _frame(self, st: Any, t_ns: int, put: Put) -> None:
+    def _frame(self, t_ns: int, put: Put) -> None:
         """Both line cameras' luminances (with noise), as one `line_sensor` message."""
-        poses = [self.body.frame_pose(f"line_camera_{s}", st) for s in ("left", "right")]
+        if self._unseen and all(r is self for r in self.world.robots):
+            # the renderer skips links with alpha 0; no other robot's camera is here to see them
+            for link in self._unseen:
+                pb.changeVisualShape(self.body.body, link, rgbaColor=[0, 0, 0, 0],
+                                     physicsClientId=self.world.client)
+        self._unseen = []
+        poses = [self._pose(f"line_camera_{s}") for s in ("left", "right")]
         lum = [v + self.noise_std * float(self.rng.standard_normal())
                for v in self.camera.luminances(poses)]
         self.images.append(lum)
@@ -101,6 +134,7 @@ class LineTrackerRobot(RobotBase):
 
     def pre_step(self, k: int) -> None:
         """Wheel motors, from the latest command through their lag."""
+        self._st = self._rot = None  # the body moves in this step
         self.body.pre_step()
 
     def post_step(self, t_ns: int, put: Put) -> None:
@@ -114,17 +148,21 @@ class LineTrackerRobot(RobotBase):
         """Continue from a recorded state (kartci simreal's windows): pose and motion of the
         body, wheels and their lagged speed targets rolling at that speed."""
         body = self.body
+        self._st = self._rot = None
         body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
         half = body.urdf_separation_m / 2
         wheels = [(v_mps - yaw_rate_radps * half) / body.urdf_radius_m,
                   (v_mps + yaw_rate_radps * half) / body.urdf_radius_m]
         self.body.spin(self.body.wheels, wheels)
-        self.body.actual_target = np.array(wheels)
+        self.body.actual_target = [float(w) for w in wheels]
 
     def done(self, k: int) -> bool:
         """Past the end of a straight course (checked at the odometry rate)."""
         if self.end_m is None or k % self.odom_every:
             return False
-        pt = self.body.frame_pose("line_sensor")[0][:2]
-        return bool(geometry.progress_m(self.world.spec.course, pt[None, :])[0]
-                    > self.end_m + 0.02)
+        pt = self._pose("line_sensor")[0][:2]
+        course = self.world.spec.course
+        if (isinstance(course, StraightCourse)
+                and math.dist(pt.tolist(), course.start_m) < self.end_m + 0.02 - 1e-6):
+            return False  # progress along the line is at most the distance from its start
+        return bool(geometry.progress_m(course, pt[None, :])[0] > self.end_m + 0.02)

@@ -10,6 +10,8 @@ from numpy.typing import NDArray
 from kartci import geometry
 from kartci._bullet import pb
 from kartci.robots.line_tracker.params import LineSensorSpec, SonarSpec
+from kartci.robots.line_tracker.render import RenderScene
+from kartci.sim.line_lab import LineLab
 from kartci.sim.world import SENSED_GROUPS
 from kartci.spec.models import LineLabWorld
 
@@ -20,6 +22,8 @@ NEAR_M, FAR_M = 0.001, 0.05
 # an edge parallel to the grid), so 16 x 16 gives the same characterisation slope as 24 x 24 and
 # 64 x 64 to 1e-9, at half the cost of 24 x 24.
 GEOMETRIC_GRID_PX = 16
+# Slack around a rendered camera's floor footprint when choosing the line's arcs to draw, m
+FOOTPRINT_MARGIN_M = 0.005
 
 
 class LineCamera:
@@ -27,15 +31,20 @@ class LineCamera:
 
     `geometric` samples the floor seen through each pixel and measures the ink under it exactly;
     `rendered` asks PyBullet's TinyRenderer for the image. Both see the same light level.
+    Given the `lab` it renders in, a rendered camera draws the lab's `RenderScene`: the same
+    pixels for a fraction of the triangles.
     """
 
-    def __init__(self, client: int, spec: LineSensorSpec, world: LineLabWorld) -> None:
-        self.client, self.spec, self.world = client, spec, world
+    def __init__(self, client: int, spec: LineSensorSpec, world: LineLabWorld,
+                 lab: LineLab | None = None) -> None:
+        self.client, self.spec, self.world, self.lab = client, spec, world, lab
         n = GEOMETRIC_GRID_PX
         u = (np.arange(n) + 0.5) / n * 2.0 - 1.0
         uu, vv = np.meshgrid(u, u)
         self._tan_half = math.tan(spec.fov_rad / 2)
         self._uv = np.stack([uu.ravel(), vv.ravel()], axis=1) * self._tan_half
+        t = self._tan_half  # the image's corner rays, as `_uv`
+        self._corner_uv = [(a * t, b * t) for a in (-1.0, 1.0) for b in (-1.0, 1.0)]
         self._proj = pb.computeProjectionMatrixFOV(math.degrees(spec.fov_rad), 1.0, NEAR_M, FAR_M)
 
     def luminance(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
@@ -51,19 +60,45 @@ class LineCamera:
 
     def _geometric(self, poses: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
                    ) -> list[float]:
-        grounds, pixel = [], 0.0
-        for pos, rot in poses:
-            # one ray per pixel, world frame; elementwise, not `@`: BLAS kernels differ by CPU
-            dirs = self._uv[:, :1] * rot[:, 1] + self._uv[:, 1:] * rot[:, 2] + rot[:, 0]
-            grounds.append(pos[:2] - (pos[2] / dirs[:, 2])[:, None] * dirs[:, :2])
-            pixel = max(pixel, 2.0 * pos[2] * self._tan_half / GEOMETRIC_GRID_PX)
+        pos = np.array([p for p, _ in poses])
+        rot = np.array([r for _, r in poses])
+        # one ray per pixel and camera, world frame; elementwise, not `@`: BLAS kernels differ by
+        # CPU
+        dirs = (self._uv[:, :1] * rot[:, None, :, 1] + self._uv[:, 1:] * rot[:, None, :, 2]
+                + rot[:, None, :, 0])
+        grounds = pos[:, None, :2] - (pos[:, None, 2:] / dirs[:, :, 2:]) * dirs[:, :, :2]
+        pixel = 0.0
+        for z in pos[:, 2].tolist():
+            pixel = max(pixel, 2.0 * z * self._tan_half / GEOMETRIC_GRID_PX)
         ink = geometry.ink_coverage(self.world.course, self.world.line_width_m,
-                                    np.concatenate(grounds), pixel)
+                                    grounds.reshape(-1, 2), pixel)
         means = ink.reshape(len(poses), -1).mean(axis=1)
         return [float(self.world.light_level * (1.0 - m)) for m in means]
 
+    def _footprint(self, pos: NDArray[np.float64], rot: NDArray[np.float64]
+                   ) -> tuple[float, float, float, float] | None:
+        """x-y box (x0, y0, x1, y1, m) around all the camera can see of the floor and anything on
+        it: its four corner rays where they meet the floor, and the point below the camera (what
+        sits above the floor is seen nearer to it); None when a corner ray misses the floor.
+        Plain floats: a few dozen operations, cheaper than numpy calls."""
+        (ax, bx, cx), (ay, by, cy), (az, bz, cz) = rot.tolist()
+        px, py, pz = pos.tolist()
+        if pz <= 0.0:
+            return None
+        xs, ys = [px], [py]
+        for u, v in self._corner_uv:
+            dx, dy, dz = ax + u * bx + v * cx, ay + u * by + v * cy, az + u * bz + v * cz
+            if dz >= -1e-6:
+                return None
+            xs.append(px - pz / dz * dx)
+            ys.append(py - pz / dz * dy)
+        m = FOOTPRINT_MARGIN_M
+        return min(xs) - m, min(ys) - m, max(xs) + m, max(ys) + m
+
     def _rendered(self, pos: NDArray[np.float64], rot: NDArray[np.float64]) -> float:
         n = self.spec.resolution_px
+        if self.lab is not None:
+            RenderScene.of(self.lab).show(self._footprint(pos, rot))
         view = pb.computeViewMatrix(pos.tolist(), (pos + 0.01 * rot[:, 0]).tolist(),
                                     rot[:, 2].tolist())
         img = pb.getCameraImage(n, n, view, self._proj, renderer=pb.ER_TINY_RENDERER,
