@@ -15,8 +15,8 @@ from kartci.mpcc.cache import Built, get_solver
 from kartci.mpcc.model import ACC, DELTA, PSI, SLACK, VS, VX, S, SingleTrack, X, Y
 from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
 from kartci.mpcc.params import MpccController
-from kartci.mpcc.rti import Rti
 from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
+from kartci.mpcc.rti import Rti
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import Track
 from kartci.vehicle import STEERING_RATIO, wheel_angles
