@@ -18,7 +18,7 @@ from kartci.mpcc.model import NU, NX
 from kartci.mpcc.ocp import CONSTRAINTS_PER_STAGE, equality
 from kartci.mpcc.params import MpccController, QpSolver
 
-REGULARISATION = 1e-5  # Levenberg-Marquardt term: states without a cost (vy, r) keep H > 0
+REGULARISATION = 1e-2  # Levenberg-Marquardt term: states without a cost (vy, r) keep H > 0
 QP_TOL = 1e-6  # the QP solvers' residual tolerance (cost, dynamics, bounds, complementarity)
 
 
