@@ -18,7 +18,6 @@ from kartci.errors import SpecError
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.mpcc import Mpcc
-from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
 from kartci.mpcc.rti import RtiStatus
 from kartci.project import BUILTIN
@@ -71,10 +70,10 @@ def test_hpipm_solves_the_structured_qp_as_a_general_solver_does(
     class Recorder:
         def __call__(self, **qp: ca.DM) -> dict[str, ca.DM]:
             seen.append(qp)
-            return hpipm(**qp)  # type: ignore[no-any-return]
+            return hpipm(**qp)
 
         def stats(self) -> dict[str, object]:
-            return hpipm.stats()  # type: ignore[no-any-return]
+            return hpipm.stats()
 
     mpcc.built.rti.qp = Recorder()  # type: ignore[assignment]
     x, y, psi = track.pose_at(0.0, 0.0)
