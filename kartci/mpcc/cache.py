@@ -26,7 +26,8 @@ from kartci.mpcc.ocp import Layout, build
 from kartci.mpcc.params import MpccController, MpccMethod
 from kartci.mpcc.rti import Rti, linearisation
 
-SOURCES = ("model.py", "ocp.py", "cache.py", "rti.py")
+SOURCES = {MpccMethod.IPOPT: ("model.py", "ocp.py", "cache.py"),
+           MpccMethod.RTI: ("model.py", "ocp.py", "cache.py", "rti.py")}
 
 
 def cache_dir() -> Path:
@@ -39,12 +40,13 @@ def cache_dir() -> Path:
 
 
 def solver_key(spec: MpccController, model: SingleTrack) -> str:
-    """The cache key: a hash of CasADi's version, the solver's sources, the spec fields compiled
-    into it (horizon, step, RK4 substeps, modelling choices) and the kart's parameters."""
+    """The cache key: a hash of CasADi's version, the method and its sources, the spec fields
+    compiled into it (horizon, step, RK4 substeps, modelling choices) and the kart's parameters.
+    The QP solver and all limits and weights are runtime inputs, not in the key."""
     here = Path(__file__).parent
     h = hashlib.sha256()
-    h.update(str(ca.CasadiMeta.version()).encode())
-    for name in SOURCES:
+    h.update(f"{ca.CasadiMeta.version()} {spec.method}".encode())
+    for name in SOURCES[spec.method]:
         h.update((here / name).read_bytes())
     compiled = spec.model_dump(include={"horizon_steps", "step_s", "rk4_substeps", "vehicle"})
     h.update(repr(sorted(compiled.items())).encode())
@@ -87,33 +89,34 @@ def get_solver(spec: MpccController, model: SingleTrack) -> Built:
     if spec.method is MpccMethod.RTI:
         lin = linearisation(nlp, spec.horizon_steps)
         if cc is not None:
-            lib, hit = _cached(spec, model, "rti", [lin], cc)
-            lin = _load(lambda: ca.external(lin.name(), str(lib)), lib)
+            lib, hit = _cached(spec, model, [lin], cc)
+            lin = _load(lambda: ca.external(lin.name(), str(lib)), str(lib))
         return Built(None, None, Rti(lin, spec), layout, cc is not None,
                      time.perf_counter() - t0, hit)
     source: Any = nlp
+    label = "(interpreted)"
     if cc is not None:
         gen = ca.nlpsol("mpcc", "ipopt", nlp, _options(spec))
-        source, hit = _cached(spec, model, "ipopt", [gen.oracle(), *(
+        source, hit = _cached(spec, model, [gen.oracle(), *(
             gen.get_function(name) for name in gen.get_function())], cc)
-        source = str(source)
-    solver = _load(lambda: ca.nlpsol("mpcc", "ipopt", source, _options(spec)), source)
+        source = label = str(source)
+    solver = _load(lambda: ca.nlpsol("mpcc", "ipopt", source, _options(spec)), label)
     cold = _load(lambda: ca.nlpsol("mpcc_cold", "ipopt", source, _options(spec, warm=False)),
-                 source)
+                 label)
     return Built(solver, cold, None, layout, cc is not None, time.perf_counter() - t0, hit)
 
 
-def _cached(spec: MpccController, model: SingleTrack, kind: str, functions: list[ca.Function],
+def _cached(spec: MpccController, model: SingleTrack, functions: list[ca.Function],
             cc: str) -> tuple[Path, bool]:
     """The library of `functions` in the cache, compiled into it on a miss; and whether it hit."""
-    lib = cache_dir() / "mpcc" / f"mpcc_{kind}_{solver_key(spec, model)}.so"
+    lib = cache_dir() / "mpcc" / f"mpcc_{spec.method}_{solver_key(spec, model)}.so"
     hit = lib.exists()
     if not hit:
         _compile(functions, lib, cc)
     return lib, hit
 
 
-def _load(make: Callable[[], ca.Function], source: Any) -> ca.Function:
+def _load(make: Callable[[], ca.Function], source: str) -> ca.Function:
     try:
         return make()
     except RuntimeError as err:

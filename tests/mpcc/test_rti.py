@@ -18,6 +18,8 @@ from kartci.errors import SpecError
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.mpcc import Mpcc
+from kartci.mpcc.cache import solver_key
+from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
 from kartci.mpcc.rti import RtiStatus
 from kartci.project import BUILTIN
@@ -140,3 +142,11 @@ def test_rti_passes_the_obstacles(tmp_path: Path) -> None:
     assert m["min_clearance_m"].value > 0.1
     assert m["best_lap_s"].value == pytest.approx(_reference("obstacle_avoidance",
                                                              "best_lap_s"), rel=0.02)
+
+
+def test_each_method_has_its_own_compiled_code_and_the_qp_solver_compiles_nothing() -> None:
+    kart = SingleTrack.of(GokartModel())
+    rti = MpccController(method=MpccMethod.RTI)
+    assert solver_key(rti, kart) != solver_key(MpccController(), kart)
+    assert solver_key(rti.model_copy(update={"qp_solver": QpSolver.DAQP,
+                                             "sqp_iterations": 3}), kart) == solver_key(rti, kart)
