@@ -26,8 +26,8 @@ class RtiStatus(StrEnum):
     """The outcome of one control step's real-time iterations."""
 
     SOLVED = "Solved"  # every QP solved
-    QP_FAILED = "QP_failed"  # the QP solver reported a failure (iteration cap, infeasible)
-    NOT_FINITE = "Not_finite"  # the step came out NaN or infinite
+    SOLVED_EARLY = "Solved_early"  # a later QP failed: the iterate of the QPs before it
+    QP_FAILED = "QP_failed"  # the first QP failed (iteration cap, infeasible, NaN step)
 
 
 @dataclass(frozen=True)
@@ -41,8 +41,8 @@ class Iterate:
 
     @property
     def ok(self) -> bool:
-        """Whether every QP solved and the iterate is usable."""
-        return self.status is RtiStatus.SOLVED
+        """Whether at least the first QP solved and the iterate is usable."""
+        return self.status in (RtiStatus.SOLVED, RtiStatus.SOLVED_EARLY)
 
 
 def linearisation(nlp: dict[str, ca.MX], n: int) -> ca.Function:
@@ -89,9 +89,10 @@ class Rti:
     def solve(self, w: np.ndarray, p: np.ndarray, lbw: np.ndarray, ubw: np.ndarray,
               lbg: np.ndarray, ubg: np.ndarray, iterations: int) -> Iterate:
         """`iterations` full SQP steps from `w` (no line search: the RTI scheme), the last
-        iterate's cost at its linearisation point."""
+        iterate's cost at its linearisation point. A QP that fails after others solved ends
+        the iterations with the iterate so far, itself an RTI plan."""
         qp_iters, cost = 0, float("nan")
-        for _ in range(iterations):
+        for done in range(iterations):
             g, jac, f, grad, hess = self.lin(w, p)
             cost = float(f)
             g = np.asarray(g).ravel()
@@ -99,9 +100,9 @@ class Rti:
                           ubx=ubw - w)
             stats = self.qp.stats()
             qp_iters += int(stats.get("iter_count", 0))
-            if not stats.get("success", False):
-                return Iterate(w, cost, RtiStatus.QP_FAILED, qp_iters)
-            w = w + np.asarray(sol["x"]).ravel()
-            if not np.isfinite(w).all():
-                return Iterate(w, cost, RtiStatus.NOT_FINITE, qp_iters)
+            step = np.asarray(sol["x"]).ravel()
+            if not stats.get("success", False) or not np.isfinite(step).all():
+                status = RtiStatus.QP_FAILED if done == 0 else RtiStatus.SOLVED_EARLY
+                return Iterate(w, cost, status, qp_iters)
+            w = w + step
         return Iterate(w, cost, RtiStatus.SOLVED, qp_iters)
