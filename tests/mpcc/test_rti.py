@@ -152,6 +152,6 @@ def test_rti_passes_the_obstacles(tmp_path: Path) -> None:
 def test_each_method_has_its_own_compiled_code_and_the_qp_solver_compiles_nothing() -> None:
     kart = SingleTrack.of(GokartModel())
     rti = MpccController(method=MpccMethod.RTI)
-    assert solver_key(rti, kart) != solver_key(MpccController(), kart)
+    assert solver_key(rti, kart) != solver_key(MpccController(method=MpccMethod.IPOPT), kart)
     assert solver_key(rti.model_copy(update={"qp_solver": QpSolver.DAQP,
                                              "sqp_iterations": 3}), kart) == solver_key(rti, kart)
