@@ -31,7 +31,7 @@ class Plan:
 
     success: bool
     status: str
-    iterations: int
+    iterations: int  # Ipopt iterations; in RTI the QP solver iterations of all its QPs
     solve_ms: float
     cost: float
     max_slack_m: float
