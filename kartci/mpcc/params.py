@@ -96,7 +96,7 @@ class MpccController(ControllerParams):
     kart_width_m: float = Field(1.3, gt=0.0, description="footprint width of other karts, m")
     method: MpccMethod = Field(MpccMethod.RTI, description="`rti`: real-time iterations, "
                                "`sqp_iterations` QPs per step with `qp_solver` (laps every "
-                               "shipped scenario within 1 % of Ipopt at a sixth of its solve "
+                               "shipped scenario within 1 % of Ipopt at a third of its solve "
                                "time); `ipopt`: the NLP to convergence every step, the "
                                "reference")
     qp_solver: QpSolver = Field(QpSolver.HPIPM, description="the RTI mode's QP solver")
