@@ -13,6 +13,7 @@ import os
 import shutil
 import subprocess
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,9 +23,11 @@ import casadi as ca
 from kartci.errors import RunError
 from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.ocp import Layout, build
-from kartci.mpcc.params import MpccController
+from kartci.mpcc.params import MpccController, MpccMethod
+from kartci.mpcc.rti import Rti, linearisation
 
-SOURCES = ("model.py", "ocp.py", "cache.py")
+SOURCES = {MpccMethod.IPOPT: ("model.py", "ocp.py", "cache.py"),
+           MpccMethod.RTI: ("model.py", "ocp.py", "cache.py", "rti.py")}
 
 
 def cache_dir() -> Path:
@@ -37,12 +40,13 @@ def cache_dir() -> Path:
 
 
 def solver_key(spec: MpccController, model: SingleTrack) -> str:
-    """The cache key: a hash of CasADi's version, the solver's sources, the spec fields compiled
-    into it (horizon, step, RK4 substeps, modelling choices) and the kart's parameters."""
+    """The cache key: a hash of CasADi's version, the method and its sources, the spec fields
+    compiled into it (horizon, step, RK4 substeps, modelling choices) and the kart's parameters.
+    The QP solver and all limits and weights are runtime inputs, not in the key."""
     here = Path(__file__).parent
     h = hashlib.sha256()
-    h.update(str(ca.CasadiMeta.version()).encode())
-    for name in SOURCES:
+    h.update(f"{ca.CasadiMeta.version()} {spec.method}".encode())
+    for name in SOURCES[spec.method]:
         h.update((here / name).read_bytes())
     compiled = spec.model_dump(include={"horizon_steps", "step_s", "rk4_substeps", "vehicle"})
     h.update(repr(sorted(compiled.items())).encode())
@@ -54,8 +58,9 @@ def solver_key(spec: MpccController, model: SingleTrack) -> str:
 class Built:
     """A solver ready to use, its decision-vector layout, and how it was obtained."""
 
-    solver: ca.Function  # warm-started from the previous solution
-    cold: ca.Function  # the same NLP with Ipopt's default start, for retries
+    solver: ca.Function | None  # Ipopt, warm-started from the previous solution
+    cold: ca.Function | None  # the same NLP with Ipopt's default start, for retries
+    rti: Rti | None  # the RTI mode's linearisation and QP solver
     layout: Layout
     compiled: bool  # False when no C compiler was found: the SX graph is interpreted
     setup_s: float  # wall time to get the solver: compile on a miss, load on a hit
@@ -75,38 +80,59 @@ def _compiler() -> str | None:
 
 
 def get_solver(spec: MpccController, model: SingleTrack) -> Built:
-    """The solver for this spec and kart: from the cache, else compiled into it (or interpreted
-    when compiling is off or impossible)."""
+    """The solver of the spec's method for this kart: from the cache, else compiled into it (or
+    interpreted when compiling is off or impossible)."""
     t0 = time.perf_counter()
     nlp, layout = build(spec, model)
     cc = _compiler() if spec.compile else None
-    if cc is None:
-        solver = ca.nlpsol("mpcc", "ipopt", nlp, _options(spec))
-        cold = ca.nlpsol("mpcc_cold", "ipopt", nlp, _options(spec, warm=False))
-        return Built(solver, cold, layout, False, time.perf_counter() - t0, False)
-    key = solver_key(spec, model)
-    lib = cache_dir() / "mpcc" / f"mpcc_{key}.so"
+    hit = False
+    if spec.method is MpccMethod.RTI:
+        lin = linearisation(nlp, spec.horizon_steps)
+        if cc is not None:
+            lib, hit = _cached(spec, model, [lin], cc)
+            lin = _load(lambda: ca.external(lin.name(), str(lib)), str(lib))
+        return Built(None, None, Rti(lin, spec), layout, cc is not None,
+                     time.perf_counter() - t0, hit)
+    source: Any = nlp
+    label = "(interpreted)"
+    if cc is not None:
+        gen = ca.nlpsol("mpcc", "ipopt", nlp, _options(spec))
+        source, hit = _cached(spec, model, [gen.oracle(), *(
+            gen.get_function(name) for name in gen.get_function())], cc)
+        source = label = str(source)
+    solver = _load(lambda: ca.nlpsol("mpcc", "ipopt", source, _options(spec)), label)
+    cold = _load(lambda: ca.nlpsol("mpcc_cold", "ipopt", source, _options(spec, warm=False)),
+                 label)
+    return Built(solver, cold, None, layout, cc is not None, time.perf_counter() - t0, hit)
+
+
+def _cached(spec: MpccController, model: SingleTrack, functions: list[ca.Function],
+            cc: str) -> tuple[Path, bool]:
+    """The library of `functions` in the cache, compiled into it on a miss; and whether it hit."""
+    lib = cache_dir() / "mpcc" / f"mpcc_{spec.method}_{solver_key(spec, model)}.so"
     hit = lib.exists()
     if not hit:
-        _compile(ca.nlpsol("mpcc", "ipopt", nlp, _options(spec)), lib, cc)
+        _compile(functions, lib, cc)
+    return lib, hit
+
+
+def _load(make: Callable[[], ca.Function], source: str) -> ca.Function:
     try:
-        solver = ca.nlpsol("mpcc", "ipopt", str(lib), _options(spec))
-        cold = ca.nlpsol("mpcc_cold", "ipopt", str(lib), _options(spec, warm=False))
+        return make()
     except RuntimeError as err:
-        raise RunError(f"MPCC solver {lib} does not load ({err}); delete it to rebuild") from err
-    return Built(solver, cold, layout, True, time.perf_counter() - t0, hit)
+        raise RunError(f"MPCC solver {source} does not load ({err}); delete it to "
+                       "rebuild") from err
 
 
-def _compile(gen: ca.Function, lib: Path, cc: str) -> None:
-    """C code for the solver's own derivative functions, compiled into `lib`."""
+def _compile(functions: list[ca.Function], lib: Path, cc: str) -> None:
+    """C code for the solver's derivative functions, compiled into `lib`."""
     lib.parent.mkdir(parents=True, exist_ok=True)
     tmp = lib.parent / f".build_{os.getpid()}_{lib.stem}"
     tmp.mkdir(exist_ok=True)
     try:
         cg = ca.CodeGenerator("mpcc_nlp.c", {"with_header": False})
-        cg.add(gen.oracle())
-        for name in gen.get_function():
-            cg.add(gen.get_function(name))
+        for f in functions:
+            cg.add(f)
         cg.generate(f"{tmp}/")
         out = tmp / lib.name
         run = subprocess.run([cc, "-O1", "-fPIC", "-shared", str(tmp / "mpcc_nlp.c"), "-o",

@@ -1,5 +1,6 @@
 """One MPCC solve per control period: measured state in, a command and the predicted horizon
-out. Warm-started from the previous solution shifted by one step; a failed solve brakes."""
+out. Warm-started from the previous solution shifted by one step, solved to convergence with
+Ipopt or by real-time iterations (`rti.py`); a failed solve brakes."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from kartci.mpcc.model import ACC, DELTA, PSI, SLACK, VS, VX, S, SingleTrack, X,
 from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
 from kartci.mpcc.params import MpccController
 from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
+from kartci.mpcc.rti import Rti
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import Track
 from kartci.vehicle import STEERING_RATIO, wheel_angles
@@ -29,7 +31,7 @@ class Plan:
 
     success: bool
     status: str
-    iterations: int
+    iterations: int  # Ipopt iterations; in RTI the QP solver iterations of all its QPs
     solve_ms: float
     cost: float
     max_slack_m: float
@@ -62,11 +64,12 @@ class Mpcc:
         x0[DELTA] = float(np.clip(x0[DELTA], -self.max_delta, self.max_delta))
         x0[ACC] = float(np.clip(x0[ACC], -sp.max_brake_mps2, sp.max_accel_mps2))
         t0 = time.perf_counter()
-        warm = self._w is not None and self._lam_g is not None
-        sol, status, ok, iters = self._attempt(x0, obstacles, self.built.solver)
-        if not ok and warm:  # a warm start can trap the interior point: retry once, fresh
+        warm = self._w is not None
+        sol, status, ok, iters = self._attempt(x0, obstacles, self.built.rti or self.built.solver)
+        if not ok and warm:  # a warm start can trap the solver: retry once, fresh
             self._w = self._lam_g = self._lam_x = None
-            sol, status, ok, more = self._attempt(x0, obstacles, self.built.cold)
+            sol, status, ok, more = self._attempt(x0, obstacles,
+                                                  self.built.rti or self.built.cold)
             iters += more
         solve_ms = (time.perf_counter() - t0) * 1e3
         w = np.asarray(sol["x"]).ravel()
@@ -75,8 +78,9 @@ class Mpcc:
             self._w = self._lam_g = self._lam_x = None
             return self._brake(x0, status, iters, solve_ms)
         self._w = w
-        self._lam_g = np.asarray(sol["lam_g"]).ravel()
-        self._lam_x = np.asarray(sol["lam_x"]).ravel()
+        if "lam_g" in sol:  # Ipopt's multipliers warm-start its next solve
+            self._lam_g = np.asarray(sol["lam_g"]).ravel()
+            self._lam_x = np.asarray(sol["lam_x"]).ravel()
         states = lay.states(w)
         slack = float(lay.inputs(w)[1:, SLACK].max())
         return Plan(True, status, iters, solve_ms, float(sol["f"]), slack, states,
@@ -84,8 +88,10 @@ class Mpcc:
 
     def _attempt(self, x0: np.ndarray, obstacles: list[Obstacle],
                  solver: Any) -> tuple[dict[str, Any], str, bool, int]:
-        """One Ipopt call from the current guess: the last solution shifted, else fresh."""
+        """One solve from the current guess (the last solution shifted, else fresh): Ipopt's,
+        or the real-time iterations."""
         sp, lay = self.spec, self.lay
+        cold = self._w is None
         w0 = self._initial_guess(x0)
         params = stage_params(self.track, lay.states(w0)[1:, S], sp.step_s,
                               sp.track_padding_m, obstacles, sp.obstacle_margin_m,
@@ -95,6 +101,10 @@ class Mpcc:
                                                           sp.max_speed_mps],
                             params.ravel()])
         lbw, ubw = variable_bounds(sp, lay, x0, self.max_delta)
+        if isinstance(solver, Rti):
+            it = solver.solve(w0, p, lbw, ubw, self.lbg, self.ubg,
+                              sp.sqp_cold_iterations if cold else sp.sqp_iterations)
+            return {"x": it.w, "f": it.cost}, it.status, it.ok, it.qp_iterations
         args = {"x0": w0, "p": p, "lbx": lbw, "ubx": ubw, "lbg": self.lbg, "ubg": self.ubg}
         if self._lam_g is not None and self._lam_x is not None:
             args["lam_g0"], args["lam_x0"] = self._lam_g, self._lam_x
@@ -121,6 +131,9 @@ class Mpcc:
             us = np.vstack([us[1:], us[-1:]])
             offset = x0[S] - xs[0, S]
             xs[:, S] += offset
+            if self.built.rti is not None:  # a measured heading that wrapped by 2 pi would
+                # linearise cos/sin far off; Ipopt iterates it away, its results stay as they were
+                xs[:, PSI] += 2 * math.pi * round((x0[PSI] - xs[0, PSI]) / (2 * math.pi))
         else:
             s = progress_guess(float(x0[S]), float(x0[VX]), sp.step_s,
                                sp.horizon_steps, sp.max_speed_mps)

@@ -13,7 +13,7 @@ from kartci.metrics import Metric, compute, race
 from kartci.metrics.kart import kart_track
 from kartci.mpcc.cache import get_solver, solver_key
 from kartci.mpcc.model import SingleTrack
-from kartci.mpcc.params import MpccController, MpccWeights
+from kartci.mpcc.params import MpccController, MpccMethod, MpccWeights
 from kartci.project import BUILTIN
 from kartci.robots.gokart.params import GokartModel
 from kartci.sim import simulate
@@ -27,16 +27,18 @@ def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]
     return log, compute(log)[1]
 
 
+@pytest.mark.parametrize("method", list(MpccMethod))
 def test_solver_is_compiled_once_then_loaded_from_the_cache(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, method: MpccMethod) -> None:
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
-    spec = MpccController(horizon_steps=8)
+    spec = MpccController(horizon_steps=8, method=method)
     kart = SingleTrack.of(GokartModel())
     first = get_solver(spec, kart)
     assert first.compiled and not first.cache_hit
-    assert len(list((tmp_path / "mpcc").glob("mpcc_*.so"))) == 1
+    assert len(list((tmp_path / "mpcc").glob(f"mpcc_{method}_*.so"))) == 1
     second = get_solver(spec, kart)
     assert second.cache_hit
+    assert (second.rti is not None) == (method is MpccMethod.RTI)
     # tuning and limits are solver inputs: they reuse the binary; the horizon and the kart's
     # own parameters (the model reads them from the robot) do not
     key = solver_key(spec, kart)
@@ -80,8 +82,11 @@ def test_the_same_mpcc_laps_other_tracks(tmp_path: Path, name: str) -> None:
 
 
 def test_failed_solves_brake_and_are_counted(tmp_path: Path) -> None:
-    """An iteration cap no solve can meet: every solve fails, the kart never gets going."""
+    """The Ipopt reference mode (a short horizon: a short compile): an iteration cap no solve
+    can meet fails every solve, the kart never gets going. (RTI: test_rti.py.)"""
     log, m = _run(tmp_path, "mpcc_lap", "duration_s=2",
+                  "agents.kart0.controller.method=ipopt",
+                  "agents.kart0.controller.horizon_steps=8",
                   "agents.kart0.controller.max_iterations=1")
     stats = tables(log)["/kart0/mpcc/stats"]
     assert m["solver_failures"].value == len(stats) == 41  # 2 s at 20 Hz, both ends

@@ -1,0 +1,157 @@
+"""The MPCC's real-time-iteration mode: selectable, its structured QP agrees with a general QP
+solver, it races the shipped scenarios as the Ipopt reference does, and a failed QP brakes and
+is counted.
+
+The full-length laps run behind KARTCI_LONG=1 (about a minute of CPU)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from kartci.errors import SpecError
+from kartci.logs import tables
+from kartci.metrics import Metric, compute
+from kartci.mpcc import Mpcc
+from kartci.mpcc.cache import solver_key
+from kartci.mpcc.model import SingleTrack
+from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
+from kartci.mpcc.rti import RtiStatus
+from kartci.project import BUILTIN
+from kartci.robots.gokart.params import GokartModel
+from kartci.sim import simulate
+from kartci.spec import load_scenario
+from kartci.track import load_track
+
+RTI = "agents.kart0.controller.method=rti"
+long_only = pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
+                               reason="full-length RTI laps: set KARTCI_LONG=1")
+
+
+def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]]:
+    log = tmp_path / f"{name}.mcap"
+    simulate(load_scenario(name, list(sets)), log)
+    return log, compute(log)[1]
+
+
+# the Ipopt mode's metrics, from its baselines (main at 50f5722, before RTI became the
+# default); runs are deterministic, so these are what `method=ipopt` gives
+IPOPT = {"mpcc_lap": {"laps_completed": 4, "lap_times_s": 9.163198476,
+                      "best_lap_s": 8.906952231},
+         "mpcc_circuit": {"laps_completed": 2, "lap_times_s": 23.13012153,
+                          "best_lap_s": 22.57441367},
+         "obstacle_avoidance": {"lap_times_s": 10.83075758, "best_lap_s": 10.39072361},
+         "multi_agent": {"kart0.lap_times_s": 9.934858121}}
+
+
+def _reference(name: str, metric: str) -> float:
+    """The Ipopt mode's value of a metric."""
+    return IPOPT[name][metric]
+
+
+def test_the_method_is_selectable_with_set_and_a_bad_one_is_one_clear_error() -> None:
+    spec = load_scenario("mpcc_lap", [RTI, "agents.kart0.controller.qp_solver=osqp"]
+                         ).agents["kart0"].controller
+    assert isinstance(spec, MpccController)
+    assert spec.method is MpccMethod.RTI and spec.qp_solver is QpSolver.OSQP
+    assert MpccController().method is MpccMethod.RTI  # the default
+    with pytest.raises(SpecError, match="method"):
+        load_scenario("mpcc_lap", ["agents.kart0.controller.method=sqp"])
+
+
+def test_hpipm_solves_the_structured_qp_as_a_general_solver_does(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """HPIPM reads the QP through the OCP structure (stages, signs of the dynamics rows); the
+    same QP handed to OSQP as a plain sparse QP must give the same step."""
+    monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
+    spec = MpccController(method=MpccMethod.RTI, horizon_steps=8)
+    track = load_track(BUILTIN / "worlds" / "winti" / "track.csv")
+    mpcc = Mpcc(spec, GokartModel(), track)
+    assert mpcc.built.rti is not None and mpcc.built.compiled
+    seen: list[dict[str, ca.DM]] = []
+    hpipm = mpcc.built.rti.qp
+
+    class Recorder:
+        def __call__(self, **qp: ca.DM) -> dict[str, ca.DM]:
+            seen.append(qp)
+            return hpipm(**qp)
+
+        def stats(self) -> dict[str, object]:
+            return hpipm.stats()
+
+    mpcc.built.rti.qp = Recorder()  # type: ignore[assignment]
+    x, y, psi = track.pose_at(0.0, 0.0)
+    plan = mpcc.solve(np.array([x, y, psi, 2.0, 0, 0, 0, 0, 0]), [])
+    assert plan.success and plan.status == RtiStatus.SOLVED
+    assert len(seen) == spec.sqp_cold_iterations
+    lin = mpcc.built.rti.lin
+    osqp = ca.conic("ref", "osqp", {"h": lin.sparsity_out("hess_f"),
+                                    "a": lin.sparsity_out("jac_g")},
+                    {"osqp": {"verbose": False, "eps_abs": 1e-9, "eps_rel": 1e-9,
+                              "max_iter": 100000, "polish": True}})
+    for qp in (seen[0], seen[-1]):
+        ours = np.asarray(hpipm(**qp)["x"]).ravel()
+        ref = np.asarray(osqp(**qp)["x"]).ravel()
+        assert np.abs(ours - ref).max() < 1e-3 * max(1.0, np.abs(ref).max())
+    assert plan.accel_mps2 > 0  # from 2 m/s on the straight: it speeds up
+
+
+def test_a_failed_qp_brakes_and_is_counted(tmp_path: Path) -> None:
+    """A QP iteration cap no QP can meet: every step fails, the kart never gets going."""
+    log, m = _run(tmp_path, "mpcc_lap", "duration_s=2", RTI,
+                  "agents.kart0.controller.max_iterations=1")
+    stats = tables(log)["/kart0/mpcc/stats"]
+    assert m["solver_failures"].value == len(stats) == 41  # 2 s at 20 Hz, both ends
+    assert set(stats["status"]) == {RtiStatus.QP_FAILED.value}
+    assert m["progress_m"].value < 0.5
+
+
+def test_rti_overtakes_in_multi_agent(tmp_path: Path) -> None:
+    _, m = _run(tmp_path, "multi_agent", RTI)
+    assert m["kart0.overtakes"].value == 1
+    assert m["kart0.collisions"].value == 0
+    assert m["kart0.off_track_s"].value == 0
+    assert m["kart0.solver_failures"].value == 0
+    assert m["kart0.min_clearance_m"].value > 0.2
+    # the Ipopt reference's mean lap (baseline) within 2 %
+    assert m["kart0.lap_times_s"].value == pytest.approx(
+        _reference("multi_agent", "kart0.lap_times_s"), rel=0.02)
+
+
+@long_only
+@pytest.mark.long
+@pytest.mark.parametrize("name", ["mpcc_lap", "mpcc_circuit"])
+def test_rti_laps_the_shipped_tracks_within_2_percent_of_ipopt(tmp_path: Path,
+                                                                name: str) -> None:
+    _, m = _run(tmp_path, name, RTI)
+    assert m["laps_completed"].value == _reference(name, "laps_completed")
+    assert m["collisions"].value == 0
+    assert m["off_track_s"].value == 0
+    assert m["solver_failures"].value == 0
+    for lap in ("lap_times_s", "best_lap_s"):
+        assert m[lap].value == pytest.approx(_reference(name, lap), rel=0.02)
+
+
+@long_only
+@pytest.mark.long
+def test_rti_passes_the_obstacles(tmp_path: Path) -> None:
+    """Clear of all five boxes, on the track, laps within 2 % of Ipopt's."""
+    _, m = _run(tmp_path, "obstacle_avoidance", RTI)
+    assert m["laps_completed"].value >= 2
+    assert m["collisions"].value == 0
+    assert m["off_track_s"].value == 0
+    assert m["min_clearance_m"].value > 0.1
+    for lap in ("lap_times_s", "best_lap_s"):
+        assert m[lap].value == pytest.approx(_reference("obstacle_avoidance", lap), rel=0.02)
+
+
+def test_each_method_has_its_own_compiled_code_and_the_qp_solver_compiles_nothing() -> None:
+    kart = SingleTrack.of(GokartModel())
+    rti = MpccController(method=MpccMethod.RTI)
+    assert solver_key(rti, kart) != solver_key(MpccController(method=MpccMethod.IPOPT), kart)
+    assert solver_key(rti.model_copy(update={"qp_solver": QpSolver.DAQP,
+                                             "sqp_iterations": 3}), kart) == solver_key(rti, kart)
