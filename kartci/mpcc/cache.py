@@ -20,6 +20,7 @@ from typing import Any
 
 import casadi as ca
 
+from kartci.cachedir import cache_dir
 from kartci.errors import RunError
 from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.ocp import Layout, build
@@ -28,15 +29,6 @@ from kartci.mpcc.rti import Rti, linearisation
 
 SOURCES = {MpccMethod.IPOPT: ("model.py", "ocp.py", "cache.py"),
            MpccMethod.RTI: ("model.py", "ocp.py", "cache.py", "rti.py")}
-
-
-def cache_dir() -> Path:
-    """KARTCI_CACHE_DIR, else ~/.cache/kartci (XDG_CACHE_HOME respected)."""
-    env = os.environ.get("KARTCI_CACHE_DIR")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "kartci"
 
 
 def solver_key(spec: MpccController, model: SingleTrack) -> str:
