@@ -6,6 +6,7 @@ The full-length laps run behind KARTCI_LONG=1 (about a minute of CPU)."""
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -27,6 +28,7 @@ from kartci.sim import simulate
 from kartci.spec import load_scenario
 from kartci.track import load_track
 
+ROOT = Path(__file__).resolve().parents[2]
 RTI = "agents.kart0.controller.method=rti"
 long_only = pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
                                reason="full-length RTI laps: set KARTCI_LONG=1")
@@ -155,3 +157,15 @@ def test_each_method_has_its_own_compiled_code_and_the_qp_solver_compiles_nothin
     assert solver_key(rti, kart) != solver_key(MpccController(method=MpccMethod.IPOPT), kart)
     assert solver_key(rti.model_copy(update={"qp_solver": QpSolver.DAQP,
                                              "sqp_iterations": 3}), kart) == solver_key(rti, kart)
+
+
+@pytest.mark.parametrize("name", sorted(IPOPT))
+def test_the_committed_rti_baselines_lap_within_2_percent_of_ipopt(name: str) -> None:
+    """RTI is the default because it laps as Ipopt does: the committed baselines, which the
+    exact-baseline test (tests/plugins) reproduces run by run with RTI, hold that."""
+    base = json.loads((ROOT / "baselines" / f"{name}.json").read_text())["metrics"]
+    for metric, ipopt in IPOPT[name].items():
+        if metric == "laps_completed":
+            assert base[metric]["value"] == ipopt
+        else:
+            assert base[metric]["value"] == pytest.approx(ipopt, rel=0.02)
