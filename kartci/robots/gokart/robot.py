@@ -96,9 +96,15 @@ class KartRobot(RobotBase):
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         """At the odometry rate: odometry, joint states, tf of the moving frames, floor friction and
         the speed loop; camera, IMU and lidar at their own rates."""
+        odom = k % self.odom_every == 0
+        camera = self.sensors.camera.enabled and k % self.camera_every == 0
+        imu = self.sensors.imu.enabled and k % self.imu_every == 0
+        lidar = self.sensors.lidar.enabled and k % self.lidar_every == 0
+        if not (odom or camera or imu or lidar):
+            return  # most physics steps publish nothing: no state read
         st = self.body.state()
         ns = self.name
-        if k % self.odom_every == 0:
+        if odom:
             self.publish_pose(st, t_ns, put)
             steer, spin, speeds = self.body.wheel_states()
             put("joint_states", joint_state(
@@ -108,11 +114,11 @@ class KartRobot(RobotBase):
             self._zone_friction(st)
             self._pedals(st)
             put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
-        if self.sensors.camera.enabled and k % self.camera_every == 0:
+        if camera:
             self._camera(st, t_ns, put)
-        if self.sensors.imu.enabled and k % self.imu_every == 0:
+        if imu:
             self._imu(st, t_ns, put)
-        if self.sensors.lidar.enabled and k % self.lidar_every == 0:
+        if lidar:
             self._lidar(st, t_ns, put)
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
