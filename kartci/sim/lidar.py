@@ -58,8 +58,8 @@ def _box_intervals(origin: Array, dirs: Array, blocks: list[Block]) -> tuple[Arr
         with np.errstate(divide="ignore", invalid="ignore"):
             t1 = (-half - o) / d
             t2 = (half - o) / d
-        lo = np.nanmax(np.minimum(t1, t2), axis=1)
-        hi = np.nanmin(np.maximum(t1, t2), axis=1)
+        lo = np.fmax.reduce(np.minimum(t1, t2), axis=1)  # nanmax without its NaN checks
+        hi = np.fmin.reduce(np.maximum(t1, t2), axis=1)
         hit = (hi >= lo) & (lo > 0)
         t_in[i, hit], t_out[i, hit] = lo[hit], hi[hit]
     return t_in, t_out
@@ -123,11 +123,12 @@ def to_points(model: LidarModel, azimuths: Array, ranges: Array) -> NDArray[np.v
     """Valid returns as a structured array in the sensor frame (x forward, z up)."""
     ring, col = np.nonzero(np.isfinite(ranges))
     r = ranges[ring, col]
-    phi, a = model.elevations_rad[ring], azimuths[col]
+    # the cosines of the rings and azimuths, looked up per point rather than computed per point
+    cos_phi = np.cos(model.elevations_rad)[ring]
     pts = np.empty(len(r), POINT_DTYPE)
-    pts["x"] = r * np.cos(phi) * np.cos(a)
-    pts["y"] = r * np.cos(phi) * np.sin(a)
-    pts["z"] = r * np.sin(phi)
+    pts["x"] = r * cos_phi * np.cos(azimuths)[col]
+    pts["y"] = r * cos_phi * np.sin(azimuths)[col]
+    pts["z"] = r * np.sin(model.elevations_rad)[ring]
     pts["intensity"] = 100.0
     pts["ring"] = ring
     return pts
