@@ -72,7 +72,10 @@ def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float,
     dirs = np.column_stack([np.cos(theta), np.sin(theta)])
     z0 = float(position[2])
     t_in, t_out = _box_intervals(position[:2], dirs, blocks)
-    heights = np.array([b.size[2] for b in blocks])[:, None]
+    # only the (block, azimuth) pairs whose 2D ray enters the block can return from it
+    blk, col = np.nonzero(np.isfinite(t_in))
+    t_in, t_out = t_in[blk, col], t_out[blk, col]
+    heights = np.array([b.size[2] for b in blocks])[blk]
     out = np.empty((len(model.elevations_rad), len(azimuths)))
     for r, phi in enumerate(model.elevations_rad):
         tan = math.tan(phi)
@@ -87,8 +90,8 @@ def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float,
         if tan < 0:
             d_top = (heights - z0) / tan
             top = (z_in > heights) & (d_top <= t_out)
-            d = np.where(top, np.broadcast_to(d_top, d.shape), d)
-        best = np.minimum(best, d.min(axis=0))
+            d = np.where(top, d_top, d)
+        np.minimum.at(best, col, d)  # nearest return of each azimuth (min is exact: any order)
         out[r] = best / math.cos(phi)
     out[out > max_range_m] = np.inf
     return out
