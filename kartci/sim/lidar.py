@@ -46,13 +46,14 @@ MODELS = {
 
 
 def _box_intervals(origin: Array, dirs: Array, blocks: list[Block]) -> tuple[Array, Array]:
-    """Horizontal entry / exit distance of each azimuth ray through each block (B, A)."""
+    """Horizontal entry / exit distance of each azimuth ray through each block (B, A), the rays
+    starting at `origin` (2,) or each at its own (A, 2)."""
     t_in = np.full((len(blocks), len(dirs)), np.inf)
     t_out = np.full_like(t_in, np.inf)
     for i, b in enumerate(blocks):
         c, s = math.cos(b.yaw), math.sin(b.yaw)
-        ox, oy = origin[0] - b.center[0], origin[1] - b.center[1]
-        o = np.array([c * ox + s * oy, -s * ox + c * oy])
+        ox, oy = origin[..., 0] - b.center[0], origin[..., 1] - b.center[1]
+        o = np.stack([c * ox + s * oy, -s * ox + c * oy], axis=-1)
         d = np.column_stack([c * dirs[:, 0] + s * dirs[:, 1], -s * dirs[:, 0] + c * dirs[:, 1]])
         half = np.array([b.size[0] / 2, b.size[1] / 2])
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -65,16 +66,18 @@ def _box_intervals(origin: Array, dirs: Array, blocks: list[Block]) -> tuple[Arr
     return t_in, t_out
 
 
-def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float,
+def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float | Array,
               blocks: list[Block], ceiling_m: float, max_range_m: float) -> Array:
-    """Ranges (m) along each beam, shape (rings, azimuths); inf where nothing is in range."""
+    """Ranges (m) along each beam, shape (rings, azimuths); inf where nothing is in range. The
+    sensor is at `position` (3,) with heading `yaw`, or, for a scan swept while moving, each
+    azimuth has its own position (A, 3) and heading (A,)."""
     theta = yaw + azimuths
     dirs = np.column_stack([np.cos(theta), np.sin(theta)])
-    z0 = float(position[2])
-    t_in, t_out = _box_intervals(position[:2], dirs, blocks)
+    z0 = np.broadcast_to(position[..., 2], azimuths.shape)
+    t_in, t_out = _box_intervals(position[..., :2], dirs, blocks)
     # only the (block, azimuth) pairs whose 2D ray enters the block can return from it
     blk, col = np.nonzero(np.isfinite(t_in))
-    t_in, t_out = t_in[blk, col], t_out[blk, col]
+    t_in, t_out, z_pair = t_in[blk, col], t_out[blk, col], z0[col]
     heights = np.array([b.size[2] for b in blocks])[blk]
     out = np.empty((len(model.elevations_rad), len(azimuths)))
     for r, phi in enumerate(model.elevations_rad):
@@ -84,11 +87,11 @@ def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float,
             best[:] = z0 / -tan
         elif tan > 0:
             best[:] = (ceiling_m - z0) / tan
-        z_in = z0 + t_in * tan
+        z_in = z_pair + t_in * tan
         side = (z_in >= 0) & (z_in <= heights)
         d = np.where(side, t_in, np.inf)
         if tan < 0:
-            d_top = (heights - z0) / tan
+            d_top = (heights - z_pair) / tan
             top = (z_in > heights) & (d_top <= t_out)
             d = np.where(top, d_top, d)
         np.minimum.at(best, col, d)  # nearest return of each azimuth (min is exact: any order)
