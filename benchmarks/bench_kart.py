@@ -25,9 +25,10 @@ from kartci.sim.hall import blocks
 from kartci.spec import load_scenario
 from kartci.spec.models import HallWorld
 
-RUNS = (("kart_manual, no lidar", "kart_manual", []),
-        ("kart_manual, VLP-16 10 Hz", "kart_manual", ["agents.kart0.sensors.lidar.enabled=true"]),
-        ("localization_lap", "localization_lap", []))
+RUNS: tuple[tuple[str, str, list[str]], ...] = (
+    ("kart_manual, no lidar", "kart_manual", []),
+    ("kart_manual, VLP-16 10 Hz", "kart_manual", ["agents.kart0.sensors.lidar.enabled=true"]),
+    ("localization_lap", "localization_lap", []))
 
 
 def rtf(name: str, sets: list[str], out: Path) -> float:

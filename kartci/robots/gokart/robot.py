@@ -199,7 +199,8 @@ class KartRobot(RobotBase):
                  if o is not self and isinstance(o, KartRobot)]
         spec, blocks = self.sensors.lidar, self.blocks + extra
 
-        def scan(azimuths: np.ndarray, xyz: np.ndarray, heading: float) -> np.ndarray:
+        def scan(azimuths: np.ndarray, xyz: np.ndarray, heading: float | np.ndarray,
+                 ) -> np.ndarray:
             return lidar_mod.scan_fast(self.lidar, azimuths, xyz, heading, blocks,
                                        self.world.ceiling_m, spec.range_m)
 
