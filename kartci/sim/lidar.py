@@ -45,22 +45,24 @@ MODELS = {
 }
 
 
-def _box_intervals(origin: Array, dirs: Array, blocks: list[Block]) -> tuple[Array, Array]:
-    """Horizontal entry / exit distance of each azimuth ray through each block (B, A), the rays
-    starting at `origin` (2,) or each at its own (A, 2)."""
-    t_in = np.full((len(blocks), len(dirs)), np.inf)
+def _box_intervals(origin: Array, cos_t: Array, sin_t: Array,
+                   blocks: list[Block]) -> tuple[Array, Array]:
+    """Horizontal entry / exit distance of each azimuth ray (direction cos_t, sin_t) through
+    each block (B, A), the rays starting at `origin` (2,) or each at its own (A, 2). Slabs per
+    axis as 1D arrays: reducing (A, 2) arrays over their short axis was the cost."""
+    t_in = np.full((len(blocks), len(cos_t)), np.inf)
     t_out = np.full_like(t_in, np.inf)
     for i, b in enumerate(blocks):
         c, s = math.cos(b.yaw), math.sin(b.yaw)
         ox, oy = origin[..., 0] - b.center[0], origin[..., 1] - b.center[1]
-        o = np.stack([c * ox + s * oy, -s * ox + c * oy], axis=-1)
-        d = np.column_stack([c * dirs[:, 0] + s * dirs[:, 1], -s * dirs[:, 0] + c * dirs[:, 1]])
-        half = np.array([b.size[0] / 2, b.size[1] / 2])
+        ox, oy = c * ox + s * oy, -s * ox + c * oy
+        dx, dy = c * cos_t + s * sin_t, -s * cos_t + c * sin_t
+        hx, hy = b.size[0] / 2, b.size[1] / 2
         with np.errstate(divide="ignore", invalid="ignore"):
-            t1 = (-half - o) / d
-            t2 = (half - o) / d
-        lo = np.fmax.reduce(np.minimum(t1, t2), axis=1)  # nanmax without its NaN checks
-        hi = np.fmin.reduce(np.maximum(t1, t2), axis=1)
+            x1, x2 = (-hx - ox) / dx, (hx - ox) / dx
+            y1, y2 = (-hy - oy) / dy, (hy - oy) / dy
+        lo = np.fmax(np.minimum(x1, x2), np.minimum(y1, y2))  # fmax/fmin: a NaN slab is open
+        hi = np.fmin(np.maximum(x1, x2), np.maximum(y1, y2))
         hit = (hi >= lo) & (lo > 0)
         t_in[i, hit], t_out[i, hit] = lo[hit], hi[hit]
     return t_in, t_out
@@ -72,9 +74,8 @@ def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float | 
     sensor is at `position` (3,) with heading `yaw`, or, for a scan swept while moving, each
     azimuth has its own position (A, 3) and heading (A,)."""
     theta = yaw + azimuths
-    dirs = np.column_stack([np.cos(theta), np.sin(theta)])
     z0 = np.broadcast_to(position[..., 2], azimuths.shape)
-    t_in, t_out = _box_intervals(position[..., :2], dirs, blocks)
+    t_in, t_out = _box_intervals(position[..., :2], np.cos(theta), np.sin(theta), blocks)
     # only the (block, azimuth) pairs whose 2D ray enters the block can return from it
     blk, col = np.nonzero(np.isfinite(t_in))
     t_in, t_out, z_pair = t_in[blk, col], t_out[blk, col], z0[col]
