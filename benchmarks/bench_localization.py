@@ -56,7 +56,7 @@ def scans(n: int) -> list[tuple[np.ndarray, np.ndarray]]:
         st = BodyState((x, y, 0.13), (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)),
                        (V, 0.0, 0.0), (0.0, 0.0, W))
 
-        def cast(a: np.ndarray, p: np.ndarray, h: float) -> np.ndarray:
+        def cast(a: np.ndarray, p: np.ndarray, h: float | np.ndarray) -> np.ndarray:
             return lidar.scan_fast(VLP16, a, p, h, bl, spec.wall_height_m, 100.0)
 
         r = distorted_scan(cast, az, st, np.array([x, y, H]), 10.0)

@@ -45,34 +45,41 @@ MODELS = {
 }
 
 
-def _box_intervals(origin: Array, dirs: Array, blocks: list[Block]) -> tuple[Array, Array]:
-    """Horizontal entry / exit distance of each azimuth ray through each block (B, A)."""
-    t_in = np.full((len(blocks), len(dirs)), np.inf)
+def _box_intervals(origin: Array, cos_t: Array, sin_t: Array,
+                   blocks: list[Block]) -> tuple[Array, Array]:
+    """Horizontal entry / exit distance of each azimuth ray (direction cos_t, sin_t) through
+    each block (B, A), the rays starting at `origin` (2,) or each at its own (A, 2). Slabs per
+    axis as 1D arrays: reducing (A, 2) arrays over their short axis was the cost."""
+    t_in = np.full((len(blocks), len(cos_t)), np.inf)
     t_out = np.full_like(t_in, np.inf)
     for i, b in enumerate(blocks):
         c, s = math.cos(b.yaw), math.sin(b.yaw)
-        ox, oy = origin[0] - b.center[0], origin[1] - b.center[1]
-        o = np.array([c * ox + s * oy, -s * ox + c * oy])
-        d = np.column_stack([c * dirs[:, 0] + s * dirs[:, 1], -s * dirs[:, 0] + c * dirs[:, 1]])
-        half = np.array([b.size[0] / 2, b.size[1] / 2])
+        ox, oy = origin[..., 0] - b.center[0], origin[..., 1] - b.center[1]
+        ox, oy = c * ox + s * oy, -s * ox + c * oy
+        dx, dy = c * cos_t + s * sin_t, -s * cos_t + c * sin_t
+        hx, hy = b.size[0] / 2, b.size[1] / 2
         with np.errstate(divide="ignore", invalid="ignore"):
-            t1 = (-half - o) / d
-            t2 = (half - o) / d
-        lo = np.nanmax(np.minimum(t1, t2), axis=1)
-        hi = np.nanmin(np.maximum(t1, t2), axis=1)
+            x1, x2 = (-hx - ox) / dx, (hx - ox) / dx
+            y1, y2 = (-hy - oy) / dy, (hy - oy) / dy
+        lo = np.fmax(np.minimum(x1, x2), np.minimum(y1, y2))  # fmax/fmin: a NaN slab is open
+        hi = np.fmin(np.maximum(x1, x2), np.maximum(y1, y2))
         hit = (hi >= lo) & (lo > 0)
         t_in[i, hit], t_out[i, hit] = lo[hit], hi[hit]
     return t_in, t_out
 
 
-def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float,
+def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float | Array,
               blocks: list[Block], ceiling_m: float, max_range_m: float) -> Array:
-    """Ranges (m) along each beam, shape (rings, azimuths); inf where nothing is in range."""
+    """Ranges (m) along each beam, shape (rings, azimuths); inf where nothing is in range. The
+    sensor is at `position` (3,) with heading `yaw`, or, for a scan swept while moving, each
+    azimuth has its own position (A, 3) and heading (A,)."""
     theta = yaw + azimuths
-    dirs = np.column_stack([np.cos(theta), np.sin(theta)])
-    z0 = float(position[2])
-    t_in, t_out = _box_intervals(position[:2], dirs, blocks)
-    heights = np.array([b.size[2] for b in blocks])[:, None]
+    z0 = np.broadcast_to(position[..., 2], azimuths.shape)
+    t_in, t_out = _box_intervals(position[..., :2], np.cos(theta), np.sin(theta), blocks)
+    # only the (block, azimuth) pairs whose 2D ray enters the block can return from it
+    blk, col = np.nonzero(np.isfinite(t_in))
+    t_in, t_out, z_pair = t_in[blk, col], t_out[blk, col], z0[col]
+    heights = np.array([b.size[2] for b in blocks])[blk]
     out = np.empty((len(model.elevations_rad), len(azimuths)))
     for r, phi in enumerate(model.elevations_rad):
         tan = math.tan(phi)
@@ -81,14 +88,14 @@ def scan_fast(model: LidarModel, azimuths: Array, position: Array, yaw: float,
             best[:] = z0 / -tan
         elif tan > 0:
             best[:] = (ceiling_m - z0) / tan
-        z_in = z0 + t_in * tan
+        z_in = z_pair + t_in * tan
         side = (z_in >= 0) & (z_in <= heights)
         d = np.where(side, t_in, np.inf)
         if tan < 0:
-            d_top = (heights - z0) / tan
+            d_top = (heights - z_pair) / tan
             top = (z_in > heights) & (d_top <= t_out)
-            d = np.where(top, np.broadcast_to(d_top, d.shape), d)
-        best = np.minimum(best, d.min(axis=0))
+            d = np.where(top, d_top, d)
+        np.minimum.at(best, col, d)  # nearest return of each azimuth (min is exact: any order)
         out[r] = best / math.cos(phi)
     out[out > max_range_m] = np.inf
     return out
@@ -123,11 +130,12 @@ def to_points(model: LidarModel, azimuths: Array, ranges: Array) -> NDArray[np.v
     """Valid returns as a structured array in the sensor frame (x forward, z up)."""
     ring, col = np.nonzero(np.isfinite(ranges))
     r = ranges[ring, col]
-    phi, a = model.elevations_rad[ring], azimuths[col]
+    # the cosines of the rings and azimuths, looked up per point rather than computed per point
+    cos_phi = np.cos(model.elevations_rad)[ring]
     pts = np.empty(len(r), POINT_DTYPE)
-    pts["x"] = r * np.cos(phi) * np.cos(a)
-    pts["y"] = r * np.cos(phi) * np.sin(a)
-    pts["z"] = r * np.sin(phi)
+    pts["x"] = r * cos_phi * np.cos(azimuths)[col]
+    pts["y"] = r * cos_phi * np.sin(azimuths)[col]
+    pts["z"] = r * np.sin(model.elevations_rad)[ring]
     pts["intensity"] = 100.0
     pts["ring"] = ring
     return pts

@@ -45,10 +45,14 @@ def quat_from_matrix(r: np.ndarray) -> tuple[float, float, float, float]:
     return x, y, z, w
 
 
+ZEROS36 = np.zeros(36)
+ZEROS36.setflags(write=False)  # shared by every odometry message: nobody may change it
+
+
 def odometry(t_ns: int, ns: str, st: BodyState) -> Any:
     """nav_msgs/Odometry of `<ns>/base_link` in the world frame from ground truth, twist in
     base_link; zero covariances."""
-    zeros36 = np.zeros(36)
+    zeros36 = ZEROS36
     return msg("nav_msgs/msg/Odometry", header=header(t_ns, WORLD_FRAME),
                child_frame_id=f"{ns}/base_link",
                pose=msg("geometry_msgs/msg/PoseWithCovariance", pose=pose(st.xyz, st.quat),

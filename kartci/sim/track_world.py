@@ -20,6 +20,7 @@ class TrackWorld(World):
     boxes (what the fast lidar sees) and `ceiling_m` the height of a ceiling, if any."""
 
     spec: TrackWorldParams
+    CONE_FRICTION = False  # karts' tyre forces come from tyres.py; their wheels are frictionless
 
     def __init__(self, spec: WorldParams, dt_s: float, blocks: list[Block],
                  ceiling_m: float) -> None:

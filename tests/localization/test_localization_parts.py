@@ -49,7 +49,7 @@ def test_deskew_undoes_motion_distortion() -> None:
     st = _state(12.0, 4.0, 0.3, 7.0, 1.0)
     pos = np.array([12.0, 4.0, 1.28])
 
-    def scan(az: np.ndarray, xyz: np.ndarray, yaw: float) -> np.ndarray:
+    def scan(az: np.ndarray, xyz: np.ndarray, yaw: float | np.ndarray) -> np.ndarray:
         return lidar.scan_fast(VLP16, az, xyz, yaw, bl, ceiling, 100.0)
 
     truth = cKDTree(_xyz(scan(AZ, pos, st.yaw)))
@@ -69,7 +69,7 @@ def test_deskew_undoes_a_sideways_slide() -> None:
     st = _state(12.0, 4.0, 0.3, 5.0, 2.0, vy=3.0)
     pos = np.array([12.0, 4.0, 1.28])
 
-    def scan(az: np.ndarray, xyz: np.ndarray, yaw: float) -> np.ndarray:
+    def scan(az: np.ndarray, xyz: np.ndarray, yaw: float | np.ndarray) -> np.ndarray:
         return lidar.scan_fast(VLP16, az, xyz, yaw, bl, ceiling, 100.0)
 
     truth = cKDTree(_xyz(scan(AZ, pos, st.yaw)))

@@ -52,6 +52,7 @@ class Gokart(Base):
         self.mu_scale = [1.0] * 4
         self.input = KartInput()
         self.column = 0.0  # steering-column angle, rad
+        self._steer_target: tuple[float, float] | None = None  # last steer-motor targets, rad
 
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;
@@ -73,10 +74,12 @@ class Gokart(Base):
         m, inp, dt, c = self.model, self.input, self.dt, self.client
         step = m.steering_rate_radps * dt
         self.column += min(max(inp.steering_rad - self.column, -step), step)
-        left, right = wheel_angles(m, self.column)
-        pb.setJointMotorControlArray(self.body, self.steer, pb.POSITION_CONTROL,
-                                     targetPositions=[left, right], forces=[800.0, 800.0],
-                                     positionGains=[1.0, 1.0], physicsClientId=c)
+        angles = wheel_angles(m, self.column)
+        if angles != self._steer_target:  # a motor keeps its target: set it when it moves
+            self._steer_target = angles
+            pb.setJointMotorControlArray(self.body, self.steer, pb.POSITION_CONTROL,
+                                         targetPositions=angles, forces=[800.0, 800.0],
+                                         positionGains=[1.0, 1.0], physicsClientId=c)
         com, quat = pb.getBasePositionAndOrientation(self.body, physicsClientId=c)
         lin, ang = pb.getBaseVelocity(self.body, physicsClientId=c)
         r = pb.getMatrixFromQuaternion(quat)  # row-major body-to-world

@@ -68,21 +68,22 @@ class WheelSlip:
 SECTORS = 36  # a revolution is cast from this many poses (10 degrees each)
 
 
-def distorted_scan(scan: Callable[[Array, Array, float], Array], azimuths: Array,
+def distorted_scan(scan: Callable[[Array, Array, Array], Array], azimuths: Array,
                    st: BodyState, sensor_xyz: Array, rate_hz: float) -> Array:
     """Ranges (rings, azimuths) with each sector cast from the pose the sensor had when the head
     pointed there: the revolution ends at the stamp, azimuth a was swept (1 - a / 2 pi) / rate
-    earlier; the pose is taken back along the current body twist. `scan(azimuths, position,
-    yaw)` casts one set of beams."""
+    earlier; the pose is taken back along the current body twist. `scan(azimuths, positions,
+    yaws)` casts the beams, each azimuth from its own position (A, 3) and heading (A,), in
+    one call."""
     w_world = st.rotation @ np.asarray(st.w_body)
     v_sensor = st.rotation @ np.asarray(st.v_body) + np.cross(
         w_world, sensor_xyz - np.asarray(st.xyz))
-    out = []
+    xyz, yaw = np.empty((len(azimuths), 3)), np.empty(len(azimuths))
     for part in np.array_split(np.arange(len(azimuths)), SECTORS):
-        a = azimuths[part]
-        ago_s = (1.0 - float(a.mean()) / (2 * math.pi)) / rate_hz
-        out.append(scan(a, sensor_xyz - v_sensor * ago_s, st.yaw - w_world[2] * ago_s))
-    return np.concatenate(out, axis=1)
+        ago_s = (1.0 - float(azimuths[part].mean()) / (2 * math.pi)) / rate_hz
+        xyz[part] = sensor_xyz - v_sensor * ago_s
+        yaw[part] = st.yaw - w_world[2] * ago_s
+    return scan(azimuths, xyz, yaw)
 
 
 def dropout(ranges: Array, spec: LidarSpec, rng: np.random.Generator) -> Array:

@@ -75,6 +75,10 @@ class KartRobot(RobotBase):
         self.azimuths = self.lidar.azimuths(sensors.lidar.rate_hz)
         self.blocks = world.blocks
         self._imu_prev: np.ndarray | None = None
+        acc_std, gyro_std = _imu_noise(model, sensors)
+        self._imu_std = acc_std, gyro_std
+        self._imu_cov = (_frozen(np.diag([acc_std**2] * 3).ravel()),
+                         _frozen(np.diag([gyro_std**2] * 3).ravel()))
         self._bias = noise.ImuBias(sensors.imu, ctx.rng, self.imu_every * dt_s)
         self._slip = noise.WheelSlip(sensors.wheels, ctx.rng, ctx.odom_every * dt_s, 4)
         self._scans = 0
@@ -96,9 +100,15 @@ class KartRobot(RobotBase):
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         """At the odometry rate: odometry, joint states, tf of the moving frames, floor friction and
         the speed loop; camera, IMU and lidar at their own rates."""
+        odom = k % self.odom_every == 0
+        camera = self.sensors.camera.enabled and k % self.camera_every == 0
+        imu = self.sensors.imu.enabled and k % self.imu_every == 0
+        lidar = self.sensors.lidar.enabled and k % self.lidar_every == 0
+        if not (odom or camera or imu or lidar):
+            return  # most physics steps publish nothing: no state read
         st = self.body.state()
         ns = self.name
-        if k % self.odom_every == 0:
+        if odom:
             self.publish_pose(st, t_ns, put)
             steer, spin, speeds = self.body.wheel_states()
             put("joint_states", joint_state(
@@ -108,11 +118,11 @@ class KartRobot(RobotBase):
             self._zone_friction(st)
             self._pedals(st)
             put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
-        if self.sensors.camera.enabled and k % self.camera_every == 0:
+        if camera:
             self._camera(st, t_ns, put)
-        if self.sensors.imu.enabled and k % self.imu_every == 0:
+        if imu:
             self._imu(st, t_ns, put)
-        if self.sensors.lidar.enabled and k % self.lidar_every == 0:
+        if lidar:
             self._lidar(st, t_ns, put)
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
@@ -166,18 +176,16 @@ class KartRobot(RobotBase):
         to_imu = (rot @ rel_rot).T
         f = to_imu @ (acc + np.array([0.0, 0.0, 9.81]))
         g = to_imu @ w_world
-        acc_std, gyro_std = _imu_noise(self.model, self.sensors)
+        acc_std, gyro_std = self._imu_std
         f = f + acc_std * self.rng.standard_normal(3)
         g = g + gyro_std * self.rng.standard_normal(3)
         acc_bias, gyro_bias = self._bias.sample()
         f, g = f + acc_bias, g + gyro_bias
-        cov_a, cov_g = np.diag([acc_std**2] * 3).ravel(), np.diag([gyro_std**2] * 3).ravel()
-        no_orientation = np.zeros(9)
-        no_orientation[0] = -1.0  # REP 145: this IMU gives no orientation estimate
+        cov_a, cov_g = self._imu_cov
         put("imu", msg("sensor_msgs/msg/Imu", header=header(t_ns, f"{self.name}/imu_link"),
                        orientation=msg("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0,
                                        w=1.0),
-                       orientation_covariance=no_orientation,
+                       orientation_covariance=NO_ORIENTATION,
                        angular_velocity=msg("geometry_msgs/msg/Vector3", x=g[0], y=g[1], z=g[2]),
                        angular_velocity_covariance=cov_g,
                        linear_acceleration=msg("geometry_msgs/msg/Vector3", x=f[0], y=f[1],
@@ -191,7 +199,8 @@ class KartRobot(RobotBase):
                  if o is not self and isinstance(o, KartRobot)]
         spec, blocks = self.sensors.lidar, self.blocks + extra
 
-        def scan(azimuths: np.ndarray, xyz: np.ndarray, heading: float) -> np.ndarray:
+        def scan(azimuths: np.ndarray, xyz: np.ndarray, heading: float | np.ndarray,
+                 ) -> np.ndarray:
             return lidar_mod.scan_fast(self.lidar, azimuths, xyz, heading, blocks,
                                        self.world.ceiling_m, spec.range_m)
 
@@ -311,6 +320,15 @@ def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     q[axis] = math.sin(angle / 2)
     return q[0], q[1], q[2], q[3]
 
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """An array shared by every message that carries it: read-only, so no reader can change
+    what the others (and the log) see."""
+    a.setflags(write=False)
+    return a
+
+
+NO_ORIENTATION = _frozen(np.array([-1.0] + [0.0] * 8))  # REP 145: no orientation estimate
 
 # Table 3.6, read as 1-sigma white noise: accuracy x default full scale.
 IMU_NOISE = {"bumblebee": (0.01 * 8 * 9.81, 0.015 * math.radians(245)),  # IRIMU-V2
