@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from kartci.runner import costs, expand
-from kartci.runner.jobs import Outcome
+from kartci.runner.jobs import Job, Outcome
 
 
 @pytest.fixture(autouse=True)
@@ -17,7 +17,7 @@ def _cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
 
 
-def _jobs() -> dict[str, costs.Job]:
+def _jobs() -> dict[str, Job]:
     return {j.label: j for j in expand(["line_straight", "kart_wall", "mpcc_lap"], [])}
 
 
