@@ -5,30 +5,41 @@ core busy alone at the end. Simulated duration misjudges cost (18 s of a lidar s
 two MPCC karts costs more than 42 s of a line tracker), so the runner remembers each label's
 wall time in the cache folder and orders by it, longest first. A label it has not seen is
 estimated from its simulated duration at the median real-time factor of those it has.
-Only the order changes: every job writes its own folder, so results are the same in any order.
+Times are kept per label and scenario content (a `--set duration_s=2` run of a scenario
+teaches nothing about the full one). Only the order changes: every job writes its own folder,
+so results are the same in any order.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import statistics
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
-from kartci.atomic import write_json_atomic
+from kartci.atomic import write_text_atomic
 from kartci.cachedir import cache_dir
 from kartci.runner.jobs import Job, Outcome
 
-FILE = "timings.json"  # {label: {"wall_s": job wall time, "sim_s": scenario duration}}
+KEEP = 500  # entries kept, the most recently run
+FILE = "timings.json"  # {key: {"wall_s": job wall time, "sim_s": scenario duration}}
 
 
 def _path() -> Path:
     return cache_dir() / FILE
 
 
+def key(job: Job) -> str:
+    """`<label>#<hash of the validated scenario>`: the same label with other settings is
+    another run."""
+    digest = hashlib.sha256(job.spec.model_dump_json().encode()).hexdigest()[:12]
+    return f"{job.label}#{digest}"
+
+
 def load() -> dict[str, tuple[float, float]]:
-    """label -> (wall s, sim s) of its last run; empty when the file is missing or unreadable
+    """key -> (wall s, sim s) of its last run; empty when the file is missing or unreadable
     (a cache is never worth a failed run)."""
     try:
         raw = json.loads(_path().read_text(encoding="utf-8"))
@@ -41,8 +52,8 @@ def load() -> dict[str, tuple[float, float]]:
 def estimate_s(job: Job, known: dict[str, tuple[float, float]]) -> float:
     """The job's expected wall time, s: its last run's, else its sim time at the median
     real-time factor of the known runs (at 1x when none is known)."""
-    if job.label in known:
-        return known[job.label][0]
+    if key(job) in known:
+        return known[key(job)][0]
     rtf = statistics.median(s / w for w, s in known.values()) if known else 1.0
     return job.spec.duration_s / rtf
 
@@ -56,10 +67,11 @@ def order(jobs: Sequence[Job]) -> list[Job]:
 def remember(outcomes: Iterable[Outcome]) -> None:
     """Merge this run's wall times into the cache file; the judged run (repeat 0) of each label
     that finished. Write errors are ignored: a read-only cache only loses the ordering."""
-    fresh = {o.job.label: {"wall_s": o.job_s, "sim_s": o.job.spec.duration_s}
+    fresh = {key(o.job): {"wall_s": o.job_s, "sim_s": o.job.spec.duration_s}
              for o in outcomes if o.job.repeat == 0 and o.error is None and o.job_s > 0}
     if not fresh:
         return
-    table = {k: {"wall_s": w, "sim_s": s} for k, (w, s) in load().items()} | fresh
+    old = {k: {"wall_s": w, "sim_s": s} for k, (w, s) in load().items() if k not in fresh}
+    table = list({**old, **fresh}.items())[-KEEP:]  # oldest first: a scenario edited away ages out
     with contextlib.suppress(OSError):
-        write_json_atomic(_path(), table)
+        write_text_atomic(_path(), json.dumps(dict(table), indent=1) + "\n")
