@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -31,10 +32,13 @@ class BodyState:
     v_body: tuple[float, float, float]  # m/s in base_link
     w_body: tuple[float, float, float]  # rad/s in base_link
 
-    @property
+    @cached_property
     def rotation(self) -> np.ndarray:
-        """base_link's orientation as a 3x3 rotation matrix (body to world)."""
-        return rotation(self.quat)
+        """base_link's orientation as a 3x3 rotation matrix (body to world); made once per
+        state, however many sensor frames read it (read-only: it is shared)."""
+        r = rotation(self.quat)
+        r.setflags(write=False)
+        return r
 
     @property
     def yaw(self) -> float:

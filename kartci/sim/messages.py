@@ -45,22 +45,27 @@ def quat_from_matrix(r: np.ndarray) -> tuple[float, float, float, float]:
     return x, y, z, w
 
 
-ZEROS36 = np.zeros(36)
-ZEROS36.setflags(write=False)  # shared by every odometry message: nobody may change it
+def frozen(a: np.ndarray) -> np.ndarray:
+    """An array shared by every message that carries it (covariances built once, not per
+    message): read-only, so no reader can change what the others and the log see."""
+    a.setflags(write=False)
+    return a
+
+
+ZEROS36 = frozen(np.zeros(36))
 
 
 def odometry(t_ns: int, ns: str, st: BodyState) -> Any:
     """nav_msgs/Odometry of `<ns>/base_link` in the world frame from ground truth, twist in
     base_link; zero covariances."""
-    zeros36 = ZEROS36
     return msg("nav_msgs/msg/Odometry", header=header(t_ns, WORLD_FRAME),
                child_frame_id=f"{ns}/base_link",
                pose=msg("geometry_msgs/msg/PoseWithCovariance", pose=pose(st.xyz, st.quat),
-                        covariance=zeros36),
+                        covariance=ZEROS36),
                twist=msg("geometry_msgs/msg/TwistWithCovariance",
                          twist=msg("geometry_msgs/msg/Twist", linear=vec(*st.v_body),
                                    angular=vec(*st.w_body)),
-                         covariance=zeros36))
+                         covariance=ZEROS36))
 
 
 def joint_state(t_ns: int, frame: str, names: list[str], position: list[float],

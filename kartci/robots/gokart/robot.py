@@ -17,7 +17,7 @@ from kartci.sim import lidar as lidar_mod
 from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
 from kartci.sim.markers import COLLISION_MARKERS, collision_marker
-from kartci.sim.messages import WORLD_FRAME, joint_state, tf_message, transform
+from kartci.sim.messages import WORLD_FRAME, frozen, joint_state, tf_message, transform
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.track_world import TrackWorld
@@ -77,8 +77,8 @@ class KartRobot(RobotBase):
         self._imu_prev: np.ndarray | None = None
         acc_std, gyro_std = _imu_noise(model, sensors)
         self._imu_std = acc_std, gyro_std
-        self._imu_cov = (_frozen(np.diag([acc_std**2] * 3).ravel()),
-                         _frozen(np.diag([gyro_std**2] * 3).ravel()))
+        self._imu_cov = (frozen(np.diag([acc_std**2] * 3).ravel()),
+                         frozen(np.diag([gyro_std**2] * 3).ravel()))
         self._bias = noise.ImuBias(sensors.imu, ctx.rng, self.imu_every * dt_s)
         self._slip = noise.WheelSlip(sensors.wheels, ctx.rng, ctx.odom_every * dt_s, 4)
         self._scans = 0
@@ -321,14 +321,7 @@ def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     return q[0], q[1], q[2], q[3]
 
 
-def _frozen(a: np.ndarray) -> np.ndarray:
-    """An array shared by every message that carries it: read-only, so no reader can change
-    what the others (and the log) see."""
-    a.setflags(write=False)
-    return a
-
-
-NO_ORIENTATION = _frozen(np.array([-1.0] + [0.0] * 8))  # REP 145: no orientation estimate
+NO_ORIENTATION = frozen(np.array([-1.0] + [0.0] * 8))  # REP 145: no orientation estimate
 
 # Table 3.6, read as 1-sigma white noise: accuracy x default full scale.
 IMU_NOISE = {"bumblebee": (0.01 * 8 * 9.81, 0.015 * math.radians(245)),  # IRIMU-V2

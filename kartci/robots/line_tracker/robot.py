@@ -58,7 +58,6 @@ class LineTrackerRobot(RobotBase):
         self.last_frame = -1
         self.images: deque[list[float]] = deque(maxlen=sensors.line_sensor.latency_frames + 1)
         self._st: BodyState | None = None  # base_link's state since the last physics step
-        self._rot: np.ndarray | None = None  # and its rotation matrix
 
     def _state(self) -> BodyState:
         """base_link's state, read from PyBullet once per physics step and only at steps where a
@@ -68,13 +67,8 @@ class LineTrackerRobot(RobotBase):
         return self._st
 
     def _pose(self, frame: str) -> tuple[np.ndarray, np.ndarray]:
-        """World position and rotation of a fixed frame (as `Base.frame_pose`), with base_link's
-        rotation matrix made once per step for all the frames read."""
-        st = self._state()
-        if self._rot is None:
-            self._rot = st.rotation
-        rel_pos, rel_rot = self.body.frames[frame]
-        return np.asarray(st.xyz) + self._rot @ rel_pos, self._rot @ rel_rot
+        """World position and rotation of a fixed frame, from this step's state."""
+        return self.body.frame_pose(frame, self._state())
 
     def static_transforms(self) -> list[Any]:
         """tf of the line sensor, both cameras and the sonar mount."""
@@ -134,7 +128,7 @@ class LineTrackerRobot(RobotBase):
 
     def pre_step(self, k: int) -> None:
         """Wheel motors, from the latest command through their lag."""
-        self._st = self._rot = None  # the body moves in this step
+        self._st = None  # the body moves in this step
         self.body.pre_step()
 
     def post_step(self, t_ns: int, put: Put) -> None:
@@ -148,7 +142,7 @@ class LineTrackerRobot(RobotBase):
         """Continue from a recorded state (kartci simreal's windows): pose and motion of the
         body, wheels and their lagged speed targets rolling at that speed."""
         body = self.body
-        self._st = self._rot = None
+        self._st = None
         body.place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
         half = body.urdf_separation_m / 2
         wheels = [(v_mps - yaw_rate_radps * half) / body.urdf_radius_m,
