@@ -10,12 +10,17 @@ The Python API, for a team's own scripts and tests:
 - `plugins`: `Controller`, `MetricSet`, `register` and the other registries' types.
 - `KartciError` and its subclasses: every problem kartci reports.
 
-`import kartci` is cheap: the simulator, solvers and tables load when first used.
+`import kartci` is cheap: the simulator, solvers and tables load when first used. It pins the
+environment numpy, OpenBLAS and libm choose their machine code from (`kartci.portable`), so
+import kartci before numpy, or runs go to a pinned child process.
 """
 
 from __future__ import annotations
 
+from kartci import portable
 from kartci.errors import BaselineError, KartciError, LogError, RunError, SpecError
+
+portable.prepare()  # before numpy loads: the same bits on every CPU (kartci.portable)
 
 TYPE_CHECKING = False  # not `from typing import ...`: importing typing costs more than kartci
 if TYPE_CHECKING:

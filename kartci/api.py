@@ -70,6 +70,8 @@ class RunResult:
         messages: Messages recorded in the log.
         finished_course: True when every robot finished its course before the duration ran out.
         replaced_agents: Agents driven by an object handed in, by name: the object's class.
+        warnings: Worth a reader's attention, not failures: a baseline made on another
+            platform, an ill-conditioned metric, a run in a process that is not pinned.
     """
 
     scenario: Scenario
@@ -83,6 +85,7 @@ class RunResult:
     messages: int
     finished_course: bool
     replaced_agents: Mapping[str, str] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
@@ -144,6 +147,7 @@ class RunResult:
                   for r in rows]
         lines += [f"agent {a}: controller replaced by {cls}"
                   for a, cls in sorted(self.replaced_agents.items())]
+        lines += [f"warning: {w}" for w in self.warnings]
         lines.append(f"log: {self.log}")
         return "\n".join(lines)
 
@@ -189,11 +193,19 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     import tempfile
     import time
 
-    from kartci import project
-    from kartci.runner.run import check_criteria_names, run_one
+    from kartci import portable, project
+    from kartci.runner.run import check_criteria_names, run_pinned
     from kartci.spec.load import with_overrides
     from kartci.spec.models import Scenario
-    from kartci.verdict import check_criteria, compare, load, read_json, read_metrics
+    from kartci.verdict import (
+        check_criteria,
+        compare,
+        ill_conditioned,
+        load,
+        made_where,
+        read_json,
+        read_metrics,
+    )
 
     if isinstance(scenario, Scenario):
         spec = with_overrides(scenario, list(overrides))
@@ -203,7 +215,7 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     root = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"kartci-{spec.name}-"))
     folder = root / spec.name
     t0 = time.perf_counter()
-    facts = run_one(spec, root, None, folder, agents)
+    facts = run_pinned(spec, root, folder, agents)
     wall = time.perf_counter() - t0
     doc = read_json(folder / "metrics.json")
     values = read_metrics(folder / "metrics.json")
@@ -211,6 +223,12 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     base_file = base_dir / f"{spec.name}.json"
     verdicts = compare(values, load(base_file))
     crit = check_criteria(values, spec.criteria)
+    note = portable.mismatch(made_where(base_file).get("platform"), facts.get("platform", {}))
+    unpinned = facts.get("platform", {}).get("simd") == portable.Pin.UNPINNED.value
+    warnings = ([note] if note else []) + ill_conditioned(verdicts) + (
+        ["this Python process was not started pinned (numpy or the process came before "
+         "`import kartci`) and agent objects run here: last bits may differ from `kartci run`; "
+         "see kartci.portable"] if unpinned else [])
     return RunResult(
         scenario=spec, folder=folder,
         metrics={name: _metric(name, m)
@@ -219,7 +237,7 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
         baseline=base_file if base_file.exists() else None,
         sim_time_s=float(facts["sim_time_s"]), wall_s=wall, messages=int(facts["messages"]),
         finished_course=bool(facts["finished_course"]),
-        replaced_agents=dict(facts.get("replaced_agents", {})))
+        replaced_agents=dict(facts.get("replaced_agents", {})), warnings=tuple(warnings))
 
 
 def _metric(name: str, entry: dict[str, Any]) -> Metric:

@@ -1,5 +1,5 @@
-"""`python -m kartci.cli`."""
+"""`python -m kartci.cli`: the command, pinned as `kartci` is (kartci.__main__)."""
 
-from kartci.cli import main
+from kartci.__main__ import main
 
 main()

@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
-from kartci.cli.common import BaselinesOpt, baseline_app, baselines_dir, out_console
+from kartci.cli.common import (
+    BaselinesOpt,
+    baseline_app,
+    baselines_dir,
+    err_console,
+    out_console,
+)
 from kartci.errors import SpecError
 
 
@@ -23,15 +30,24 @@ def baseline_update(
     names: Annotated[list[str] | None, typer.Argument(
         help="Scenarios (default: those of the last run in OUT).")] = None,
     baselines: BaselinesOpt = None,
+    replicas: Annotated[int, typer.Option(
+        help="Conditioning replicas per scenario: the run itself and K-1 with every robot's "
+             "start moved k nm sideways (those missing in OUT are run now); each metric's "
+             "spread over them goes into the baseline. 0: record no spread.")] = 4,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Replicas run at once.")] = 1,
 ) -> None:
-    """Store a run's metrics as the baselines, and a decimated reference trace of its paths
+    """Store a run's metrics as the baselines, with each metric's spread over conditioning
+    replicas, where they were made, and a decimated reference trace of its paths
     (baselines/traces/, for the report's overlay); the only command that writes baselines. Only a
-    complete, current run is taken: a scenario whose last run failed or did not finish is
-    refused, and with no names only the scenarios of the last run in OUT are taken."""
+    complete, current, pinned run is taken: a scenario whose last run failed or did not finish
+    is refused, and with no names only the scenarios of the last run in OUT are taken. A metric
+    whose spread exceeds its tolerance is flagged ill-conditioned."""
     from kartci.runner.outdir import locked, read_manifest, valid_label
     from kartci.runner.run import check_complete, reference_plots
     from kartci.verdict import load, read_metrics, update
     from kartci.verdict.trace import trace_path, write_trace
+
+    _check_options(replicas, jobs)
 
     if not out.is_dir():
         raise SpecError(f"{out}: no such folder; run `kartci run` first")
@@ -47,19 +63,96 @@ def baseline_update(
         for label in labels:  # check everything before writing anything
             folder = out / label
             check_complete(folder)
+            _check_pinned(folder)
             load(target / f"{label}.json")
             checked.append((label, read_metrics(folder / "metrics.json")))
+        if replicas:
+            _replicate(out, target, labels, replicas, jobs)
         # the traces' plots read the logs: after the cheap checks, still before any write
         traced = [(label, values, reference_plots(out / label)) for label, values in checked]
         for label, values, drawn in traced:
-            changes = update(target / f"{label}.json", label, values)
+            spreads, made = _conditioning(out / label) if replicas else (None, _made(out / label))
+            changes = update(target / f"{label}.json", label, values, spreads, made)
             moved = [c for c in changes if c.kind != "unchanged"]
             out_console.print(f"{label}: {len(moved)} of {len(changes)} metrics changed",
                               highlight=False, markup=False)
             for c in moved:
                 out_console.print(f"  {c.kind:8s} {c.metric}: {exact(c.old)} -> {exact(c.new)}",
                                   highlight=False, markup=False)
+            _print_conditioning(target / f"{label}.json")
             if drawn is not None and drawn.tracks:
                 size = write_trace(trace_path(target, label), drawn)
                 out_console.print(f"  reference trace {trace_path(target, label)} ({size} bytes)",
                                   highlight=False, markup=False)
+
+
+def _check_options(replicas: int, jobs: int) -> None:
+    if replicas == 1 or replicas < 0:
+        raise SpecError(f"--replicas {replicas}: expected 0 (none) or 2 or more")
+    if jobs < 1:
+        raise SpecError(f"--jobs {jobs}: expected 1 or more")
+
+
+def _check_pinned(folder: Path) -> None:
+    """A baseline holds every CPU's numbers: a run with the CPU's own kernels is refused."""
+    from kartci.runner.conditioning import platform_of
+
+    simd = platform_of(folder).get("simd")
+    if simd not in (None, "pinned"):
+        raise SpecError(f"{folder}: run with {simd} SIMD kernels (KARTCI_SIMD=native or numpy "
+                        "imported before kartci): its numbers are this CPU's only; run it again "
+                        "with `kartci run`")
+
+
+def _made(folder: Path) -> dict[str, Any]:
+    from kartci.runner.conditioning import platform_of
+
+    platform = platform_of(folder)
+    return {"platform": platform} if platform else {}
+
+
+def _conditioning(folder: Path) -> tuple[dict[str, float | None] | None, dict[str, Any]]:
+    from kartci.runner.conditioning import record, spreads
+
+    return spreads(folder), {**_made(folder), "conditioning": record(folder)}
+
+
+def _replicate(out: Path, target: Path, labels: list[str], replicas: int, workers: int) -> None:
+    """Run the conditioning replicas OUT lacks; all must finish before anything is written."""
+    from kartci.runner.conditioning import check_complete, missing_jobs
+    from kartci.runner.executors import execute
+    from kartci.runner.jobs import Context, Job
+    from kartci.runner.run import recorded_scenario
+
+    todo = missing_jobs(out, labels, replicas,
+                        lambda folder: Job(recorded_scenario(folder), folder.name))
+    if todo:
+        err_console.print(f"running {len(todo)} conditioning replicas (start moved 1-"
+                          f"{replicas - 1} nm) ...", highlight=False, markup=False)
+        for _ in execute(todo, Context(out, target), lambda _event: None, workers):
+            pass
+    check_complete(out, labels, replicas)
+
+
+def _print_conditioning(path: Path) -> None:
+    """The worst-conditioned metric of a baseline, and every ill-conditioned one."""
+    from kartci.verdict import Conditioning, ill_conditioned, load
+    from kartci.verdict.baseline import judge
+
+    entries = load(path) or {}
+    verdicts = [judge(e.get("value"), str(e.get("unit", "")), name, e)
+                for name, e in entries.items() if "spread" in e]
+    if not verdicts:
+        return
+    def ratio(v: Any) -> float:
+        declared = float(entries[v.name]["tolerance"])
+        return math.inf if v.spread is None else (v.spread / declared if declared else (
+            math.inf if v.spread else 0.0))
+    worst = max(verdicts, key=ratio)
+    tol = float(entries[worst.name]["tolerance"])
+    size = "undefined in some replicas" if worst.spread is None else f"{worst.spread:.3g}"
+    out_console.print(f"  worst-conditioned: {worst.name}: spread {size}, tolerance {tol:.3g} "
+                      f"({worst.conditioning.value})", highlight=False, markup=False)
+    for line in ill_conditioned([v for v in verdicts if v.conditioning is Conditioning.ILL]):
+        err_console.print(f"kartci: warning: {path.stem}: {line}", highlight=False,
+                          markup=False)

@@ -13,7 +13,7 @@ from rich.table import Table
 from rich.text import Text
 
 from kartci.errors import KartciError, RunError, SpecError
-from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
+from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code, one_line
 
 # Help text is shown as written (rich_markup_mode=None): rich markup would eat `kartci[ray]`
@@ -100,14 +100,14 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
             line = Text.assemble((r.name, "bold"), f": {MARK[r.status]} error: {r.error}")
             out_console.print(line, highlight=False)
             continue
-        table = Table("metric", "value", words.base, "delta", "tolerance", "verdict",
-                      title=Text(f"{r.name}: {MARK[r.status]} {r.status.value}"),
+        table = Table("metric", "value", words.base, "delta", "tolerance", "conditioning",
+                      "verdict", title=Text(f"{r.name}: {MARK[r.status]} {r.status.value}"),
                       title_justify="left")
         for v in r.verdicts:
             table.add_row(Text(v.name), num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
-                          tolerance(v), f"{MARK[v.status]} {v.status.value}")
+                          tolerance(v), conditioning(v), f"{MARK[v.status]} {v.status.value}")
         for c in r.criteria:
-            table.add_row(Text(f"criterion {c.name}"), num(c.value), Text(c.bound), "", "",
+            table.add_row(Text(f"criterion {c.name}"), num(c.value), Text(c.bound), "", "", "",
                           "✅ pass" if c.ok else "❌ failed")
         out_console.print(table)
         for problem in r.problems:

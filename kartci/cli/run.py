@@ -65,6 +65,11 @@ def run(
     repeat: Annotated[int, typer.Option(
         help="Run K seeds (seed, seed+1, ...): extra runs in OUT/<scenario>/repeat_<k>/, for "
              "`kartci compare`.")] = 1,
+    conditioning: Annotated[int, typer.Option(
+        help="Check how well-conditioned each metric is: K replicas (the run itself and K-1 "
+             "with every robot's start moved k nm sideways) in OUT/<scenario>/repeat_<k>/; "
+             "each metric's spread over them is judged against its tolerance and a metric "
+             "whose spread exceeds it is flagged ill-conditioned. 0: off.")] = 0,
     timeout_s: Annotated[float | None, typer.Option(
         "--timeout-s", help="Wall-clock limit per run, s: a slower run is an error (held "
                             "within a second, even inside a slow controller step).")] = None,
@@ -86,7 +91,7 @@ def run(
     from kartci.report.progress import ProgressView
     from kartci.runner import expand, parse_shard, run_jobs
     from kartci.runner import shard as share
-    from kartci.runner.jobs import default_suite
+    from kartci.runner.jobs import Vary, default_suite
     from kartci.runner.merge import write_marker
     from kartci.runner.outdir import clear_reports, locked, write_manifest
 
@@ -106,7 +111,12 @@ def run(
         where = ", ".join(str(p) for p in proj.scenarios)
         raise SpecError(f"no scenarios to run: none in {where}; name one (`kartci list` shows "
                         "the built-in ones) or create a project with `kartci init`")
-    todo = expand(selected, set_ or [], sweep, repeat)
+    if conditioning and repeat > 1:
+        raise SpecError("--conditioning and --repeat both set the replicas: choose one")
+    if conditioning == 1 or conditioning < 0:
+        raise SpecError(f"--conditioning {conditioning}: expected 0 (off) or 2 or more")
+    todo = (expand(selected, set_ or [], sweep, conditioning, Vary.START) if conditioning
+            else expand(selected, set_ or [], sweep, repeat))
     if part is not None:
         todo = share(todo, *part)
     index, total = part or (None, None)

@@ -127,8 +127,11 @@ def _compile(functions: list[ca.Function], lib: Path, cc: str) -> None:
             cg.add(f)
         cg.generate(f"{tmp}/")
         out = tmp / lib.name
-        run = subprocess.run([cc, "-O1", "-fPIC", "-shared", str(tmp / "mpcc_nlp.c"), "-o",
-                              str(out), "-lm"], capture_output=True, text=True, check=False)
+        # no fused multiply-adds: a compiler whose default target has FMA (x86-64-v3 distros,
+        # aarch64) would otherwise round differently from one whose default has not
+        run = subprocess.run([cc, "-O1", "-ffp-contract=off", "-fPIC", "-shared",
+                              str(tmp / "mpcc_nlp.c"), "-o", str(out), "-lm"],
+                             capture_output=True, text=True, check=False)
         if run.returncode != 0:
             raise RunError(f"compiling the MPCC solver failed: {run.stderr.strip()[:300]}")
         os.replace(out, lib)

@@ -41,6 +41,7 @@ def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
                 "error": r.error,
                 "metrics": {v.name: {"value": v.value, "unit": v.unit, "baseline": v.baseline,
                                      "tolerance": v.tolerance, "direction": v.direction.value,
+                                     "spread": v.spread, "conditioning": v.conditioning.value,
                                      "status": v.status.value} for v in r.verdicts},
                 "criteria": {c.name: {"bound": c.bound, "value": c.value, "ok": c.ok}
                              for c in r.criteria},

@@ -11,7 +11,7 @@ from kartci.report.interactive import body_assets, figures_block, head_assets
 from kartci.report.laps import lap_tables
 from kartci.report.markdown import VERDICT_WORD
 from kartci.report.static import scenario_svgs
-from kartci.report.tables import MARK, RUN, Wording, delta, num, tolerance
+from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
 from kartci.results import ScenarioResult, exit_code
 
 CSS = """
@@ -50,11 +50,12 @@ def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
                    f"{num(r.run.get('real_time_factor'))}; log <code>"
                    f"{html.escape(str(r.run.get('log', '')))}</code></p>")
     out.append(f"<table><tr><th>metric</th><th>value</th><th>{words.base}</th><th>delta</th>"
-               "<th>tolerance</th><th>verdict</th></tr>")
+               "<th>tolerance</th><th>conditioning</th><th>verdict</th></tr>")
     for v in r.verdicts:
         out.append(f"<tr><td>{html.escape(v.name)}</td><td>{num(v.value, v.unit)}</td>"
                    f"<td>{num(v.baseline, v.unit)}</td><td>{delta(v)}</td>"
-                   f"<td>{tolerance(v)}</td><td class=\"{v.status.value}\">{MARK[v.status]} "
+                   f"<td>{tolerance(v)}</td><td class=\"cond-{v.conditioning.value}\">"
+                   f"{conditioning(v)}</td><td class=\"{v.status.value}\">{MARK[v.status]} "
                    f"{v.status.value}</td></tr>")
     out.append("</table>")
     if r.criteria:

@@ -2,7 +2,16 @@
 
 from __future__ import annotations
 
-from kartci.report.tables import MARK, RUN, Wording, delta, num, regression_size, tolerance
+from kartci.report.tables import (
+    MARK,
+    RUN,
+    Wording,
+    conditioning,
+    delta,
+    num,
+    regression_size,
+    tolerance,
+)
 from kartci.results import ScenarioResult, exit_code
 from kartci.verdict import SEVERITY, MetricVerdict, Status
 
@@ -45,11 +54,11 @@ def summary_md(results: list[ScenarioResult], words: Wording = RUN) -> str:
         for c in failed:
             lines.append(f"- ❌ criterion `{c.name}` {c.bound}: got {num(c.value)}")
         if bad:
-            lines += ["", f"| metric | value | {words.base} | delta | tolerance | verdict |",
-                      "|---|---|---|---|---|---|"]
+            lines += ["", f"| metric | value | {words.base} | delta | tolerance | conditioning "
+                      "| verdict |", "|---|---|---|---|---|---|---|"]
             for v in sorted(bad, key=_verdict_key):
                 lines.append(f"| `{v.name}` | {num(v.value, v.unit)} | {num(v.baseline, v.unit)}"
-                             f" | {delta(v)} | {tolerance(v)} | {MARK[v.status]} "
-                             f"{v.status.value} |")
+                             f" | {delta(v)} | {tolerance(v)} | {conditioning(v)} | "
+                             f"{MARK[v.status]} {v.status.value} |")
     lines.append("")
     return "\n".join(lines)

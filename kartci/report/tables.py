@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from kartci.verdict import MetricVerdict, Status
+from kartci.verdict import Conditioning, MetricVerdict, Status
 
 MARK = {Status.PASS: "✅", Status.IMPROVED: "🟢", Status.REGRESSED: "❌", Status.FAILED: "❌",
         Status.NEW: "🆕", Status.MISSING: "⚠️", Status.ERROR: "💥"}
@@ -28,6 +28,17 @@ def delta(v: MetricVerdict) -> str:
 def tolerance(v: MetricVerdict) -> str:
     """The tolerance and the direction it applies in; a dash when there is none."""
     return "—" if v.tolerance is None else f"±{v.tolerance:.3g} ({v.direction.value})"
+
+
+def conditioning(v: MetricVerdict) -> str:
+    """The metric's spread over replicas started nanometres apart, and what it means for the
+    verdict; a dash when the baseline has no replicas."""
+    if v.conditioning is Conditioning.UNMEASURED:
+        return "—"
+    size = "varies" if v.spread is None else f"spread {v.spread:.2g}"
+    return {Conditioning.WELL: f"well ({size})",
+            Conditioning.MARGINAL: f"marginal ({size}, tolerance widened)",
+            Conditioning.ILL: f"ILL-CONDITIONED ({size})"}[v.conditioning]
 
 
 def regression_size(v: MetricVerdict) -> float:

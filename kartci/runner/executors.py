@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
+from kartci import portable
+from kartci.portable import Pin
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.run import STAGE_PREFIX, mark_failed
@@ -187,14 +189,16 @@ class _Workers:
         self.events.close()
 
 
-def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Iterator[Outcome]:
+def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
+         here: bool = True) -> Iterator[Outcome]:
     """`workers - 1` worker processes plus this one. This process has everything imported, so
     it starts the first (longest) run at once while the workers start up (2-3 s each), and it
     takes the next run whenever it is free. A hard crash (a segfault) in a run done here ends
-    the whole command, as with -j 1; in a worker it is an error for that run only."""
+    the whole command, as with -j 1; in a worker it is an error for that run only. With
+    `here` False (this process is not pinned: kartci.portable) `workers` workers do all runs."""
     todo = deque(jobs)
-    mine: Job | None = todo.popleft()  # before the dispatcher gives it to a worker
-    others = _Workers(ctx, emit, workers - 1, todo)
+    mine: Job | None = todo.popleft() if here else None  # before a worker can take it
+    others = _Workers(ctx, emit, workers - (1 if here else 0), todo)
     try:
         while True:
             others.tick()
@@ -208,7 +212,9 @@ def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Ite
                 with others.lock:
                     if not others.todo:
                         break
-            mine = others.take()
+                if not here:
+                    others.wait_any(0.05)  # not yet handed out by the dispatcher
+            mine = others.take() if here or others.slots == 0 else None  # 0: no workers
     finally:
         others.close()
 
@@ -239,6 +245,8 @@ def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,
         from kartci.runner.ray_executor import ray_tasks
 
         return ray_tasks(jobs, ctx, emit, workers, ray_address)
+    if portable.state() is Pin.UNPINNED:  # this process's bits are not every CPU's
+        return pool(jobs, ctx, emit, max(1, min(workers, len(jobs))), here=False)
     if workers <= 1 or len(jobs) <= 1:
         return serial(jobs, ctx, emit)
     return pool(jobs, ctx, emit, min(workers, len(jobs)))

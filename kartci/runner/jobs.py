@@ -1,8 +1,10 @@
 """Units of work: one simulation of one scenario into one folder, picklable for any executor.
 
 A *label* names a scenario result and its folder in OUT: the scenario name, or for a sweep
-point `<scenario>@<key>=<value>`. With `--repeat K`, seed + k runs into `<label>/repeat_<k>/`
-(k = 1 .. K-1) beside the seed's own run in `<label>/`.
+point `<scenario>@<key>=<value>`. With `--repeat K`, replica k (k = 1 .. K-1) runs into
+`<label>/repeat_<k>/` beside the judged run in `<label>/`: with seed + k (`Vary.SEED`, the
+spread of the noise), or with every robot's start moved k nanometres sideways (`Vary.START`,
+`--conditioning K`: the spread of chaos, which the baseline records).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from enum import StrEnum
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -31,7 +34,26 @@ from kartci.runner.run import (
 from kartci.spec import Scenario, load_scenario
 
 REPEAT_PREFIX = "repeat_"
+START_STEP_M = 1e-9  # replica k starts k x 1 nm to the left: far below anything physical
 Report = Callable[[str, float], None]  # (job folder, sim time s), called from the worker
+
+
+class Vary(StrEnum):
+    """What a replica changes."""
+
+    SEED = "seed"  # seed + k: another draw of the sensor noise
+    START = "start"  # every robot's start k x START_STEP_M to the left: a last-bit nudge
+
+
+def replica(spec: Scenario, vary: Vary, k: int) -> Scenario:
+    """Replica k of a scenario (k = 0 is the scenario itself)."""
+    if k == 0:
+        return spec
+    if vary is Vary.SEED:
+        return spec.model_copy(update={"seed": spec.seed + k})
+    agents = {name: a.model_copy(update={"start": a.start.model_copy(update={
+        "lateral_m": a.start.lateral_m + k * START_STEP_M})}) for name, a in spec.agents.items()}
+    return spec.model_copy(update={"agents": agents})
 
 
 @dataclass(frozen=True)
@@ -40,7 +62,14 @@ class Job:
 
     spec: Scenario
     label: str  # the scenario result's name and top-level folder
-    repeat: int = 0  # k: the run with seed + k; 0 is the judged run
+    repeat: int = 0  # k: replica k; 0 is the judged run
+    vary: Vary = Vary.SEED  # what replicas change
+
+    @property
+    def variation(self) -> dict[str, Any]:
+        """What this run changed, for run.json (baseline update reads it)."""
+        step = START_STEP_M if self.vary is Vary.START else 1
+        return {"vary": self.vary.value, "k": self.repeat, "step": step}
 
     @property
     def folder(self) -> str:
@@ -91,7 +120,7 @@ def _safe(text: str) -> str:
 
 
 def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = None,
-           repeat: int = 1) -> list[Job]:
+           repeat: int = 1, vary: Vary = Vary.SEED) -> list[Job]:
     """Every job of a run, all validated before anything runs (bad input stops everything)."""
     if repeat < 1:
         raise SpecError(f"--repeat {repeat}: expected 1 or more")
@@ -105,8 +134,7 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
         for point in points:
             spec = load_scenario(name, [*overrides, *(f"{k}={v}" for k, v in point)])
             label = spec.name + _variant(overrides, point)
-            jobs += [Job(spec if k == 0 else spec.model_copy(update={"seed": spec.seed + k}),
-                         _safe(label), k) for k in range(repeat)]
+            jobs += [Job(replica(spec, vary, k), _safe(label), k, vary) for k in range(repeat)]
     check_criteria_names([j.spec for j in jobs])
     labels = [j.label for j in jobs if j.repeat == 0]
     twice = sorted({x for x in labels if labels.count(x) > 1})
@@ -205,7 +233,8 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
 
     try:
         with wall_clock_limit(ctx.timeout_s, where):
-            run = run_one(job.spec, ctx.out, progress, ctx.out / job.folder)
+            run = run_one(job.spec, ctx.out, progress, ctx.out / job.folder,
+                          facts={"variation": job.variation})
     except Exception as err:  # a crashing controller must not take the suite down
         return Outcome.failed(job, one_line(failure_text(err)))
     if job.repeat != 0:

@@ -13,6 +13,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 from kartci.errors import RunError, SpecError
+from kartci.portable import child_vars
 from kartci.runner.executors import Event, EventKind, Listener, lost
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 
@@ -34,7 +35,8 @@ def ray_tasks(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
         try:
             ray.init(address=address or "local", num_cpus=None if address else workers,
                      include_dashboard=False, log_to_driver=False,
-                     logging_level=logging.WARNING)
+                     logging_level=logging.WARNING,
+                     runtime_env={"env_vars": child_vars()})  # kartci.portable
         except Exception as err:  # an unreachable address, a broken local start
             raise RunError(f"cannot start Ray ({address or 'local'}): {err}") from None
     try:

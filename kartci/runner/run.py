@@ -22,7 +22,7 @@ from typing import Any
 
 import pandas as pd
 
-from kartci import metrics, plugins, project
+from kartci import metrics, plugins, portable, project
 from kartci.atomic import write_text_atomic
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
@@ -34,7 +34,15 @@ from kartci.sim import simulate
 from kartci.sim.session import describe
 from kartci.spec import Scenario
 from kartci.spec.models import LogSource
-from kartci.verdict import check_criteria, compare, load, read_metrics, write_json_atomic
+from kartci.verdict import (
+    check_criteria,
+    compare,
+    ill_conditioned,
+    load,
+    made_where,
+    read_metrics,
+    write_json_atomic,
+)
 from kartci.verdict.trace import load_trace, trace_path
 
 LOG_NAME = "run.mcap"
@@ -71,11 +79,12 @@ def failure_text(err: BaseException) -> str:
 def run_one(scenario: Scenario, out: Path,
             on_progress: Callable[[float], None] | None = None,
             folder: Path | None = None,
-            agents: Mapping[str, object] | None = None) -> dict[str, Any]:
+            agents: Mapping[str, object] | None = None,
+            facts: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Simulate one scenario into `folder` (default OUT/<scenario>) and score its log; returns
     the run facts (raises on failure, with the folder marked failed). `agents`: objects
     replacing those agents' controllers (recorded in the log and in run.json as
-    `replaced_agents`).
+    `replaced_agents`). `facts`: more entries for run.json.
 
     The folder is marked unfinished first, the run and its scoring happen in a private staging
     folder, and only a complete result (log, metrics, facts) replaces the previous one: a run
@@ -88,7 +97,7 @@ def run_one(scenario: Scenario, out: Path,
     mark_failed(folder, scenario.name, UNFINISHED)
     stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=folder))
     try:
-        run = _run_staged(scenario, stage, folder, on_progress, agents)
+        run = _run_staged(scenario, stage, folder, on_progress, agents, facts)
         _commit(stage, folder)
     except BaseException as err:
         keep_outputs(stage, folder)
@@ -99,9 +108,23 @@ def run_one(scenario: Scenario, out: Path,
     return run
 
 
+def run_pinned(scenario: Scenario, out: Path, folder: Path,
+               agents: Mapping[str, object] | None = None) -> dict[str, Any]:
+    """`run_one`, in a spawned pinned child when this process is not pinned (kartci.portable);
+    agent objects cannot leave this process, so their runs stay here (run.json says so)."""
+    if agents or portable.state() is not portable.Pin.UNPINNED:
+        return run_one(scenario, out, None, folder, agents)
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as pool:
+        return pool.submit(run_one, scenario, out, None, folder).result()
+
+
 def _run_staged(scenario: Scenario, stage: Path, folder: Path,
                 on_progress: Callable[[float], None] | None,
-                agents: Mapping[str, object] | None = None) -> dict[str, Any]:
+                agents: Mapping[str, object] | None = None,
+                facts: Mapping[str, Any] | None = None) -> dict[str, Any]:
     t0 = time.perf_counter()
     info = simulate(scenario, stage / LOG_NAME, on_progress, agents)
     wall = time.perf_counter() - t0
@@ -110,7 +133,7 @@ def _run_staged(scenario: Scenario, stage: Path, folder: Path,
         "sim_time_s": round(info.sim_time_s, 6), "wall_s": round(wall, 3),
         "real_time_factor": round(info.sim_time_s / wall, 2) if wall > 0 else None,
         "messages": info.messages, "finished_course": info.finished_course,
-        "log": str(folder / LOG_NAME)}
+        "log": str(folder / LOG_NAME), "platform": portable.describe(), **(facts or {})}
     if agents:
         run["replaced_agents"] = {name: describe(a) for name, a in sorted(agents.items())}
     warnings = input_warnings(scenario)
@@ -237,7 +260,7 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
     except KartciError as err:
         return ScenarioResult(name, "", error=str(err))
     try:
-        return _judge(folder, baseline, with_plots, reference)
+        return _judge(folder, baseline, baselines, with_plots, reference)
     except Exception as err:  # this scenario only: the others are still judged
         error = str(err) if isinstance(err, KartciError) else (
             f"cannot judge {name}: {type(err).__name__}: {err}")
@@ -246,8 +269,8 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
         return ScenarioResult(name, "", error=one_line(error))
 
 
-def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, with_plots: bool,
-           reference: dict[str, pd.DataFrame]) -> ScenarioResult:
+def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, baselines: Path,
+           with_plots: bool, reference: dict[str, pd.DataFrame]) -> ScenarioResult:
     scenario, _ = _recorded(folder)
     values = read_metrics(folder / "metrics.json")
     verdicts = compare(values, baseline)
@@ -256,13 +279,21 @@ def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, with_plots:
     run = json.loads(run_path.read_text(encoding="utf-8")) if run_path.exists() else {}
     if not isinstance(run, dict):
         raise LogError(f"{run_path}: expected a JSON object")
-    warnings = run.get("warnings")
+    warnings = [str(w) for w in run.get("warnings") or [] if isinstance(w, str)]
+    made = made_where(baselines / f"{folder.name}.json").get("platform")
+    note = portable.mismatch(made, run.get("platform") or {}) if made else None
+    warnings += [note] if note else []
+    warnings += ill_conditioned(verdicts)
     drawn = plots(folder, scenario) if with_plots else None
     if drawn is not None:
         drawn = replace(drawn, reference=reference)
-    return ScenarioResult(
-        folder.name, scenario.description, verdicts, crit, None, run, drawn,
-        warnings=tuple(one_line(str(w)) for w in warnings) if isinstance(warnings, list) else ())
+    return ScenarioResult(folder.name, scenario.description, verdicts, crit, None, run, drawn,
+                          warnings=tuple(one_line(w) for w in warnings))
+
+
+def recorded_scenario(folder: Path) -> Scenario:
+    """The scenario a run folder's log recorded: exactly what ran, overrides applied."""
+    return _recorded(folder)[0]
 
 
 def _recorded(folder: Path) -> tuple[Scenario, dict[str, pd.DataFrame]]:

@@ -6,9 +6,9 @@ import shutil
 from pathlib import Path
 
 from kartci.results import ScenarioResult
-from kartci.runner import costs
+from kartci.runner import conditioning, costs
 from kartci.runner.executors import Event, Listener, execute
-from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome
+from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome, Vary
 from kartci.runner.kinds import ExecutorKind
 
 
@@ -41,6 +41,8 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
                                     error=f"{o.job.folder} (seed {o.job.spec.seed}): {o.error}")
         if main.error is None:
             _drop_stale_repeats(out / job.label, {o.job.folder.rsplit("/", 1)[-1] for o in mine})
+        if job.vary is Vary.START and len(mine) > 1:
+            result = conditioning.judged(result, out / job.label, baselines)
         results.append(result)
     return results
 

@@ -2,19 +2,26 @@
 
 from kartci.verdict.baseline import (
     SEVERITY,
+    SPREAD_MULTIPLE,
     Change,
+    Conditioning,
     CriterionResult,
     MetricVerdict,
     Status,
     check_criteria,
     compare,
+    ill_conditioned,
     load,
+    made_where,
     read_json,
     read_metrics,
+    spread,
     update,
     worst,
     write_json_atomic,
 )
 
-__all__ = ["SEVERITY", "Change", "CriterionResult", "MetricVerdict", "Status", "check_criteria",
-           "compare", "load", "read_json", "read_metrics", "update", "worst", "write_json_atomic"]
+__all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Change", "Conditioning", "CriterionResult",
+           "MetricVerdict", "Status", "check_criteria", "compare", "ill_conditioned", "load",
+           "made_where",
+           "read_json", "read_metrics", "spread", "update", "worst", "write_json_atomic"]

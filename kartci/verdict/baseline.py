@@ -35,6 +35,42 @@ class Status(StrEnum):
         return self in (Status.REGRESSED, Status.FAILED, Status.MISSING, Status.ERROR)
 
 
+class Conditioning(StrEnum):
+    """How a metric's baseline spread (its range over replicas started nanometres apart)
+    compares with its tolerance: whether its verdict measures the change or chaos."""
+
+    WELL = "well"  # SPREAD_MULTIPLE x spread fits in the tolerance
+    MARGINAL = "marginal"  # fits once: judged with the tolerance widened to the multiple
+    ILL = "ill"  # the spread alone exceeds the tolerance: the verdict is a coin toss
+    UNMEASURED = "unmeasured"  # no replicas were run for this baseline
+
+    @property
+    def flagged(self) -> bool:
+        """True when the metric is ill-conditioned: a reader must be told."""
+        return self is Conditioning.ILL
+
+
+SPREAD_MULTIPLE = 3.0  # a tolerance below 3 x the chaotic spread could flip on chaos alone
+
+
+def conditioning(spread: float | None, declared: float, measured: bool = True) -> Conditioning:
+    """A metric's conditioning from its spread (None: defined in some replicas only) and its
+    declared tolerance."""
+    if not measured:
+        return Conditioning.UNMEASURED
+    if spread is None or spread > declared:
+        return Conditioning.ILL
+    return Conditioning.WELL if SPREAD_MULTIPLE * spread <= declared else Conditioning.MARGINAL
+
+
+def spread(values: list[float | None]) -> float | None:
+    """Range of a metric over replicas; 0 when undefined in all, None when undefined in some."""
+    finite = [v for v in values if v is not None and math.isfinite(v)]
+    if len(finite) != len(values):
+        return 0.0 if not finite else None
+    return max(finite) - min(finite)
+
+
 SEVERITY = [Status.ERROR, Status.FAILED, Status.REGRESSED, Status.MISSING, Status.NEW,
             Status.IMPROVED, Status.PASS]
 
@@ -55,6 +91,8 @@ class MetricVerdict:
     tolerance: float | None
     direction: Direction
     status: Status
+    spread: float | None = None  # range over the baseline's replicas (None: see conditioning)
+    conditioning: Conditioning = Conditioning.UNMEASURED
 
     @property
     def delta(self) -> float | None:
@@ -62,6 +100,20 @@ class MetricVerdict:
         if self.value is None or self.baseline is None:
             return None
         return self.value - self.baseline
+
+
+def ill_conditioned(verdicts: list[MetricVerdict]) -> list[str]:
+    """One line per ill-conditioned metric: what it is and what to do."""
+    out = []
+    for v in verdicts:
+        if v.conditioning is not Conditioning.ILL:
+            continue
+        size = "defined in some replicas only" if v.spread is None else f"spread {v.spread:.3g}"
+        out.append(f"{v.name} is ill-conditioned ({size} over replicas started nanometres "
+                   f"apart, more than its tolerance): its verdict reflects chaos, not the "
+                   f"change. Make the scenario or controller decide robustly, or set the "
+                   f"tolerance to at least {SPREAD_MULTIPLE:g}x the spread by hand")
+    return out
 
 
 @dataclass(frozen=True)
@@ -119,6 +171,9 @@ def load(path: Path) -> dict[str, dict[str, Any]] | None:
                 raise ValueError(f"{name}: tolerance must be a number >= 0")
             if entry.get("value") is not None and not _is_number(entry["value"]):
                 raise ValueError(f"{name}: value must be a number or null")
+            if entry.get("spread") is not None and not (_is_number(entry["spread"])
+                                                        and entry["spread"] >= 0):
+                raise ValueError(f"{name}: spread must be a number >= 0 or null")
     except (OSError, ValueError, UnicodeDecodeError) as err:
         raise BaselineError(f"{path}: malformed baseline ({err})") from None
     return dict(metrics)
@@ -144,13 +199,18 @@ def read_metrics(path: Path) -> dict[str, dict[str, Any]]:
 
 def judge(value: float | None, unit: str, name: str,
           entry: dict[str, Any] | None) -> MetricVerdict:
-    """One metric's value against its baseline entry (None: no baseline, NEW)."""
+    """One metric's value against its baseline entry (None: no baseline, NEW). With a measured
+    spread, the tolerance is at least SPREAD_MULTIPLE times it: chaos alone never regresses."""
     d = definition(name)
     direction = Direction(entry["direction"]) if entry else (d.direction if d else
                                                              Direction.EQUAL)
     if entry is None:
         return MetricVerdict(name, value, unit, None, None, direction, Status.NEW)
-    base, tol = _num(entry.get("value")), float(entry["tolerance"])
+    base, declared = _num(entry.get("value")), float(entry["tolerance"])
+    measured = "spread" in entry
+    sp = _num(entry.get("spread"))
+    cond = conditioning(sp, declared, measured)
+    tol = max(declared, SPREAD_MULTIPLE * sp) if sp is not None else declared
     if value is None and base is None:
         status = Status.PASS
     elif value is None or base is None:
@@ -168,7 +228,7 @@ def judge(value: float | None, unit: str, name: str,
             status = Status.IMPROVED
         else:
             status = Status.PASS
-    return MetricVerdict(name, value, unit, base, tol, direction, status)
+    return MetricVerdict(name, value, unit, base, tol, direction, status, sp, cond)
 
 
 def compare(metrics: dict[str, dict[str, Any]],
@@ -221,8 +281,12 @@ class Change:
     kind: str  # "added", "changed", "removed", "unchanged"
 
 
-def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]]) -> list[Change]:
-    """Write a scenario's baseline from a run's metrics, keeping hand-set tolerances."""
+def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
+           spreads: dict[str, float | None] | None = None,
+           made: dict[str, Any] | None = None) -> list[Change]:
+    """Write a scenario's baseline from a run's metrics, keeping hand-set tolerances; with each
+    metric's spread over replicas (`spreads`) and where it was made (`made`: the platform and
+    how the replicas were perturbed)."""
     old = load(path) or {}
     new: dict[str, dict[str, Any]] = {}
     changes = []
@@ -237,10 +301,24 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]]) -> lis
             direction = (d.direction if d else Direction.EQUAL).value
         new[name] = {"value": value, "unit": m.get("unit", ""), "tolerance": tol,
                      "direction": direction}
+        if spreads is not None and name in spreads:
+            sp = spreads[name]
+            new[name]["spread"] = None if sp is None else float(f"{sp:.4g}")
         old_value = _num(prev.get("value")) if prev else None
         kind = "added" if prev is None else ("unchanged" if old_value == value else "changed")
         changes.append(Change(name, old_value, value, kind))
     changes += [Change(n, _num(e.get("value")), None, "removed") for n, e in old.items()
                 if n not in new]
-    write_json_atomic(path, {"scenario": scenario, "metrics": new})
+    write_json_atomic(path, {"scenario": scenario, **(made or {}), "metrics": new})
     return changes
+
+
+def made_where(path: Path) -> dict[str, Any]:
+    """A baseline's record of where it was made (`platform`, `conditioning`); {} for none."""
+    try:
+        data = read_json(path)
+    except (OSError, ValueError, UnicodeDecodeError):
+        return {}
+    if not isinstance(data, dict):
+        return {}
+    return {k: data[k] for k in ("platform", "conditioning") if isinstance(data.get(k), dict)}

@@ -1,0 +1,17 @@
+"""`kartci` and `python -m kartci`: the command, in a pinned process (see kartci.portable)."""
+
+from __future__ import annotations
+
+from kartci import portable
+
+
+def main() -> None:
+    """Re-execute pinned if needed (before anything that computes is imported), then run."""
+    portable.reexec()
+    from kartci.cli import main as cli
+
+    cli()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,120 @@
+"""Conditioning: how far each metric moves when every robot starts a few nanometres elsewhere.
+
+A metric whose spread over such replicas (`Vary.START`) is comparable to its tolerance is
+chaotic there: a last-bit difference between two CPUs, or any unrelated change, flips its
+verdict. `kartci run --conditioning K` measures the spread and judges with it;
+`kartci baseline update` records it in the baseline, where every later run is judged with it.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from kartci.errors import BaselineError
+from kartci.results import ScenarioResult
+from kartci.runner.jobs import REPEAT_PREFIX, START_STEP_M, Job, Vary, replica
+from kartci.verdict import (
+    SPREAD_MULTIPLE,
+    compare,
+    ill_conditioned,
+    load,
+    read_metrics,
+    spread,
+)
+
+DEFAULT_REPLICAS = 4  # the run itself and 3 nudged: enough to see a bifurcation, 4x the cost
+
+
+def _run_fact(folder: Path, key: str) -> dict[str, Any]:
+    try:
+        run = json.loads((folder / "run.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    found = run.get(key) if isinstance(run, dict) else None
+    return found if isinstance(found, dict) else {}
+
+
+def _variation(folder: Path) -> dict[str, Any]:
+    return _run_fact(folder, "variation")
+
+
+def platform_of(folder: Path) -> dict[str, Any]:
+    """Where a run folder's numbers were made (run.json), or {} when it does not say."""
+    return _run_fact(folder, "platform")
+
+
+def replica_folders(folder: Path) -> list[Path]:
+    """The complete start replicas of a scenario folder."""
+    out = []
+    for rep in sorted(folder.glob(f"{REPEAT_PREFIX}*")):
+        if (rep / "metrics.json").is_file() and not (rep / "error.json").exists() and (
+                _variation(rep).get("vary") == Vary.START.value):
+            out.append(rep)
+    return out
+
+
+def spreads(folder: Path) -> dict[str, float | None] | None:
+    """Each metric's range over the judged run and its start replicas; None without replicas."""
+    reps = replica_folders(folder)
+    if not reps:
+        return None
+    samples = [read_metrics(folder / "metrics.json"), *(read_metrics(r / "metrics.json")
+                                                        for r in reps)]
+    names = sorted(set().union(*samples))
+
+    def value(sample: dict[str, dict[str, Any]], name: str) -> float | None:
+        v = sample.get(name, {}).get("value")
+        return None if v is None else float(v)
+
+    return {n: spread([value(s, n) for s in samples]) for n in names}
+
+
+def record(folder: Path) -> dict[str, Any]:
+    """How the spreads of `folder` were measured, for the baseline file."""
+    return {"replicas": len(replica_folders(folder)) + 1, "vary": Vary.START.value,
+            "step_m": START_STEP_M, "tolerance_at_least": f"{SPREAD_MULTIPLE:g} x spread"}
+
+
+def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioResult:
+    """A result judged again with the spreads its own replicas measured (a --conditioning run);
+    unchanged without replicas or with an error."""
+    measured = spreads(folder) if result.error is None else None
+    if measured is None:
+        return result
+    base = load(baselines / f"{result.name}.json")
+    entries = None if base is None else {
+        name: {**entry, "spread": measured.get(name)} for name, entry in base.items()}
+    verdicts = compare(read_metrics(folder / "metrics.json"), entries)
+    verdicts = [v if v.baseline is not None or v.name not in measured else
+                replace(v, spread=measured[v.name]) for v in verdicts]
+    old = [w for w in result.warnings if " is ill-conditioned " not in w]
+    return replace(result, verdicts=verdicts, warnings=(*old, *ill_conditioned(verdicts)))
+
+
+def missing_jobs(out: Path, labels: list[str], replicas: int,
+                 recorded: Callable[[Path], Job]) -> list[Job]:
+    """The start replicas still to run so that each label has `replicas` samples."""
+    jobs = []
+    for label in labels:
+        folder = out / label
+        have = {int(p.name.removeprefix(REPEAT_PREFIX)) for p in replica_folders(folder)
+                if p.name.removeprefix(REPEAT_PREFIX).isdigit()}
+        need = [k for k in range(1, replicas) if k not in have]
+        if need:
+            job = recorded(folder)
+            jobs += [Job(replica(job.spec, Vary.START, k), label, k, Vary.START) for k in need]
+    return jobs
+
+
+def check_complete(out: Path, labels: list[str], replicas: int) -> None:
+    """Every label has its replicas (after running them): else no baseline is written."""
+    for label in labels:
+        n = len(replica_folders(out / label)) + 1
+        if n < replicas:
+            raise BaselineError(f"{label}: {n} of {replicas} conditioning replicas finished; "
+                                "nothing written (see the replicas' error.json)")
+
