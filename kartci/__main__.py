@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import sys
+
 from kartci import portable
 
 
 def main() -> None:
     """Re-execute pinned if needed (before anything that computes is imported), then run."""
-    portable.reexec()
+    portable.reexec(["-P", "-m", "kartci", *sys.argv[1:]])
     from kartci.cli import main as cli
 
     cli()

@@ -154,14 +154,15 @@ def state() -> Pin:
     return Pin.PINNED if _numpy_pinned() else Pin.UNPINNED
 
 
-def reexec() -> None:
-    """The `kartci` command started without the pin becomes a pinned process (same pid, same
-    arguments) before it imports anything that computes; once only."""
+def reexec(args: list[str]) -> None:
+    """A process started without the pin becomes a pinned one (same pid): `python ARGS` with
+    the pinned environment, before it computes anything; once only (a process whose pin did
+    not take goes on unpinned, and its run.json says so)."""
     if state() is not Pin.UNPINNED or os.environ.get(_REEXEC):
         return
     env = pinned_env(os.environ)
     env[_REEXEC] = "1"
-    argv = [sys.executable, "-P", "-m", "kartci", *sys.argv[1:]]
+    argv = [sys.executable, *args]
     sys.stdout.flush()
     sys.stderr.flush()
     try:

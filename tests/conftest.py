@@ -4,17 +4,30 @@ kartci as a user installs it: its wheel (once per session) in a fresh venv."""
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from helpers import KartLap, kartci
 
+from kartci import portable
 from kartci.report import write_all
 from kartci.runner.run import evaluate
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = ROOT.parent / "shared" / "fixtures" / "bags"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """The tests simulate in this process and compare with baselines bit for bit: a pytest
+    started without kartci's pinned environment (kartci.portable) restarts itself with it."""
+    if portable.state() is portable.Pin.UNPINNED and not os.environ.get("PYTEST_XDIST_WORKER"):
+        capture = config.pluginmanager.getplugin("capturemanager")
+        if capture is not None:
+            capture.stop_global_capturing()  # the restarted pytest writes to the terminal
+        portable.reexec(["-P", "-m", "pytest", *sys.argv[1:]])
 
 
 @pytest.fixture(scope="session", autouse=True)
