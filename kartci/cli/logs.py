@@ -1,4 +1,4 @@
-"""`kartci replay` and `extract`: recorded logs in, as inputs or as copies."""
+"""`kartci replay`, `extract` and `diff`: recorded logs in, as inputs, as copies or compared."""
 
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ from kartci.cli.common import (
 from kartci.errors import SpecError
 
 if TYPE_CHECKING:
+    from kartci.logs.diff import FieldDiff, LogDiff, MessageDiff, TopicDiff
     from kartci.logs.reader import TopicInfo
 
 
@@ -161,3 +162,162 @@ def _open_loop(log: Path, agent: str | None, ns: str | None, reference: Path | N
     out_console.print(f"outputs: {out / 'openloop.mcap'}  (exit {1 if bad else 0})",
                       highlight=False)
     raise typer.Exit(1 if bad else 0)
+
+
+@app.command("diff")
+def diff_cmd(
+    a: Annotated[Path, typer.Argument(
+        help="Run A: a log (.mcap) or a run folder (OUT/<scenario>, holding run.mcap).",
+        show_default=False)],
+    b: Annotated[Path, typer.Argument(help="Run B, the same.", show_default=False)],
+    ignore: Annotated[list[str] | None, typer.Option(
+        "--ignore", metavar="TOPIC[:FIELD]",
+        help="Leave a topic, or one dotted field of it, out of the comparison (repeat). TOPIC "
+        "may hold * wildcards; FIELD is written without array indices, e.g. "
+        "'/kart0/mpcc/horizon:poses.pose.position.x'.")] = None,
+    wall_clock: Annotated[bool, typer.Option(
+        "--wall-clock", help="Also compare the fields measured on the wall clock (the MPCC's "
+        "solve_ms; listed in kartci/logs/wallclock.py), which differ between any two runs.")]
+    = False,
+    tolerance: Annotated[float, typer.Option(
+        help="Absolute tolerance of float fields, in each field's own unit [default: 0: "
+        "bitwise equal, NaN equal to NaN].", show_default=False)] = 0.0,
+    fields: Annotated[int, typer.Option(
+        "--fields", help="Differing fields printed at most.")] = 10,
+) -> None:
+    """Find where two run logs diverge: the first message, in log-time order, that differs
+    between A and B (its topic, sim time, index on the topic and differing fields with both
+    values in full precision), e.g. a run on a laptop against the same run in CI. Topics found
+    in one log only, of another type or with another message count are listed first. Exit 0
+    when identical, 1 when they differ, 2 for bad input. (`kartci compare` compares metrics.)"""
+    from kartci.logs.damage import count_of
+    from kartci.logs.diff import DiffOptions, Ignore, diff_logs
+
+    options = DiffOptions(tolerance, wall_clock, tuple(Ignore.parse(i) for i in ignore or []),
+                          fields)
+    log_a, log_b = _run_log(a, "A"), _run_log(b, "B")
+    result = diff_logs(log_a, log_b, options)
+    for unused in result.unused_ignores:
+        err_console.print(f"kartci: warning: --ignore {unused} matches no topic of either log",
+                          highlight=False, markup=False)
+    if result.identical:
+        _say(f"identical: {count_of(result.compared, 'message')} compared on "
+             f"{count_of(result.topics, 'topic')}"
+             + "".join(f"; {s}" for s in _skipped_lines(result)))
+        raise typer.Exit(0)
+    _say(f"A: {log_a}\nB: {log_b}")
+    for line in _diff_lines(result):
+        _say(line)
+    _say(f"logs differ ({count_of(result.compared, 'message')} compared; exit 1)")
+    raise typer.Exit(1)
+
+
+def _say(text: str) -> None:
+    out_console.print(text, highlight=False, markup=False, soft_wrap=True)
+
+
+def _run_log(path: Path, which: str) -> Path:
+    """The log a path names: a log file, a rosbag2 folder, a run folder's run.mcap, or the one
+    run's log in an OUT folder."""
+    from kartci.errors import LogError
+    from kartci.runner.run import LOG_NAME
+
+    what = f"give a run log (.mcap) or a run folder (OUT/<scenario>, holding {LOG_NAME})"
+    if not path.exists():
+        raise LogError(f"{which}: {path}: no such file or folder; {what}")
+    if not path.is_dir() or (path / "metadata.yaml").is_file():
+        return path
+    if (path / LOG_NAME).is_file():
+        return path / LOG_NAME
+    runs = sorted(path.glob(f"*/{LOG_NAME}"))
+    if len(runs) == 1:
+        return runs[0]
+    if runs:
+        names = ", ".join(r.parent.name for r in runs)
+        raise LogError(f"{which}: {path} holds {len(runs)} runs ({names}); give one of them, "
+                       f"e.g. {runs[0].parent}")
+    raise LogError(f"{which}: {path}: no {LOG_NAME} in this folder; {what}")
+
+
+def _seconds(t_ns: int) -> str:
+    return f"{t_ns / 1e9:.9f}".rstrip("0").rstrip(".") + " s"
+
+
+def _value(v: object) -> str:
+    from kartci.logs.diff import ABSENT
+
+    if v is ABSENT:
+        return "(no such field)"
+    text = repr(v)
+    return text if len(text) <= 100 else f"{text[:97]}..."
+
+
+def _field_line(f: FieldDiff, width: int) -> str:
+    a, b = f.a, f.b
+    if isinstance(a, str) and isinstance(b, str) and max(len(a), len(b)) > 60:
+        at = next((i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y),
+                  min(len(a), len(b)))
+        start = max(at - 20, 0)
+        return (f"  {f.path:<{width}}  strings differ from character {at}: "
+                f"A ...{a[start:at + 40]!r}...  B ...{b[start:at + 40]!r}...")
+    delta = f.delta
+    return (f"  {f.path:<{width}}  A {_value(a)}  B {_value(b)}"
+            + ("" if delta is None else f"  B-A {delta!r}"))
+
+
+def _message_lines(d: MessageDiff) -> list[str]:
+    head = (f"first difference: {d.topic} message {d.index} (counted from 0), "
+            f"t = {_seconds(d.t_ns)}, {d.msgtype}")
+    if d.t_a_ns is None or d.t_b_ns is None:
+        has, lacks = ("B", "A") if d.t_a_ns is None else ("A", "B")
+        n_a, n_b = d.counts
+        return [head, f"  only in {has}: {lacks} has no message {d.index} on {d.topic} "
+                      f"(A has {n_a}, B {n_b})"]
+    lines = [head]
+    if d.t_a_ns != d.t_b_ns:
+        lines.append(f"  log time: A {_seconds(d.t_a_ns)}  B {_seconds(d.t_b_ns)}")
+    width = max((len(f.path) for f in d.fields), default=0)
+    lines += [_field_line(f, width) for f in d.fields]
+    if d.more_fields:
+        lines.append(f"  ... and {d.more_fields} more differing "
+                     f"{'field' if d.more_fields == 1 else 'fields'} (--fields N shows more)")
+    return lines
+
+
+def _topic_line(t: TopicDiff) -> str:
+    from kartci.logs.diff import TopicChange
+
+    a, b = t.a, t.b
+    if t.change is TopicChange.ONLY_A and a is not None:
+        return f"topic {t.topic}: only in A ({a.msgtype}, {a.count} messages)"
+    if t.change is TopicChange.ONLY_B and b is not None:
+        return f"topic {t.topic}: only in B ({b.msgtype}, {b.count} messages)"
+    if t.change is TopicChange.TYPE and a is not None and b is not None:
+        return f"topic {t.topic}: type {a.msgtype} in A, {b.msgtype} in B (not compared)"
+    return (f"topic {t.topic}: {t.change.value}, A {a.count if a else 0}, "
+            f"B {b.count if b else 0}")
+
+
+def _skipped_lines(result: LogDiff) -> list[str]:
+    from kartci.logs.damage import count_of
+    from kartci.logs.diff import SkipReason
+
+    out = []
+    for s in (s for s in result.skipped if s.messages):
+        hint = " (--wall-clock compares it)" if s.reason is SkipReason.WALL_CLOCK else ""
+        out.append(f"not compared ({s.reason.value}): {s.field} on {s.topic}, in "
+                   f"{count_of(s.messages, 'message')}{hint}")
+    if result.ignored_topics:
+        out.append(f"not compared (--ignore): {', '.join(result.ignored_topics)}")
+    return out
+
+
+def _diff_lines(result: LogDiff, shown: int = 10) -> list[str]:
+    lines = [_topic_line(t) for t in result.topic_diffs[:shown]]
+    if len(result.topic_diffs) > shown:
+        lines.append(f"... and {len(result.topic_diffs) - shown} more topics that differ")
+    if result.first is not None:
+        lines += _message_lines(result.first)
+    elif result.topics:
+        lines.append(f"no message differs on the {result.topics} topics both logs have")
+    return lines + _skipped_lines(result)

@@ -194,13 +194,27 @@ class LogReader:
     def messages(self, wanted: Sequence[str] | None = None) -> Iterator[tuple[str, int, Any]]:
         """Yield (topic, log time ns, message) in time order, for the wanted topics (default
         all). Messages that do not decode are skipped and reported once at the end."""
+        for raw in self.raw(wanted):
+            m = self.decode(raw)
+            if m is not None:
+                yield raw[0], raw[3], m
+        self._report_undecodable()
+
+    def raw(self, wanted: Sequence[str] | None = None) -> Iterator[Raw]:
+        """Like messages(), but undecoded: (topic, msgtype, ROS 1 encoded, log time ns, bytes).
+        For comparing logs byte for byte, decoding (decode()) only what differs."""
         position = _Position()
         try:
-            yield from self._decoded(wanted, position, resume=False)
+            yield from self._raws(wanted, position, resume=False)
         except _SourceFailedError as failed:
             self._fall_back(failed.err)
-            yield from self._decoded(wanted, position, resume=True)
-        self._report_undecodable()
+            yield from self._raws(wanted, position, resume=True)
+
+    def decode(self, raw: Raw) -> Any:
+        """One message of raw(), decoded with this log's types; None when it does not decode
+        (counted, and reported once at the end of messages())."""
+        topic, msgtype, ros1, _, data = raw
+        return self._decode(topic, msgtype, ros1, data)
 
     def close(self) -> None:
         self._source.close()
@@ -213,22 +227,21 @@ class LogReader:
         warnings.warn_explicit(SalvagedLog(text), SalvagedLog, "kartci", 0, module=__name__,
                                registry=_SHOWN)
 
-    def _decoded(self, wanted: Sequence[str] | None, position: _Position,
-                 resume: bool) -> Iterator[tuple[str, int, Any]]:
+    def _raws(self, wanted: Sequence[str] | None, position: _Position,
+              resume: bool) -> Iterator[Raw]:
         raws = self._source.raw(wanted)
         while True:
             try:
-                topic, msgtype, ros1, t_ns, data = next(raws)
+                raw = next(raws)
             except StopIteration:
                 return
             except Exception as err:  # damaged bytes make readers raise anything
                 raise _SourceFailedError(err) from err
+            topic, t_ns = raw[0], raw[3]
             if resume and position.seen(topic, t_ns):
                 continue
             position.passed(topic, t_ns)
-            m = self._decode(topic, msgtype, ros1, data)
-            if m is not None:
-                yield topic, t_ns, m
+            yield raw
 
     def _decode(self, topic: str, msgtype: str, ros1: bool, data: bytes) -> Any:
         store = self._source.store
@@ -334,4 +347,4 @@ def messages(path: Path, wanted: Sequence[str] | None = None) -> Iterator[tuple[
         yield from log.messages(wanted)
 
 
-__all__ = ["LogReader", "SalvagedLog", "TopicInfo", "messages", "open_log", "topics"]
+__all__ = ["LogReader", "Raw", "SalvagedLog", "TopicInfo", "messages", "open_log", "topics"]

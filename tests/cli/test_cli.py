@@ -55,7 +55,7 @@ COMMANDS = _commands()
 def test_every_command_is_found() -> None:
     names = {" ".join(c) for c in COMMANDS}
     assert {"init", "list", "show", "run", "report", "schema", "characterise", "baseline",
-            "baseline update", "merge", "compare", "plugins", "replay", "extract"} <= names
+            "baseline update", "merge", "compare", "plugins", "replay", "extract", "diff"} <= names
 
 
 @pytest.mark.parametrize("cmd", COMMANDS, ids=lambda c: " ".join(c) or "kartci")
