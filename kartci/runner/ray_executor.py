@@ -40,7 +40,8 @@ def ray_tasks(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
         except Exception as err:  # an unreachable address, a broken local start
             raise RunError(f"cannot start Ray ({address or 'local'}): {err}") from None
     try:
-        task = ray.remote(num_cpus=1, max_retries=0)(run_job)
+        task = ray.remote(num_cpus=1, max_retries=0,
+                          runtime_env={"env_vars": child_vars()})(run_job)
         refs = {task.remote(job, ctx): job for job in jobs}
         while refs:
             ready, _ = ray.wait(list(refs), num_returns=1)
