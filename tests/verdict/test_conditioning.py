@@ -17,7 +17,8 @@ from kartci.verdict import Conditioning, Status, load, spread, update
 from kartci.verdict.baseline import judge
 
 
-def _entry(value: float, tol: float, sp: float | None, direction: str = "higher") -> dict:
+def _entry(value: float, tol: float, sp: float | None,
+           direction: str = "higher") -> dict[str, object]:
     return {"value": value, "unit": "m", "tolerance": tol, "direction": direction, "spread": sp}
 
 
@@ -93,8 +94,9 @@ def test_conditioning_run_and_baseline_update_record_spreads(tmp_path: Path) -> 
     assert all("spread" in m for m in metrics.values())
     # the line tracker's start nudged by nanometres: its cross-track error moves, but far less
     # than any tolerance (a well-conditioned scenario)
-    assert 0 < metrics["cross_track_rms_m"]["spread"] < metrics["cross_track_rms_m"]["tolerance"] / 3
-    metrics["cross_track_rms_m"]["tolerance"] = metrics["cross_track_rms_m"]["spread"] / 2
+    xt = metrics["cross_track_rms_m"]
+    assert 0 < xt["spread"] < xt["tolerance"] / 3
+    xt["tolerance"] = xt["spread"] / 2
     (base / "line_straight.json").write_text(json.dumps(data))
     again = kartci("run", "line_straight", *QUICK, "--out", out, "--baselines", base)
     assert again.returncode == 0, again.stderr
