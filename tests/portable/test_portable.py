@@ -139,3 +139,31 @@ KART_SCENARIOS = ["obstacle_avoidance", "perception_obstacles", "mpcc_lap", "mul
 def test_kart_scenarios_are_byte_identical_under_every_level(name: str, tmp_path: Path) -> None:
     got = _across_levels(tmp_path, name, 12.0)
     assert len(set(got.values())) == 1, got
+
+
+def test_agent_objects_in_an_unpinned_python_run_there_and_say_so(tmp_path: Path) -> None:
+    """Objects cannot leave the caller's process: the run happens there, and the result warns
+    that its last bits may differ from `kartci run`."""
+    code = """
+import sys, numpy as np
+import kartci
+from kartci.logs import header, msg
+
+class Straight:
+    period_s = 0.06
+    inputs = ("line_sensor",)
+    def on_message(self, topic, message): pass
+    def step(self, t_ns):
+        return [("wheel_cmd", msg("sensor_msgs/msg/JointState", header=header(t_ns, "base_link"),
+                 name=[], position=np.zeros(0), effort=np.zeros(0),
+                 velocity=np.array([3.0, 3.0])))]
+
+r = kartci.run("line_straight", overrides=["duration_s=1", "metrics.line_tracking.transient_s=0.5"],
+               agents={"lt0": Straight()}, out=sys.argv[1])
+print(repr(r.warnings))
+"""
+    done = subprocess.run([PY, "-c", code, str(tmp_path)], env=_clean_env(), cwd=ROOT,
+                          capture_output=True, text=True, check=True)
+    assert "not started pinned" in done.stdout
+    run = json.loads((tmp_path / "line_straight" / "run.json").read_text())
+    assert run["platform"]["simd"] == "unpinned"
