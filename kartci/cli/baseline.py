@@ -114,7 +114,10 @@ def _made(folder: Path) -> dict[str, Any]:
 def _conditioning(folder: Path) -> tuple[dict[str, float | None] | None, dict[str, Any]]:
     from kartci.runner.conditioning import record, spreads
 
-    return spreads(folder), {**_made(folder), "conditioning": record(folder)}
+    measured = spreads(folder)
+    if measured is None:  # not a simulation (a scored real log): nothing to replicate
+        return None, _made(folder)
+    return measured, {**_made(folder), "conditioning": record(folder)}
 
 
 def _replicate(out: Path, target: Path, labels: list[str], replicas: int, workers: int) -> None:

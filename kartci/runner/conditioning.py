@@ -99,7 +99,7 @@ def missing_jobs(out: Path, labels: list[str], replicas: int,
                  recorded: Callable[[Path], Job]) -> list[Job]:
     """The start replicas still to run so that each label has `replicas` samples."""
     jobs = []
-    for label in labels:
+    for label in simulated(out, labels):
         folder = out / label
         have = {int(p.name.removeprefix(REPEAT_PREFIX)) for p in replica_folders(folder)
                 if p.name.removeprefix(REPEAT_PREFIX).isdigit()}
@@ -110,9 +110,15 @@ def missing_jobs(out: Path, labels: list[str], replicas: int,
     return jobs
 
 
+def simulated(out: Path, labels: list[str]) -> list[str]:
+    """The labels whose folders kartci simulated (an imported or scored real log has nothing
+    to replicate: its spread is not measured)."""
+    return [label for label in labels if platform_of(out / label)]
+
+
 def check_complete(out: Path, labels: list[str], replicas: int) -> None:
-    """Every label has its replicas (after running them): else no baseline is written."""
-    for label in labels:
+    """Every simulated label has its replicas (after running them): else nothing is written."""
+    for label in simulated(out, labels):
         n = len(replica_folders(out / label)) + 1
         if n < replicas:
             raise BaselineError(f"{label}: {n} of {replicas} conditioning replicas finished; "

@@ -69,14 +69,24 @@ def _metrics(folder: Path) -> str:
                       sort_keys=True)
 
 
+def _same_log(a: Path, b: Path) -> None:
+    """Every message of the two run logs bit for bit (wall-clock fields aside): stronger than
+    the metrics, which a short run's last-bit differences may not reach."""
+    done = subprocess.run([KARTCI, "diff", str(a), str(b)], capture_output=True, text=True,
+                          check=False)
+    assert done.returncode == 0, done.stdout[-1500:] + done.stderr[-500:]
+
+
 def _run(out: Path, env: dict[str, str], *args: str) -> None:
     done = subprocess.run([KARTCI, "run", *args, "--out", str(out)], env=env,
                           capture_output=True, text=True, check=False, cwd=ROOT)
     assert done.returncode in (0, 1), done.stderr[-2000:]
 
 
-def _levels() -> dict[str, dict[str, str]]:
-    """Every dispatch level and OpenBLAS choice this machine offers, as a user's environment."""
+def _levels(every: bool) -> dict[str, dict[str, str]]:
+    """Dispatch levels and OpenBLAS / libm choices this machine offers, as a user's environment:
+    each one alone (`every`), or the lowest levels together with the other libraries' foreign
+    choices (the quick check: three runs)."""
     import numpy  # noqa: F401  (loaded, so its dispatch table is known)
 
     _, dispatch, features = portable._numpy_cpu()
@@ -88,42 +98,55 @@ def _levels() -> dict[str, dict[str, str]]:
     if "X86_V3" in on:
         out["X86_V3 off too"] = _clean_env(NPY_DISABLE_CPU_FEATURES=" ".join(dispatch))
     if X86:
-        out["OpenBLAS Haswell, 2 threads"] = _clean_env(OPENBLAS_CORETYPE="Haswell",
-                                                        OPENBLAS_NUM_THREADS="2")
-        out["OpenBLAS SkylakeX"] = _clean_env(OPENBLAS_CORETYPE="SkylakeX")
-        out["libm without FMA"] = _clean_env(GLIBC_TUNABLES="glibc.cpu.hwcaps=-AVX2,-FMA")
+        foreign = {"OPENBLAS_CORETYPE": "Haswell", "OPENBLAS_NUM_THREADS": "2",
+                   "GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA"}
+        if every:
+            out["OpenBLAS Haswell, 2 threads"] = _clean_env(OPENBLAS_CORETYPE="Haswell",
+                                                            OPENBLAS_NUM_THREADS="2")
+            out["OpenBLAS SkylakeX"] = _clean_env(OPENBLAS_CORETYPE="SkylakeX")
+            out["libm without FMA"] = _clean_env(GLIBC_TUNABLES="glibc.cpu.hwcaps=-AVX2,-FMA")
+        else:
+            lowest = list(out)[-1]
+            out[lowest] = {**out[lowest], **foreign}
     return out
 
 
-def _across_levels(tmp_path: Path, name: str, duration_s: float) -> dict[str, str]:
+def _across_levels(tmp_path: Path, name: str, duration_s: float,
+                   every: bool = False) -> dict[str, str]:
+    """Each level's metrics; every level's log equals the first's."""
     got = {}
-    for i, (label, env) in enumerate(_levels().items()):
+    for i, (label, env) in enumerate(_levels(every).items()):
         out = tmp_path / f"level{i}"
         _run(out, env, name, "--set", f"duration_s={duration_s:g}")
         got[label] = _metrics(out / name)
+        if i:
+            _same_log(tmp_path / "level0" / name, out / name)
     return got
 
 
 def test_the_command_gives_the_same_metrics_under_every_level(tmp_path: Path) -> None:
     """`kartci run` started from any environment re-executes itself pinned: the MPCC lap's
-    metrics are the same bytes whatever numpy, OpenBLAS or libm would pick on this CPU."""
-    got = _across_levels(tmp_path, "mpcc_lap", 3.0)
+    log and metrics are the same bytes whatever numpy, OpenBLAS or libm would pick on this CPU
+    (unpinned, its log differs from the first message: tests/logs/test_diff.py)."""
+    got = _across_levels(tmp_path, "mpcc_lap", 2.0)
     assert len(set(got.values())) == 1, got
 
 
 def test_workers_and_an_unpinned_python_compute_as_the_command(tmp_path: Path) -> None:
     """-j workers, and the API in a Python that imported numpy before kartci (its run goes to
     a pinned child), give the command's bytes."""
-    _run(tmp_path / "one", _clean_env(), "kart_wall", "mpcc_lap", "--set", "duration_s=2")
-    _run(tmp_path / "two", _clean_env(), "kart_wall", "mpcc_lap", "--set", "duration_s=2",
+    _run(tmp_path / "one", _clean_env(), "kart_wall", "mpcc_lap", "--set", "duration_s=1")
+    _run(tmp_path / "two", _clean_env(), "kart_wall", "mpcc_lap", "--set", "duration_s=1",
          "-j", "2")
-    code = ("import numpy, kartci, sys; r = kartci.run('mpcc_lap', overrides=['duration_s=2'], "
+    code = ("import numpy, kartci, sys; r = kartci.run('mpcc_lap', overrides=['duration_s=1'], "
             "out=sys.argv[1]); print(r.folder)")
     subprocess.run([PY, "-c", code, str(tmp_path / "api")], env=_clean_env(), check=True,
                    capture_output=True, cwd=ROOT)
     for name in ("kart_wall", "mpcc_lap"):
         assert _metrics(tmp_path / "one" / name) == _metrics(tmp_path / "two" / name)
+        _same_log(tmp_path / "one" / name, tmp_path / "two" / name)
     assert _metrics(tmp_path / "api" / "mpcc_lap") == _metrics(tmp_path / "one" / "mpcc_lap")
+    _same_log(tmp_path / "one" / "mpcc_lap", tmp_path / "api" / "mpcc_lap")
     run = json.loads((tmp_path / "api" / "mpcc_lap" / "run.json").read_text())
     assert run["platform"]["simd"] == "pinned"
 
@@ -137,7 +160,7 @@ KART_SCENARIOS = ["obstacle_avoidance", "perception_obstacles", "mpcc_lap", "mul
                     reason="every kart scenario under every level: set KARTCI_LONG=1")
 @pytest.mark.parametrize("name", KART_SCENARIOS)
 def test_kart_scenarios_are_byte_identical_under_every_level(name: str, tmp_path: Path) -> None:
-    got = _across_levels(tmp_path, name, 12.0)
+    got = _across_levels(tmp_path, name, 12.0, every=True)
     assert len(set(got.values())) == 1, got
 
 
