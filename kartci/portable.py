@@ -154,6 +154,18 @@ def state() -> Pin:
     return Pin.PINNED if _numpy_pinned() else Pin.UNPINNED
 
 
+def warn_unpinned() -> None:
+    """A run about to happen in this process, which is not pinned: say that its last bits may
+    differ from `kartci run`'s (a Python warning, once per place)."""
+    if state() is Pin.UNPINNED:
+        import warnings
+
+        warnings.warn("this process was not started with kartci's pinned environment (numpy "
+                      "or the process came before `import kartci`): a run here may differ in "
+                      "its last bits from `kartci run`; see kartci.portable", RuntimeWarning,
+                      stacklevel=3)
+
+
 def reexec(args: list[str]) -> None:
     """A process started without the pin becomes a pinned one (same pid): `python ARGS` with
     the pinned environment, before it computes anything; once only (a process whose pin did

@@ -28,7 +28,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from kartci import plugins
+from kartci import plugins, portable
 from kartci.agents.base import Agent
 from kartci.errors import KartciError, SpecError
 from kartci.logs import McapLogWriter, msg
@@ -289,6 +289,7 @@ class Session:
                  agents: Mapping[str, object] | None = None,
                  taps: tuple[Tap, ...] = ()) -> None:
         """Check the agent objects; nothing is built before `reset()`."""
+        portable.warn_unpinned()
         self.scenario = scenario
         self.taps = taps or LIVE_TAPS.get()
         self.log_path = log_path
