@@ -262,7 +262,7 @@ def test_runs_at_two_numpy_simd_levels_are_told_apart(
                 if k not in ("NPY_ENABLE_CPU_FEATURES", "NPY_DISABLE_CPU_FEATURES")}
     base_env["KARTCI_SIMD"] = "native"  # keep numpy's own dispatch when kartci pins one
     envs = {"v2": {**base_env, "NPY_ENABLE_CPU_FEATURES": "X86_V2"}, "all": base_env}
-    cmd = [sys.executable, "-m", "kartci.cli", "run", "mpcc_lap", "--set", "duration_s=2"]
+    cmd = [sys.executable, "-m", "kartci.cli", "run", "mpcc_lap", "--set", "duration_s=1"]
     procs = {name: subprocess.Popen([*cmd, "--out", str(tmp_path / name)], env=env,
                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
              for name, env in envs.items()}
