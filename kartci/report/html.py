@@ -19,7 +19,8 @@ body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}
 table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;
 text-align:right}th{background:#f3f3f3}td:first-child{text-align:left;font-family:monospace}
 .pass,.improved{color:#176f2c}.regressed,.failed,.error,.missing{color:#b00020;font-weight:bold}
-.new{color:#555}.figs{display:flex;flex-wrap:wrap;gap:1em}.figs svg{max-width:560px;height:auto}
+.new{color:#555}.cond-ill{color:#b00020;font-weight:bold}.cond-marginal{color:#8a5a00}
+.figs{display:flex;flex-wrap:wrap;gap:1em}.figs svg{max-width:560px;height:auto}
 .kfigs{display:flex;flex-wrap:wrap;gap:1em}.kfig{width:570px}.ktitle{font-weight:bold;
 text-align:center;font-size:14px}.kinfo{font-size:12px}table.laps td.best{font-weight:bold;
 color:#176f2c}table.laps tr.ideal td{color:#555;font-style:italic}caption{text-align:left}
