@@ -19,12 +19,14 @@ from kartci.results import ScenarioResult
 from kartci.runner.jobs import REPEAT_PREFIX, START_STEP_M, Job, Vary, replica
 from kartci.verdict import (
     SPREAD_MULTIPLE,
+    MetricVerdict,
     compare,
     ill_conditioned,
     load,
     read_metrics,
     spread,
 )
+from kartci.verdict.baseline import conditioning, definition
 
 DEFAULT_REPLICAS = 4  # the run itself and 3 nudged: enough to see a bifurcation, 4x the cost
 
@@ -90,9 +92,17 @@ def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioRes
         name: {**entry, "spread": measured.get(name)} for name, entry in base.items()}
     verdicts = compare(read_metrics(folder / "metrics.json"), entries)
     verdicts = [v if v.baseline is not None or v.name not in measured else
-                replace(v, spread=measured[v.name]) for v in verdicts]
+                _unjudged(v, measured[v.name]) for v in verdicts]
     old = [w for w in result.warnings if " is ill-conditioned " not in w]
     return replace(result, verdicts=verdicts, warnings=(*old, *ill_conditioned(verdicts)))
+
+
+def _unjudged(v: MetricVerdict, sp: float | None) -> MetricVerdict:
+    """A metric with no baseline yet: its spread against the tolerance it would get."""
+    d = definition(v.name.rsplit(".", 1)[-1])
+    if d is None or v.value is None:
+        return replace(v, spread=sp)
+    return replace(v, spread=sp, conditioning=conditioning(sp, d.default_tolerance(v.value)))
 
 
 def missing_jobs(out: Path, labels: list[str], replicas: int,

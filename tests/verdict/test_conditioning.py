@@ -81,6 +81,10 @@ def test_conditioning_run_and_baseline_update_record_spreads(tmp_path: Path) -> 
     run = kartci("run", "line_straight", *QUICK, "--conditioning", "3", "--out", out,
                  "--baselines", base)
     assert run.returncode == 0, run.stderr
+    first = json.loads((out / "summary.json").read_text())["scenarios"]["line_straight"]
+    # no baseline yet: each spread is judged against the tolerance the metric would get
+    assert first["metrics"]["cross_track_rms_m"]["conditioning"] == "well"
+    assert first["metrics"]["cross_track_rms_m"]["status"] == "new"
     for k in (1, 2):
         facts = json.loads((out / "line_straight" / f"repeat_{k}" / "run.json").read_text())
         assert facts["variation"] == {"vary": "start", "k": k, "step": START_STEP_M}
