@@ -27,6 +27,7 @@ import platform as _platform
 import sys
 from collections.abc import Mapping
 from enum import StrEnum
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -103,8 +104,10 @@ def prepare() -> None:
     os.environ.update(pinned)
 
 
+@cache
 def _started_env() -> dict[str, str] | None:
-    """The environment this process was started with (Linux), or None where unknown."""
+    """The environment this process was started with (Linux), or None where unknown; it never
+    changes, so it is read once."""
     try:
         raw = Path("/proc/self/environ").read_bytes()
     except OSError:
