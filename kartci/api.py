@@ -30,7 +30,8 @@ if TYPE_CHECKING:
     from kartci.verdict import CriterionResult, MetricVerdict, Status
 
 
-def load_scenario(scenario: str | Path, overrides: Sequence[str] = ()) -> Scenario:
+def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
+                  allow_outside_paths: bool = False) -> Scenario:
     """Load and validate a scenario file.
 
     Args:
@@ -38,6 +39,8 @@ def load_scenario(scenario: str | Path, overrides: Sequence[str] = ()) -> Scenar
             YAML file (a `Path`, or a string ending in `.yaml` or holding a `/`).
         overrides: `dotted.key=value` assignments, as `kartci run --set` takes them
             (`"duration_s=3"`, `"agents.lt0.controller.kp=80"`); values are parsed as YAML.
+        allow_outside_paths: Let track, world and model files lie outside the project and
+            kartci's data (absolute paths, `..`, symlinks), as `--allow-outside-paths`.
 
     Returns:
         The validated, frozen scenario, with world and robot files resolved.
@@ -48,7 +51,7 @@ def load_scenario(scenario: str | Path, overrides: Sequence[str] = ()) -> Scenar
     """
     from kartci.spec.load import load_scenario as load
 
-    return load(scenario, list(overrides))
+    return load(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
 
 
 @dataclass(frozen=True)
@@ -165,7 +168,7 @@ def _num(x: float | None, unit: str) -> str:
 
 def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
         out: str | Path | None = None, agents: Mapping[str, object] | None = None,
-        baselines: str | Path | None = None) -> RunResult:
+        baselines: str | Path | None = None, allow_outside_paths: bool = False) -> RunResult:
     """Run one scenario, record its log, score it and judge it against its baseline.
 
     Args:
@@ -179,6 +182,7 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
             scenario as written plus which agents were replaced, and by what.
         baselines: Folder of baseline files. Default: the project's (`[tool.kartci]
             baselines`).
+        allow_outside_paths: As for `load_scenario`.
 
     Returns:
         The run's metrics, verdicts and criteria (`result.passed`, `result.table()`).
@@ -208,9 +212,9 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     )
 
     if isinstance(scenario, Scenario):
-        spec = with_overrides(scenario, list(overrides))
+        spec = with_overrides(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
     else:
-        spec = load_scenario(scenario, overrides)
+        spec = load_scenario(scenario, overrides, allow_outside_paths=allow_outside_paths)
     check_criteria_names([spec])
     root = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"kartci-{spec.name}-"))
     folder = root / spec.name

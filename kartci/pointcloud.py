@@ -44,7 +44,7 @@ def read_ply(path: Path) -> Array:
         raise LogError(f"{path}: not a PLY file (no 'ply' ... 'end_header')")
     lines = data[:end].decode("ascii", "replace").splitlines()
     fmt, count, props, element = "", 0, [], ""
-    for line in lines:
+    for number, line in enumerate(lines, 1):
         words = line.split()
         if words[:1] == ["format"] and len(words) > 1:
             fmt = words[1]
@@ -54,7 +54,8 @@ def read_ply(path: Path) -> Array:
                 count = int(words[2])
         elif words[:1] == ["property"] and element == "vertex":
             if words[1] == "list" or words[1] not in PLY_TYPES:
-                raise LogError(f"{path}: unsupported vertex property '{line.strip()}'")
+                raise LogError(f"{path}:{number}: unsupported vertex property (a list, or a "
+                               "type other than PLY's scalar types)")
             props.append((words[2], PLY_TYPES[words[1]]))
     if not {"x", "y", "z"} <= {n for n, _ in props}:
         raise LogError(f"{path}: the PLY's vertices have no x, y, z")
@@ -69,13 +70,13 @@ def _vertices(path: Path, fmt: str, count: int, props: list[tuple[str, str]],
         rows = body.decode("ascii", "replace").split("\n")[:count]
         try:
             table = np.array([[float(v) for v in r.split()[:len(names)]] for r in rows])
-        except ValueError as err:
-            raise LogError(f"{path}: bad ASCII vertex ({err})") from err
+        except ValueError as err:  # its message quotes the value: the file may be anything
+            raise LogError(f"{path}: an ASCII vertex value is not a number") from err
         if table.shape != (count, len(names)):
             raise LogError(f"{path}: expected {count} vertices of {len(names)} values")
         return np.column_stack([table[:, names.index(c)] for c in "xyz"])
     if fmt != "binary_little_endian":
-        raise LogError(f"{path}: PLY format '{fmt}' not supported (binary_little_endian, ascii)")
+        raise LogError(f"{path}: PLY format not supported (binary_little_endian, ascii)")
     dtype = np.dtype([(n, t) for n, t in props])
     if len(body) < count * dtype.itemsize:
         raise LogError(f"{path}: truncated: {count} vertices need {count * dtype.itemsize} "

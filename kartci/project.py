@@ -79,6 +79,26 @@ class Project:
         """Robot model folders in search order: the project's own, then the built-in ones."""
         return _unique((*self.models, BUILTIN / "models"))
 
+    @property
+    def data_roots(self) -> tuple[Path, ...]:
+        """The folders a data file may come from: the project's own and kartci's built-in data.
+        A file outside them (an absolute path, a `..`, a symlink leaving them) could be any file
+        on the machine, and a file that fails to parse ends up named in CI artifacts."""
+        return _unique((self.root, *self.scenarios, *self.worlds, *self.models, BUILTIN))
+
+    def contained(self, path: Path, what: str, allow_outside: bool = False) -> Path:
+        """`path` with symlinks resolved; a SpecError when that leaves `data_roots`, unless
+        `allow_outside` (the user's `--allow-outside-paths`)."""
+        try:
+            real = path.resolve()
+        except (OSError, RuntimeError) as err:  # a symlink loop, a name too long
+            raise SpecError(f"{what}: {_shown(path)}: cannot be resolved ({err})") from err
+        if allow_outside or any(real.is_relative_to(root) for root in self.data_roots):
+            return real
+        link = "" if str(real) == os.path.abspath(path) else f" (a link to {_shown(real)})"
+        raise SpecError(f"{what}: {_shown(path)}{link} is outside the project and kartci's data "
+                        "(pass --allow-outside-paths to use it)")
+
     def own_scenarios(self) -> list[Path]:
         """The project's own scenario files (and the built-in ones when asked for), by name;
         a name found twice is taken from the first folder."""
@@ -103,24 +123,26 @@ class Project:
         raise SpecError(f"unknown scenario '{shown}'{did_you_mean(name, known)}; "
                         "see `kartci list`")
 
-    def find_world(self, name: str) -> Path:
+    def find_world(self, name: str, allow_outside: bool = False) -> Path:
         """`winti/hall` -> the first `<world folder>/winti/hall.yaml` on the search path."""
-        return self._find(self.world_path, f"{name}.yaml", f"world {name!r}")
+        return self._find(self.world_path, f"{name}.yaml", f"world {name!r}", allow_outside)
 
-    def find_model(self, name: str) -> Path:
+    def find_model(self, name: str, allow_outside: bool = False) -> Path:
         """`gokart` -> the first `<model folder>/gokart/params.yaml` on the search path."""
-        return self._find(self.model_path, f"{name}/params.yaml", f"robot model {name!r}")
+        return self._find(self.model_path, f"{name}/params.yaml", f"robot model {name!r}",
+                          allow_outside)
 
-    def world_file(self, rel: str) -> Path:
+    def world_file(self, rel: str, allow_outside: bool = False) -> Path:
         """A data file named relative to the world folders (a track CSV, a mesh)."""
-        return self._find(self.world_path, rel, f"world data file {rel!r}")
+        return self._find(self.world_path, rel, f"world data file {rel!r}", allow_outside)
 
-    def model_file(self, rel: str) -> Path:
+    def model_file(self, rel: str, allow_outside: bool = False) -> Path:
         """A data file named relative to the model folders (a URDF, a joystick mapping)."""
-        return self._find(self.model_path, rel, f"model data file {rel!r}")
+        return self._find(self.model_path, rel, f"model data file {rel!r}", allow_outside)
 
-    @staticmethod
-    def _find(path: tuple[Path, ...], rel: str, what: str) -> Path:
+    def _find(self, path: tuple[Path, ...], rel: str, what: str, allow_outside: bool) -> Path:
+        """The first `<folder>/rel` on `path` that is a file; a symlink found there must stay
+        within `data_roots` (unless `allow_outside`)."""
         what = what if len(what) <= 120 else what[:117] + "..."  # never echo a huge name
         if Path(rel).is_absolute() or ".." in Path(rel).parts:
             raise SpecError(f"{what}: expected a name relative to the search path "
@@ -129,11 +151,18 @@ class Project:
             candidate = folder / rel
             try:
                 if candidate.is_file():
+                    self.contained(candidate, what, allow_outside)
                     return candidate
             except OSError as err:  # a name too long for the file system, say
                 raise SpecError(f"{what}: cannot be a file name ({err.strerror})") from err
         where = ", ".join(str(p) for p in path)
         raise SpecError(f"{what} not found (searched {where})")
+
+
+def _shown(path: Path, limit_chars: int = 200) -> str:
+    """A path for a message: one printable line, cut (a `--set` path may be 64 KB)."""
+    text = str(path) if str(path).isprintable() else repr(str(path))[1:-1]
+    return text if len(text) <= limit_chars else text[: limit_chars - 1] + "…"
 
 
 def _unique(paths: tuple[Path, ...]) -> tuple[Path, ...]:

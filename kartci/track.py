@@ -62,14 +62,13 @@ class Track:
         return self.xy + n * self.w_left[:, None], self.xy - n * self.w_right[:, None]
 
 
-def parse_csv(path: Path, text: str | None = None) -> Array:
-    """Rows of a TUMFTM CSV file (or of its text, as recorded in a run log)."""
+def parse_csv(path: Path, text: str) -> Array:
+    """Rows of a TUMFTM CSV file's text (`path` names it in messages)."""
     try:
-        rows = np.loadtxt(io.StringIO(text) if text is not None else path, delimiter=",",
-                          comments="#", ndmin=2)
-    except (OSError, ValueError) as err:
-        raise SpecError(f"{path}: not a TUMFTM track CSV (x_m,y_m,w_tr_right_m,w_tr_left_m): "
-                        f"{err}") from err
+        rows = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", ndmin=2)
+    except ValueError as err:  # numpy's message quotes the row: the file may be any file
+        raise SpecError(f"{path}{_first_bad_cell(text)}: not a TUMFTM track CSV "
+                        "(x_m,y_m,w_tr_right_m,w_tr_left_m)") from err
     if rows.shape[1] != 4 or len(rows) < 4:
         raise SpecError(f"{path}: expected at least 4 rows of x_m,y_m,w_tr_right_m,w_tr_left_m")
     if np.allclose(rows[0, :2], rows[-1, :2]):
@@ -77,6 +76,25 @@ def parse_csv(path: Path, text: str | None = None) -> Array:
     if (rows[:, 2:] <= 0).any():
         raise SpecError(f"{path}: track widths must be positive")
     return rows
+
+
+def _first_bad_cell(text: str) -> str:
+    """`:LINE:COLUMN` (1-based) of the first cell that is not a number, or `:LINE` of the first
+    row without 4 cells: where np.loadtxt stopped, told without quoting the file."""
+    for number, line in enumerate(text.splitlines(), 1):
+        cells = line.split("#", 1)[0].split(",")
+        if len(cells) == 1 and not cells[0].strip():
+            continue
+        if len(cells) != 4:
+            return f":{number}"
+        column = 1
+        for cell in cells:
+            try:
+                float(cell)
+            except ValueError:
+                return f":{number}:{column + len(cell) - len(cell.lstrip())}"
+            column += len(cell) + 1
+    return ""
 
 
 TRACK_TOPIC = "/kartci/track"  # std_msgs/String: the track CSV, published at t = 0

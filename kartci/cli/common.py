@@ -64,6 +64,9 @@ OutOpt = Annotated[Path | None, typer.Option(
     "--out", "-o", help="Output folder [default: the project's reports/<command>].")]
 BaselinesOpt = Annotated[Path | None, typer.Option(
     help="Folder of baseline files (default: the project's baselines/).")]
+AllowOutsideOpt = Annotated[bool, typer.Option(
+    "--allow-outside-paths", help="Let track, world and model files (absolute paths, '..', "
+    "symlinks) lie outside the project and kartci's data.")]
 StrictOpt = Annotated[bool | None, typer.Option(
     "--strict/--no-strict", help="Fail a scenario without a baseline or with a metric its "
     "baseline lacks [default: strict when the CI environment variable is set].")]

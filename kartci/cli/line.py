@@ -9,7 +9,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from kartci.cli.common import OutOpt, SetOpt, app, out_console, out_dir
+from kartci.cli.common import AllowOutsideOpt, OutOpt, SetOpt, app, out_console, out_dir
 from kartci.errors import SpecError
 
 
@@ -22,6 +22,7 @@ def characterise(
     = "0.5,0.75,1.0,1.2,1.4,1.5,2.0",
     step_m: Annotated[float, typer.Option(help="Offset step of the sweep, m.")] = 0.0005,
     set_: SetOpt = None,
+    allow_outside_paths: AllowOutsideOpt = False,
 ) -> None:
     """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
     6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
@@ -30,7 +31,7 @@ def characterise(
     from kartci.spec import load_scenario
 
     out = out_dir(out, "characterisation")
-    spec = load_scenario(scenario, set_ or [])
+    spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)
     agent = next(iter(spec.agents))
     try:
         fov_list = [float(f) for f in fovs.split(",") if f.strip()]

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from kartci.cli.common import (
+    AllowOutsideOpt,
     BaselinesOpt,
     OutOpt,
     SetOpt,
@@ -40,6 +41,7 @@ def replay(
     agent: Annotated[str | None, typer.Option(help="Agent to drive (default: the first).")]
     = None,
     set_: SetOpt = None,
+    allow_outside_paths: AllowOutsideOpt = False,
     out: OutOpt = None,
     baselines: BaselinesOpt = None,
     strict: StrictOpt = None,
@@ -72,7 +74,7 @@ def replay(
     from kartci.spec.models import LogSource
 
     out = out_dir(out, "replay")
-    spec = load_scenario(scenario, set_ or [])
+    spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)
     name = agent or next(iter(spec.agents))
     if name not in spec.agents:
         raise SpecError(f"scenario {spec.name} has no agent '{name}' "

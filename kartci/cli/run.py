@@ -10,6 +10,7 @@ from typing import Annotated
 import typer
 
 from kartci.cli.common import (
+    AllowOutsideOpt,
     BaselinesOpt,
     OutOpt,
     SetOpt,
@@ -81,6 +82,7 @@ def run(
         help="Port of the --live server (0: any free port).")] = 8765,
     live_rate: Annotated[float, typer.Option(
         help="--live pace: sim seconds per wall second (0: as fast as it runs).")] = 1.0,
+    allow_outside_paths: AllowOutsideOpt = False,
 ) -> None:
     """Run scenarios, record each as OUT/<scenario>/run.mcap, score and judge them.
 
@@ -106,7 +108,7 @@ def run(
     if live_view and ((jobs or 1) > 1 or executor is not ExecutorKind.LOCAL):
         raise SpecError("--live serves one run at a time in this process: drop -j / --executor")
     proj = project.current()
-    selected = names or default_suite(proj.own_scenarios())
+    selected = names or default_suite(proj.own_scenarios(), allow_outside_paths)
     if not selected:
         where = ", ".join(str(p) for p in proj.scenarios)
         raise SpecError(f"no scenarios to run: none in {where}; name one (`kartci list` shows "
@@ -115,8 +117,10 @@ def run(
         raise SpecError("--conditioning and --repeat both set the replicas: choose one")
     if conditioning == 1 or conditioning < 0:
         raise SpecError(f"--conditioning {conditioning}: expected 0 (off) or 2 or more")
-    todo = (expand(selected, set_ or [], sweep, conditioning, Vary.START) if conditioning
-            else expand(selected, set_ or [], sweep, repeat))
+    todo = (expand(selected, set_ or [], sweep, conditioning, Vary.START,
+                   allow_outside_paths=allow_outside_paths) if conditioning
+            else expand(selected, set_ or [], sweep, repeat,
+                        allow_outside_paths=allow_outside_paths))
     if part is not None:
         todo = share(todo, *part)
     index, total = part or (None, None)

@@ -11,7 +11,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
-from kartci.cli.common import SetOpt, app, complete_scenario, out_console
+from kartci.cli.common import AllowOutsideOpt, SetOpt, app, complete_scenario, out_console
 from kartci.errors import SpecError
 
 
@@ -44,11 +44,11 @@ def list_cmd() -> None:
 @app.command()
 def show(name: Annotated[str, typer.Argument(help="A scenario name or YAML path.",
                                              autocompletion=complete_scenario)],
-         set_: SetOpt = None) -> None:
+         set_: SetOpt = None, allow_outside_paths: AllowOutsideOpt = False) -> None:
     """Print a scenario fully resolved (world and model files included, overrides applied)."""
     from kartci.spec import load_scenario
 
-    spec = load_scenario(name, set_ or [])
+    spec = load_scenario(name, set_ or [], allow_outside_paths=allow_outside_paths)
     typer.echo(json.dumps(spec.model_dump(mode="json"), indent=2))
 
 

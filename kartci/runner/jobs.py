@@ -120,19 +120,24 @@ def _safe(text: str) -> str:
 
 
 def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = None,
-           repeat: int = 1, vary: Vary = Vary.SEED) -> list[Job]:
-    """Every job of a run, all validated before anything runs (bad input stops everything)."""
+           repeat: int = 1, vary: Vary = Vary.SEED, *,
+           allow_outside_paths: bool = False) -> list[Job]:
+    """Every job of a run, all validated before anything runs (bad input stops everything);
+    data files resolved once here, so workers never look a path up again."""
     if repeat < 1:
         raise SpecError(f"--repeat {repeat}: expected 1 or more")
     axes = [parse_sweep(s) for s in sweeps or []]
     jobs: list[Job] = []
     for name in names:
         own = [] if axes else [(k, [str(v) for v in vs])
-                               for k, vs in load_scenario(name, overrides).sweep.items()]
+                               for k, vs in load_scenario(
+                                   name, overrides,
+                                   allow_outside_paths=allow_outside_paths).sweep.items()]
         points: list[list[tuple[str, str]]] = [list(p) for p in itertools.product(
             *[[(k, v) for v in values] for k, values in axes or own])]
         for point in points:
-            spec = load_scenario(name, [*overrides, *(f"{k}={v}" for k, v in point)])
+            spec = load_scenario(name, [*overrides, *(f"{k}={v}" for k, v in point)],
+                                 allow_outside_paths=allow_outside_paths)
             label = spec.name + _variant(overrides, point)
             jobs += [Job(replica(spec, vary, k), _safe(label), k, vary) for k in range(repeat)]
     check_criteria_names([j.spec for j in jobs])
@@ -143,11 +148,11 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     return jobs
 
 
-def default_suite(paths: list[Path]) -> list[str]:
+def default_suite(paths: list[Path], allow_outside_paths: bool = False) -> list[str]:
     """The scenarios a plain `kartci run` runs: all but `tool` ones and grids (a scenario with
     its own sweep), which run by name."""
-    return [p.stem for p in paths
-            if "tool" not in (spec := load_scenario(p.stem)).tags and not spec.sweep]
+    return [p.stem for p in paths if "tool" not in (spec := load_scenario(
+        p.stem, allow_outside_paths=allow_outside_paths)).tags and not spec.sweep]
 
 
 def _variant(overrides: list[str], point: list[tuple[str, str]]) -> str:

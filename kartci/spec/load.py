@@ -75,35 +75,39 @@ def scenario_path(name: str | Path) -> Path:
     return project.current().find_scenario(name)
 
 
-def _resolve_refs(data: dict[str, Any], path: Path) -> None:
+def _resolve_refs(data: dict[str, Any], path: Path, allow_outside: bool) -> None:
     """World and model names become their files' contents; data files named inside them become
-    absolute paths found on the project's search path (never outside it)."""
+    absolute paths found on the project's search path (never outside it, nor outside the
+    project and kartci's data through an absolute path or a symlink, unless `allow_outside`)."""
     proj = project.current()
-    _resolve_world(data, proj)
+    _resolve_world(data, proj, allow_outside)
     agents = data.get("agents")
     if not isinstance(agents, dict):
         return
-    for agent in agents.values():
+    for name, agent in agents.items():
         if isinstance(agent, dict):
-            _resolve_agent(agent, proj, path)
+            _resolve_agent(agent, proj, path, allow_outside)
+            _check_urdf(agent, f"agents.{clip(str(name), 80)}", proj, allow_outside)
 
 
-def _resolve_world(data: dict[str, Any], proj: project.Project) -> None:
+def _resolve_world(data: dict[str, Any], proj: project.Project, allow_outside: bool) -> None:
     """`world: <name>` or `world: {from: <name>, ...}` becomes the world file's keys (with those
     given replacing its own), and a relative track file its path on the search path."""
     world = data.get("world")
     if isinstance(world, str):
-        data["world"] = _read_yaml(proj.find_world(world))
+        data["world"] = _read_yaml(proj.find_world(world, allow_outside))
     elif isinstance(world, dict) and isinstance(world.get("from"), str):
         # `world: {from: winti/hall, obstacles: [...]}`: a world file with keys replaced
-        data["world"] = {**_read_yaml(proj.find_world(world["from"])),
+        data["world"] = {**_read_yaml(proj.find_world(world["from"], allow_outside)),
                          **{k: v for k, v in world.items() if k != "from"}}
     world = data.get("world")
     if isinstance(world, dict) and isinstance(world.get("track"), str):
         track = world["track"]
-        if not Path(track).is_absolute():
+        if Path(track).is_absolute():
+            proj.contained(Path(track), "world.track", allow_outside)
+        else:
             with contextlib.suppress(SpecError):  # may be a command-line path: checked later
-                world["track"] = str(proj.world_file(track))
+                world["track"] = str(proj.world_file(track, allow_outside))
 
 
 def load_world(name: str) -> tuple[WorldParams, Path]:
@@ -114,13 +118,14 @@ def load_world(name: str) -> tuple[WorldParams, Path]:
     proj = project.current()
     path = proj.find_world(name)
     data: dict[str, Any] = {"world": name}
-    _resolve_world(data, proj)
+    _resolve_world(data, proj, allow_outside=False)
     world = dispatch(data)["world"]
     assert isinstance(world, WorldParams)  # dispatch validated it by its kind
     return world, path
 
 
-def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path) -> None:
+def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path,
+                   allow_outside: bool) -> None:
     """`model: <name>` becomes the model's parameters (its URDF a path on the search path), and
     a controller's relative source log a path relative to the scenario file at `path`."""
     model = agent.get("model")
@@ -130,10 +135,10 @@ def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path) -> 
         given = {k: v for k, v in model.items() if k != "from"}
         model = model["from"]
     if isinstance(model, str):
-        params = _read_yaml(proj.find_model(model))
+        params = _read_yaml(proj.find_model(model, allow_outside))
         urdf = params.get("urdf")
         if isinstance(urdf, str) and not Path(urdf).is_absolute():
-            params["urdf"] = str(proj.model_file(f"{model}/{urdf}"))
+            params["urdf"] = str(proj.model_file(f"{model}/{urdf}", allow_outside))
         agent["model"] = {**params, **given}
     controller = agent.get("controller")
     source = controller.get("source") if isinstance(controller, dict) else None
@@ -143,18 +148,31 @@ def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path) -> 
             source["log"] = str((path.parent / log).resolve())
 
 
-def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str]) -> None:
-    """A data path given with `--set` may name any file, relative to the working directory as
-    a user typing it expects; one in a file must be on the project's search path."""
+def _check_urdf(agent: dict[str, Any], where: str, proj: project.Project,
+                allow_outside: bool) -> None:
+    """An absolute URDF path (in a model file, inline, or from `--set`) must stay inside the
+    project and kartci's data; a relative one is looked up on the model path when it runs."""
+    model = agent.get("model")
+    urdf = model.get("urdf") if isinstance(model, dict) else None
+    if isinstance(urdf, str) and Path(urdf).is_absolute():
+        proj.contained(Path(urdf), f"{where}.model.urdf", allow_outside)
+
+
+def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str],
+                                allow_outside: bool) -> None:
+    """A data path given with `--set` may name a file relative to the working directory, as a
+    user typing it expects, inside the project or kartci's data (anywhere with
+    `allow_outside`); one in a file must be on the project's search path."""
     keys = {o.partition("=")[0].strip() for o in overrides}
     world = data.get("world")
     if isinstance(world, dict) and isinstance(world.get("track"), str):
         track = Path(world["track"])
         if not track.is_absolute():
             if keys & {"world.track", "world"} and track.is_file():
-                world["track"] = str(track.resolve())
-            else:
-                project.current().world_file(str(track))  # raises: not on the search path
+                world["track"] = str(project.current().contained(track, "world.track",
+                                                                 allow_outside))
+            else:  # raises: not on the search path
+                project.current().world_file(str(track), allow_outside)
     for agent in (data.get("agents") or {}).values() if isinstance(data.get("agents"),
                                                                      dict) else ():
         controller = agent.get("controller") if isinstance(agent, dict) else None
@@ -182,7 +200,8 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
 
 def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
               prefix: tuple[str | int, ...] = ()) -> str:
-    """The first validation error as `file: dotted.key (from --set): problem (got value)`."""
+    """The first validation error as `file: dotted.key (from --set): problem (got value)`;
+    the value only when it came from `--set`."""
     first = errors[0]
     parts = [str(p) for p in (*prefix, *first.get("loc", ()))]
     # a discriminated union (a line course) puts its tag into the location: not a key
@@ -195,7 +214,9 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
     elif first["type"] == "missing" and msg == "Field required":
         msg = "required key is missing"
     got = first.get("input")
-    shown = "" if first["type"] in ("missing", "extra_forbidden", "unknown_plugin") or isinstance(
+    # a value is echoed only when the user typed it: one from a file may be anything in it
+    shown = "" if not source or first["type"] in ("missing", "extra_forbidden",
+                                                  "unknown_plugin") or isinstance(
         got, dict) else f" (got {preview(got, 60)})"
     more = f" [+{len(errors) - 1} more]" if len(errors) > 1 else ""
     return f"{path}: {loc or '<top>'}{source}: {msg}{shown}{more}"
@@ -213,35 +234,44 @@ def _did_you_mean_key(error: dict[str, Any]) -> str:
     return did_you_mean(str(error["loc"][-1]), allowed)
 
 
-def load_scenario(name: str | Path, overrides: Sequence[str] | None = None) -> Scenario:
+def load_scenario(name: str | Path, overrides: Sequence[str] | None = None, *,
+                  allow_outside_paths: bool = False) -> Scenario:
     """Load and validate a scenario; every problem becomes one SpecError line.
 
     Args:
         name: A scenario name on the project's scenario path (`line_straight`), or the path of
             a YAML file (a `Path`, or a string ending in `.yaml` / `.yml` or holding a `/`).
         overrides: `dotted.key=value` assignments applied before validation, as `--set`.
+        allow_outside_paths: Let track, world and model files (and the scenario's file when
+            found by name) lie outside the project and kartci's data (`--allow-outside-paths`).
     """
     path = scenario_path(name)
+    if path != Path(name):  # found by name in a scenario folder: maybe a symlink out of it
+        project.current().contained(path, f"scenario {clip(str(name), 80)!r}",
+                                    allow_outside_paths)
     data = _read_yaml(path)
     data.setdefault("name", path.stem)
-    return _validated(data, path, list(overrides or ()))
+    return _validated(data, path, list(overrides or ()), allow_outside_paths)
 
 
-def with_overrides(scenario: Scenario, overrides: Sequence[str]) -> Scenario:
+def with_overrides(scenario: Scenario, overrides: Sequence[str], *,
+                   allow_outside_paths: bool = False) -> Scenario:
     """A validated scenario with `dotted.key=value` overrides applied (validated again);
     a relative log path in an override is relative to the working directory."""
     if not overrides:
         return scenario
     data = json.loads(scenario.model_dump_json())
-    return _validated(data, Path(f"scenario {scenario.name}"), list(overrides))
+    return _validated(data, Path(f"scenario {scenario.name}"), list(overrides),
+                      allow_outside_paths)
 
 
-def _validated(data: dict[str, Any], path: Path, overrides: list[str]) -> Scenario:
-    _resolve_refs(data, path)
+def _validated(data: dict[str, Any], path: Path, overrides: list[str],
+               allow_outside: bool) -> Scenario:
+    _resolve_refs(data, path, allow_outside)
     for assignment in overrides:
         apply_override(data, assignment)
-        _resolve_refs(data, path)  # `--set world=line_lab/circle` names a file too
-    _resolve_command_line_paths(data, overrides)
+        _resolve_refs(data, path, allow_outside)  # `--set world=line_lab/circle` names a file
+    _resolve_command_line_paths(data, overrides, allow_outside)
     try:
         return Scenario.model_validate(data)
     except ParamsError as err:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import stat
 from pathlib import Path
 from typing import Any
@@ -140,13 +141,11 @@ class _BoundedLoader(yaml.SafeLoader):
             self.get_event()  # type: ignore[no-untyped-call]
             target = self.anchors.get(event.anchor)
             if target is None:
-                raise yaml.composer.ComposerError(
-                    None, None, f"found undefined alias {clip(repr(event.anchor), 40)}",
-                    event.start_mark)
+                raise yaml.composer.ComposerError(None, None, "found undefined alias",
+                                                  event.start_mark)
             measured = self._measured.get(id(target))
             if measured is None:  # anchored but not finished: the alias is inside it
-                raise _Refused(None, None, f"recursive alias *{clip(str(event.anchor), 40)}",
-                               event.start_mark)
+                raise _Refused(None, None, "recursive alias", event.start_mark)
             self._nodes += measured[0]
             self._reach = max(self._reach, level + measured[1] - 1)
             self._refuse_past_limits(event.start_mark)
@@ -155,8 +154,7 @@ class _BoundedLoader(yaml.SafeLoader):
         if anchor is not None and anchor in self.anchors:
             first = self.anchors[anchor].start_mark.line + 1
             raise yaml.composer.ComposerError(
-                None, None, f"anchor &{clip(str(anchor), 40)} defined again (first on line "
-                f"{first})", event.start_mark)
+                None, None, f"anchor defined again (first on line {first})", event.start_mark)
         before, outer_reach = self._nodes, self._reach
         self._nodes += 1
         if self._nodes > YAML_MAX_NODES or level > YAML_MAX_DEPTH_LEVELS:
@@ -191,8 +189,7 @@ def _checked(construct: Any) -> Any:
             return construct(loader, node)
         except (ArithmeticError, AttributeError, LookupError, TypeError, ValueError) as err:
             tag = str(node.tag).replace("tag:yaml.org,2002:", "!!")
-            raise _Refused(None, None, f"not a valid {clip(tag, 40)}: {clip(repr(node.value), 40)}",
-                           node.start_mark) from err
+            raise _Refused(None, None, f"not a valid {clip(tag, 40)}", node.start_mark) from err
 
     return run
 
@@ -210,33 +207,48 @@ for _tag, _construct in (("int", _bounded_int), ("float", yaml.SafeLoader.constr
     _BoundedLoader.add_constructor(f"tag:yaml.org,2002:{_tag}", _checked(_construct))
 
 
-def _problem(err: yaml.YAMLError, text: str) -> str:
-    """`line N: problem` (or just the problem when YAML gives no place)."""
+# a quoted token in a PyYAML problem (a tag, a scalar) is the file's text; one character (a
+# `','` expected, a `'\t'` found) and a token's kind (`'<scalar>'`) tell where, not what
+_QUOTED = re.compile(r"""\s*(['"])(.*?)\1""")
+
+
+def _unquoted(problem: str) -> str:
+    """`problem` without the quoted tokens that could be the file's text."""
+    return _QUOTED.sub(lambda m: m[0] if len(m[2]) <= 2 or re.fullmatch(r"<[a-z ]+>", m[2])
+                       else "", problem)
+
+
+def _problem(err: yaml.YAMLError, text: str, where: str) -> str:
+    """`where:LINE:COLUMN: problem` (or `where: problem` when YAML gives no place), without
+    the snippet of the document PyYAML would print or any token it quotes: the file may be
+    anything a path pointed at, and the message ends up in CI artifacts."""
     if isinstance(err, yaml.MarkedYAMLError):
         mark = err.problem_mark or err.context_mark
-        line = f"line {mark.line + 1}: " if mark is not None else ""
-        return line + clip(err.problem or err.context or "invalid YAML")
+        place = f":{mark.line + 1}:{mark.column + 1}" if mark is not None else ""
+        problem = _unquoted(err.problem or err.context or "") or "invalid YAML"
+        return f"{where}{place}: {clip(problem)}"
     if isinstance(err, yaml.reader.ReaderError) and isinstance(err.position, int):
+        line_start = text.rfind("\n", 0, err.position) + 1
+        place = f":{text.count(chr(10), 0, err.position) + 1}:{err.position - line_start + 1}"
         char = err.character if isinstance(err.character, int) else ord(err.character[:1] or " ")
-        return (f"line {text.count(chr(10), 0, err.position) + 1}: character #x{char:04x}: "
-                f"{clip(str(err.reason))}")
-    return clip(str(err)) or "invalid YAML"
+        return f"{where}{place}: character #x{char:04x}: {clip(str(err.reason))}"
+    return f"{where}: invalid YAML"
 
 
 def _load(text: str, where: str, lenient: bool = False) -> Any:
-    """One YAML document, or a SpecError `where: line N: problem`. With `lenient`, text that is
-    not YAML is taken as a string (a `--set` value) unless it was refused for its size,
-    depth, a recursive alias or a bad tagged value."""
+    """One YAML document, or a SpecError `where:LINE:COLUMN: problem`. With `lenient`, text
+    that is not YAML is taken as a string (a `--set` value) unless it was refused for its
+    size, depth, a recursive alias or a bad tagged value."""
     loader = None
     try:
         loader = _BoundedLoader(text)  # its reader checks the characters here
         return loader.get_single_data()
     except _Refused as err:
-        raise SpecError(f"{where}: {_problem(err, text)}") from err
+        raise SpecError(_problem(err, text, where)) from err
     except yaml.YAMLError as err:
         if lenient:
             return text
-        raise SpecError(f"{where}: {_problem(err, text)}") from err
+        raise SpecError(_problem(err, text, where)) from err
     except RecursionError as err:  # only if called with the stack already deep
         raise SpecError(f"{where}: nested too deeply") from err
     except (ArithmeticError, AttributeError, LookupError, TypeError, ValueError) as err:
