@@ -76,7 +76,8 @@ def _vertices(path: Path, fmt: str, count: int, props: list[tuple[str, str]],
             raise LogError(f"{path}: expected {count} vertices of {len(names)} values")
         return np.column_stack([table[:, names.index(c)] for c in "xyz"])
     if fmt != "binary_little_endian":
-        raise LogError(f"{path}: PLY format not supported (binary_little_endian, ascii)")
+        raise LogError(f"{path}: PLY format '{fmt[:40]}' not supported (binary_little_endian, "
+                       "ascii)")
     dtype = np.dtype([(n, t) for n, t in props])
     if len(body) < count * dtype.itemsize:
         raise LogError(f"{path}: truncated: {count} vertices need {count * dtype.itemsize} "

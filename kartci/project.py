@@ -95,7 +95,8 @@ class Project:
             raise SpecError(f"{what}: {_shown(path)}: cannot be resolved ({err})") from err
         if allow_outside or any(real.is_relative_to(root) for root in self.data_roots):
             return real
-        link = "" if str(real) == os.path.abspath(path) else f" (a link to {_shown(real)})"
+        plain = str(real) == os.path.normpath(path.absolute())  # only `..` and `.` in it
+        link = "" if plain else f" (a link to {_shown(real)})"
         raise SpecError(f"{what}: {_shown(path)}{link} is outside the project and kartci's data "
                         "(pass --allow-outside-paths to use it)")
 

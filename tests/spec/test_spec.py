@@ -51,7 +51,7 @@ def test_missing_scenario_lists_known_ones() -> None:
 def test_malformed_yaml_names_file_and_line(tmp_path: Path) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("description: x\nagents: [unclosed\n")
-    with pytest.raises(SpecError, match=r"bad\.yaml: line \d+"):
+    with pytest.raises(SpecError, match=r"bad\.yaml:\d+:\d+: "):
         load_scenario(str(bad))
 
 
