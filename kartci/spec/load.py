@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import copy
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -225,6 +226,20 @@ def load_scenario(name: str | Path, overrides: Sequence[str] | None = None) -> S
     data = _read_yaml(path)
     data.setdefault("name", path.stem)
     return _validated(data, path, list(overrides or ()))
+
+
+def scenario_loader(name: str | Path) -> Callable[[Sequence[str]], Scenario]:
+    """`load_scenario(name, overrides)` for many override sets (a sweep's points): the file
+    and the world and model files it names are read once, not once per point."""
+    path = scenario_path(name)
+    data = _read_yaml(path)
+    data.setdefault("name", path.stem)
+    _resolve_refs(data, path)  # what _validated does first; doing it again is a no-op
+
+    def load(overrides: Sequence[str]) -> Scenario:
+        return _validated(copy.deepcopy(data), path, list(overrides))
+
+    return load
 
 
 def with_overrides(scenario: Scenario, overrides: Sequence[str]) -> Scenario:
