@@ -16,7 +16,7 @@ from kartci import project
 from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
 from kartci.spec.dispatch import ParamsError, with_allowed_keys
-from kartci.spec.models import Scenario, WorldParams
+from kartci.spec.models import Scenario, WorldParams, unit_of
 from kartci.spec.yamlio import clip, parse_value, preview, read_yaml
 
 
@@ -190,8 +190,13 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
     loc = clip(".".join(p for p in parts if not p.startswith(("function-", "tagged"))
                         and p not in COURSE_TAGS))
     source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
-    msg = clip(first["msg"])
-    if first["type"] == "extra_forbidden":
+    msg = clip(first["msg"].removeprefix("Value error, "))
+    if first["type"] in BOUNDS:
+        keys = [p for p in parts if not p.isdigit()]
+        bound = next(iter((first.get("ctx") or {}).values()), "")
+        msg = f"must be {BOUNDS[first['type']]} {bound:g} {unit_of(keys[-1] if keys else '')}"
+        msg = msg.rstrip()
+    elif first["type"] == "extra_forbidden":
         msg = "unknown key" + _did_you_mean_key(first)
     elif first["type"] == "missing" and msg == "Field required":
         msg = "required key is missing"
@@ -203,6 +208,8 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
 
 
 COURSE_TAGS = ("straight", "circle")
+BOUNDS = {"greater_than": "more than", "greater_than_equal": "at least",
+          "less_than": "less than", "less_than_equal": "at most"}  # pydantic's error types
 
 
 def _did_you_mean_key(error: dict[str, Any]) -> str:

@@ -64,3 +64,47 @@ def test_a_sweep_point_selected_twice_is_found(tmp_path: Path) -> None:
     p = kartci("run", _scenario(tmp_path), "--sweep", "seed=1,2,1", "--out", tmp_path / "out")
     assert p.returncode == 2
     assert p.stderr == "kartci: error: scenario selected twice: probe@seed=1\n"
+
+
+def test_a_start_far_off_the_line_is_refused_with_its_bound(tmp_path: Path) -> None:
+    """`start.lateral_m: 1e308` ran a robot at 1e308 m: now one line with the key, the bound
+    and its unit, the value clipped, exit 2, nothing run."""
+    path = _scenario(tmp_path, "    start: {lateral_m: 1.0e+308}\n")
+    p = kartci("run", path, "--out", tmp_path / "out")
+    assert p.returncode == 2
+    assert p.stderr == (f"kartci: error: {path}: agents.lt0.start.lateral_m: must be at most "
+                        "100 m (got 1e+308)\n")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_speed_command_beyond_physics_is_refused_with_its_bound(tmp_path: Path) -> None:
+    """`v1_mps: 1e308` ran the controller with it: now refused the same way."""
+    path = _scenario(tmp_path).with_name("fast.yaml")
+    path.write_text(SCENARIO.replace("{type: line_pid}", "{type: line_pid, v1_mps: 1.0e+308}"))
+    p = kartci("run", path, "--out", tmp_path / "out")
+    assert p.returncode == 2
+    assert p.stderr == (f"kartci: error: {path}: agents.lt0.controller.v1_mps: must be at most "
+                        "100 m/s (got 1e+308)\n")
+
+
+def test_a_start_beside_the_track_is_refused_where_the_track_is_known(tmp_path: Path) -> None:
+    """The track's width is known once the world has read it: a kart started 50 m beside the
+    hall's centreline is a failed run with the reason, exit 2 (within the model's 100 m)."""
+    p = kartci("run", "kart_manual", "--set", "duration_s=0.1", "--set",
+               "agents.kart0.start.lateral_m=50", "--out", tmp_path / "out")
+    assert p.returncode == 2
+    assert ("error: start.lateral_m: 50 m is off the track track.csv at along_m 0 m: it must "
+            "be within -2.00 m .. 2.00 m of the centreline there") in p.stdout + p.stderr
+
+
+def test_an_agent_name_that_is_not_a_ros_name_is_refused(tmp_path: Path) -> None:
+    """An agent named `../../etc` recorded topics `/../../etc/odom`: names are ROS 2 name
+    tokens now, checked before anything runs."""
+    path = tmp_path / "etc.yaml"
+    path.write_text(SCENARIO.replace("  lt0:", "  ../../etc:"))
+    p = kartci("run", path, "--out", tmp_path / "out")
+    assert p.returncode == 2
+    assert p.stderr == (f'kartci: error: {path}: agents: agent name "../../etc" is not a ROS 2 '
+                        "name token: a letter, then letters, digits and single underscores, not "
+                        "ending in one, at most 64 characters (e.g. kart0)\n")
+    assert not (tmp_path / "out").exists()
