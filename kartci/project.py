@@ -13,6 +13,8 @@ from __future__ import annotations
 import difflib
 import os
 import tomllib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -252,3 +254,15 @@ def activate(project: Project | None) -> None:
     """Make `project` the active one in this process (None: find it from the working dir)."""
     global _CURRENT
     _CURRENT = project
+
+
+@contextmanager
+def held() -> Iterator[Project]:
+    """The active project looked up once and kept for the enclosed work: loading a sweep's
+    many points would otherwise find and parse the project's configuration for each."""
+    before = _CURRENT
+    activate(current())
+    try:
+        yield current()
+    finally:
+        activate(before)

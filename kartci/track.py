@@ -38,9 +38,18 @@ class Track:
     length_m: float
     _tree: cKDTree = field(repr=False, compare=False, hash=False)
 
+    def _index(self, s_m: float) -> int:
+        """The centreline sample nearest arc length `s_m` (m, any lap)."""
+        return round((s_m % self.length_m) / self.length_m * len(self.s)) % len(self.s)
+
+    def widths_at(self, s_m: float) -> tuple[float, float]:
+        """The track's free width (right, left) of the centreline at arc length `s_m`, m."""
+        i = self._index(s_m)
+        return float(self.w_right[i]), float(self.w_left[i])
+
     def pose_at(self, s_m: float, lateral_m: float = 0.0) -> tuple[float, float, float]:
         """Point `lateral_m` left of the centreline at arc length `s_m`, and the heading there."""
-        i = round((s_m % self.length_m) / self.length_m * len(self.s)) % len(self.s)
+        i = self._index(s_m)
         h = self.heading[i]
         x, y = self.xy[i]
         return float(x - np.sin(h) * lateral_m), float(y + np.cos(h) * lateral_m), float(h)

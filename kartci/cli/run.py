@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Annotated
 
@@ -26,6 +26,8 @@ from kartci.cli.common import (
 from kartci.errors import SpecError
 from kartci.runner.kinds import ExecutorKind
 
+SWEEP_LINE_EVERY = 1000  # points: a line per this many in a CI log
+
 
 @contextmanager
 def live_server(on: bool, port: int, rate: float) -> Iterator[None]:
@@ -39,6 +41,24 @@ def live_server(on: bool, port: int, rate: float) -> Iterator[None]:
         err_console.print(f"live: ws://127.0.0.1:{view.port} (Foxglove: Open connection, "
                           "Foxglove WebSocket)", highlight=False, markup=False)
         yield
+
+
+@contextmanager
+def validating(live: bool) -> Iterator[Callable[[int, int], None]]:
+    """Progress of validating a sweep's points (a large grid takes a while): a bar on a
+    terminal, otherwise a line every SWEEP_LINE_EVERY points (a small run prints nothing)."""
+    if not live:
+        def line(done: int, total: int) -> None:
+            if done % SWEEP_LINE_EVERY == 0:
+                err_console.print(f"validated {done:,} of {total:,} sweep points",
+                                  highlight=False)
+        yield line
+        return
+    from rich.progress import Progress
+
+    with Progress(console=err_console, transient=True) as bar:
+        task = bar.add_task("validating sweep points", total=None)
+        yield lambda done, total: bar.update(task, completed=done, total=total)
 
 
 @app.command()
@@ -117,16 +137,16 @@ def run(
         raise SpecError("--conditioning and --repeat both set the replicas: choose one")
     if conditioning == 1 or conditioning < 0:
         raise SpecError(f"--conditioning {conditioning}: expected 0 (off) or 2 or more")
-    todo = (expand(selected, set_ or [], sweep, conditioning, Vary.START,
-                   allow_outside_paths=allow_outside_paths) if conditioning
-            else expand(selected, set_ or [], sweep, repeat,
-                        allow_outside_paths=allow_outside_paths))
+    live = err_console.is_terminal and not os.environ.get("CI")
+    replicas, vary = (conditioning, Vary.START) if conditioning else (repeat, Vary.SEED)
+    with validating(live) as progress:
+        todo = expand(selected, set_ or [], sweep, replicas, vary, progress,
+                      allow_outside_paths=allow_outside_paths)
     if part is not None:
         todo = share(todo, *part)
     index, total = part or (None, None)
     labels = [j.label for j in todo if j.repeat == 0]
     workers = jobs or (os.cpu_count() or 1 if executor is ExecutorKind.RAY else 1)
-    live = err_console.is_terminal and not os.environ.get("CI")
     with locked(out):  # an unusable or busy --out fails here, before any run
         clear_reports(out)
         write_marker(out, index, total, labels)

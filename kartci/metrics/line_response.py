@@ -32,9 +32,11 @@ DEFS: dict[str, MetricDef] = {
 class LineResponseParams(MetricParams):
     """Where the oscillation amplitude starts being measured."""
 
-    transient_s: float = Field(5.0, ge=0.0, description="start-up transient left out of the "
+    transient_s: float = Field(5.0, ge=0.0, le=3600.0,
+                               description="start-up transient left out of the "
                                "oscillation amplitude, s")
-    lost_threshold_m: float = Field(0.021, gt=0.0, description="farther than this the line is "
+    lost_threshold_m: float = Field(0.021, gt=0.0, le=1e4,
+                                    description="farther than this the line is "
                                     "lost and the rest of the run is left out, m (Eq. 6.15)")
 
 

@@ -31,13 +31,15 @@ class LocalizationMetricsParams(MetricParams):
     topic: str = Field("localization/odom", description="the estimate (nav_msgs/Odometry), "
                        "relative to the agent's namespace or absolute")
     reference_topic: str = Field("odom", description="ground truth (nav_msgs/Odometry)")
-    max_diff_s: float = Field(0.01, gt=0.0, description="association: largest stamp "
+    max_diff_s: float = Field(0.01, gt=0.0, le=3600.0, description="association: largest stamp "
                               "difference of a pose pair, s (evo's --t_max_diff)")
-    converged_m: float = Field(0.1, gt=0.0, description="the estimate has converged once its "
+    converged_m: float = Field(0.1, gt=0.0, le=1e4,
+                               description="the estimate has converged once its "
                                "position error stays below this for `hold_s`, m")
-    hold_s: float = Field(1.0, ge=0.0, description="how long the error must stay below "
+    hold_s: float = Field(1.0, ge=0.0, le=3600.0, description="how long the error must stay below "
                           "`converged_m`, s")
-    diverged_m: float = Field(0.3, gt=0.0, description="after convergence, a position error "
+    diverged_m: float = Field(0.3, gt=0.0, le=1e4,
+                              description="after convergence, a position error "
                               "above this is a divergence event, m")
 
 

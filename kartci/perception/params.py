@@ -10,38 +10,46 @@ from kartci.spec.models import NodeParams
 class DetectorParams(NodeParams):
     """Lidar obstacle detection against the world's map."""
 
-    period_s: float = Field(0.02, gt=0.0, description="node period, s (a scan is processed at "
+    period_s: float = Field(0.02, gt=0.0, le=3600.0,
+                            description="node period, s (a scan is processed at "
                             "the first tick after it arrives)")
     map: str = Field("winti/hall_map.ply", description="the map (PLY, world frame): points "
                      "near it are the hall, not obstacles")
     pose_topic: str = Field("localization/odom", description="where the kart is "
                             "(nav_msgs/Odometry): the localization's estimate, or `odom` for "
                             "ground truth")
-    sensor_height_m: float = Field(1.154, description="velodyne_link above base_link, m, "
+    sensor_height_m: float = Field(1.154, ge=-1e4, le=1e4,
+                                   description="velodyne_link above base_link, m, "
                                    "until /tf_static says")
-    ground_m: float = Field(0.12, ge=0.0, description="points lower than this above the floor "
+    ground_m: float = Field(0.12, ge=0.0, le=1e4,
+                            description="points lower than this above the floor "
                             "are ground, m")
-    top_m: float = Field(2.2, gt=0.0, description="points higher than this are not "
+    top_m: float = Field(2.2, gt=0.0, le=1e4, description="points higher than this are not "
                          "obstacles a kart meets (ceiling, walls' tops), m")
-    map_clearance_m: float = Field(0.3, gt=0.0, description="points this close (x, y) to "
+    map_clearance_m: float = Field(0.3, gt=0.0, le=1e4, description="points this close (x, y) to "
                                    "the map are the hall, m")
-    max_range_m: float = Field(25.0, gt=0.0, description="points farther away are ignored, m")
-    cluster_gap_m: float = Field(0.5, gt=0.0, description="points closer than this are one "
+    max_range_m: float = Field(25.0, gt=0.0, le=1e4,
+                               description="points farther away are ignored, m")
+    cluster_gap_m: float = Field(0.5, gt=0.0, le=1e4, description="points closer than this are one "
                                  "object, m")
-    min_points: int = Field(3, ge=1, description="smaller clusters are noise")
-    gate_m: float = Field(1.0, gt=0.0, description="a cluster this close to a track's "
+    min_points: int = Field(3, ge=1, le=1_000_000, description="smaller clusters are noise")
+    gate_m: float = Field(1.0, gt=0.0, le=1e4, description="a cluster this close to a track's "
                           "prediction updates it, m")
-    dynamic_mps: float = Field(0.5, ge=0.0, description="a track is dynamic once faster "
+    dynamic_mps: float = Field(0.5, ge=0.0, le=100.0, description="a track is dynamic once faster "
                                "than this, m/s ...")
-    dynamic_m: float = Field(1.0, ge=0.0, description="... and farther than this from where "
+    dynamic_m: float = Field(1.0, ge=0.0, le=1e4,
+                             description="... and farther than this from where "
                              "it was first seen, m")
-    confirm_hits: int = Field(2, ge=1, description="scans a track needs before it is "
+    confirm_hits: int = Field(2, ge=1, le=1_000_000, description="scans a track needs before it is "
                               "published")
-    keep_static_s: float = Field(3.0, ge=0.0, description="a static track unseen this long "
+    keep_static_s: float = Field(3.0, ge=0.0, le=3600.0,
+                                 description="a static track unseen this long "
                                  "is dropped, s (a box the beams pass over when close)")
-    keep_dynamic_s: float = Field(0.5, ge=0.0, description="a dynamic track unseen this long "
+    keep_dynamic_s: float = Field(0.5, ge=0.0, le=3600.0,
+                                  description="a dynamic track unseen this long "
                                   "is dropped, s")
-    established_hits: int = Field(10, ge=1, description="a static track seen in fewer scans "
+    established_hits: int = Field(10, ge=1, le=1_000_000,
+                                  description="a static track seen in fewer scans "
                                   "is dropped like a dynamic one: fragments of a passing kart "
                                   "(seen a few scans) must not stay as boxes for keep_static_s; "
                                   "a real box is seen for seconds before the kart is close")

@@ -10,6 +10,7 @@ spread of the noise), or with every robot's start moved k nanometres sideways (`
 from __future__ import annotations
 
 import itertools
+import math
 import re
 import signal
 import threading
@@ -22,6 +23,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+from kartci import project
 from kartci.errors import RunError, SpecError
 from kartci.results import ScenarioResult, one_line
 from kartci.runner.gate import require_baselines
@@ -32,10 +34,18 @@ from kartci.runner.run import (
     run_one,
 )
 from kartci.spec import Scenario, load_scenario
+from kartci.spec.load import scenario_loader
+from kartci.spec.yamlio import clip
 
 REPEAT_PREFIX = "repeat_"
 START_STEP_M = 1e-9  # replica k starts k x 1 nm to the left: far below anything physical
 Report = Callable[[str, float], None]  # (job folder, sim time s), called from the worker
+Progress = Callable[[int, int], None]  # (sweep points validated, points in all)
+Grid = list[tuple[str, list[str]]]  # a sweep: (dotted key, its values) per axis
+# A sweep's points each validate in a few ms and each become a run, a folder in OUT and a
+# baseline of their own: 10,000 is already hours of CI and a minute of validation; a larger
+# grid is a mistake or belongs split over several commands (`--shard` splits the runs, not this).
+MAX_SWEEP_POINTS = 10_000
 
 
 class Vary(StrEnum):
@@ -120,32 +130,59 @@ def _safe(text: str) -> str:
 
 
 def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = None,
-           repeat: int = 1, vary: Vary = Vary.SEED, *,
+           repeat: int = 1, vary: Vary = Vary.SEED, progress: Progress | None = None, *,
            allow_outside_paths: bool = False) -> list[Job]:
     """Every job of a run, all validated before anything runs (bad input stops everything);
-    data files resolved once here, so workers never look a path up again."""
+    data files resolved once here, so workers never look a path up again.
+
+    A sweep's points are validated one by one, each reported to `progress` (points validated,
+    points in all); a grid of more than MAX_SWEEP_POINTS fails before any is expanded."""
     if repeat < 1:
         raise SpecError(f"--repeat {repeat}: expected 1 or more")
     axes = [parse_sweep(s) for s in sweeps or []]
-    jobs: list[Job] = []
-    for name in names:
-        own = [] if axes else [(k, [str(v) for v in vs])
-                               for k, vs in load_scenario(
-                                   name, overrides,
-                                   allow_outside_paths=allow_outside_paths).sweep.items()]
-        points: list[list[tuple[str, str]]] = [list(p) for p in itertools.product(
-            *[[(k, v) for v in values] for k, values in axes or own])]
-        for point in points:
-            spec = load_scenario(name, [*overrides, *(f"{k}={v}" for k, v in point)],
-                                 allow_outside_paths=allow_outside_paths)
-            label = spec.name + _variant(overrides, point)
-            jobs += [Job(replica(spec, vary, k), _safe(label), k, vary) for k in range(repeat)]
-    check_criteria_names([j.spec for j in jobs])
-    labels = [j.label for j in jobs if j.repeat == 0]
-    twice = sorted({x for x in labels if labels.count(x) > 1})
-    if twice:
-        raise SpecError(f"scenario selected twice: {', '.join(twice)}")
+    with project.held():
+        grids = [(name, axes or [(k, [str(v) for v in vs]) for k, vs in
+                                 load_scenario(name, overrides, allow_outside_paths=
+                                               allow_outside_paths).sweep.items()])
+                 for name in names]
+        total = sum(_checked_size(name, grid) for name, grid in grids)
+        jobs = _points(grids, overrides, repeat, vary, (total, progress), allow_outside_paths)
+    check_criteria_names([j.spec for j in jobs if j.repeat == 0])
     return jobs
+
+
+def _points(grids: list[tuple[str, Grid]], overrides: list[str],
+            repeat: int, vary: Vary, report: tuple[int, Progress | None],
+            allow_outside_paths: bool) -> list[Job]:
+    """The jobs of every grid point, each validated as it comes (a duplicate label is found
+    in a set, not by counting in a list)."""
+    jobs: list[Job] = []
+    labels: set[str] = set()
+    done, (total, progress) = 0, report
+    for name, grid in grids:
+        load = scenario_loader(name, allow_outside_paths=allow_outside_paths)
+        for point in itertools.product(*[[(k, v) for v in values] for k, values in grid]):
+            spec = load([*overrides, *(f"{k}={v}" for k, v in point)])
+            label = _safe(spec.name + _variant(overrides, list(point)))
+            if label in labels:
+                raise SpecError(f"scenario selected twice: {label}")
+            labels.add(label)
+            jobs += [Job(replica(spec, vary, k), label, k, vary) for k in range(repeat)]
+            done += 1
+            if progress is not None:
+                progress(done, total)
+    return jobs
+
+
+def _checked_size(name: str, grid: Grid) -> int:
+    """The number of points of a scenario's grid, from the axis lengths alone; more than
+    MAX_SWEEP_POINTS is an error."""
+    count = math.prod(len(values) for _, values in grid)
+    if count > MAX_SWEEP_POINTS:
+        shown = f"{count:,}" if count < 10**15 else f"about 10^{int(math.log10(count))}"
+        raise SpecError(f"scenario {clip(name, 80)}: sweep: {shown} points, more than the "
+                        f"{MAX_SWEEP_POINTS:,} allowed; split the sweep")
+    return count
 
 
 def default_suite(paths: list[Path], allow_outside_paths: bool = False) -> list[str]:

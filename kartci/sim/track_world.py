@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from kartci.errors import SpecError
 from kartci.logs import msg
 from kartci.sim.blocks import Block
 from kartci.sim.line_lab import COURSE_TOPIC, path_message
@@ -31,7 +32,13 @@ class TrackWorld(World):
         super().__init__(spec, dt_s)
 
     def start_pose(self, start: Pose2D) -> tuple[float, float, float]:
-        """x, y (m) and yaw (rad) of a start given along the track's centreline."""
+        """x, y (m) and yaw (rad) of a start given along the track's centreline; a start beside
+        the track is bad input (the scenario model cannot check it: it has not read the track)."""
+        right_m, left_m = self.track.widths_at(start.along_m)
+        if not -right_m <= start.lateral_m <= left_m:
+            raise SpecError(f"start.lateral_m: {start.lateral_m:g} m is off the track "
+                            f"{self.track_file.name} at along_m {start.along_m:g} m: it must be "
+                            f"within {-right_m:.2f} m .. {left_m:.2f} m of the centreline there")
         x, y, yaw = self.track.pose_at(start.along_m, start.lateral_m)
         return x, y, yaw + start.heading_rad
 

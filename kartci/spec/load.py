@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import copy
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,7 @@ from kartci import project
 from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
 from kartci.spec.dispatch import ParamsError, with_allowed_keys
-from kartci.spec.models import Scenario, WorldParams
+from kartci.spec.models import Scenario, WorldParams, unit_of
 from kartci.spec.yamlio import clip, parse_value, preview, read_yaml
 
 
@@ -208,8 +209,13 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
     loc = clip(".".join(p for p in parts if not p.startswith(("function-", "tagged"))
                         and p not in COURSE_TAGS))
     source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
-    msg = clip(first["msg"])
-    if first["type"] == "extra_forbidden":
+    msg = clip(first["msg"].removeprefix("Value error, "))
+    if first["type"] in BOUNDS:
+        keys = [p for p in parts if not p.isdigit()]
+        bound = next(iter((first.get("ctx") or {}).values()), "")
+        msg = f"must be {BOUNDS[first['type']]} {bound:g} {unit_of(keys[-1] if keys else '')}"
+        msg = msg.rstrip()
+    elif first["type"] == "extra_forbidden":
         msg = "unknown key" + _did_you_mean_key(first)
     elif first["type"] == "missing" and msg == "Field required":
         msg = "required key is missing"
@@ -223,6 +229,8 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
 
 
 COURSE_TAGS = ("straight", "circle")
+BOUNDS = {"greater_than": "more than", "greater_than_equal": "at least",
+          "less_than": "less than", "less_than_equal": "at most"}  # pydantic's error types
 
 
 def _did_you_mean_key(error: dict[str, Any]) -> str:
@@ -245,13 +253,25 @@ def load_scenario(name: str | Path, overrides: Sequence[str] | None = None, *,
         allow_outside_paths: Let track, world and model files (and the scenario's file when
             found by name) lie outside the project and kartci's data (`--allow-outside-paths`).
     """
+    return scenario_loader(name, allow_outside_paths=allow_outside_paths)(overrides or ())
+
+
+def scenario_loader(name: str | Path, *, allow_outside_paths: bool = False
+                    ) -> Callable[[Sequence[str]], Scenario]:
+    """`load_scenario(name, overrides)` for many override sets (a sweep's points): the file
+    and the world and model files it names are read once, not once per point."""
     path = scenario_path(name)
     if path != Path(name):  # found by name in a scenario folder: maybe a symlink out of it
         project.current().contained(path, f"scenario {clip(str(name), 80)!r}",
                                     allow_outside_paths)
     data = _read_yaml(path)
     data.setdefault("name", path.stem)
-    return _validated(data, path, list(overrides or ()), allow_outside_paths)
+    _resolve_refs(data, path, allow_outside_paths)  # what _validated does first: a no-op again
+
+    def load(overrides: Sequence[str]) -> Scenario:
+        return _validated(copy.deepcopy(data), path, list(overrides), allow_outside_paths)
+
+    return load
 
 
 def with_overrides(scenario: Scenario, overrides: Sequence[str], *,

@@ -3,9 +3,19 @@
 from __future__ import annotations
 
 import math
+import re
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    SerializeAsAny,
+    field_validator,
+    model_validator,
+)
+
+from kartci.spec.yamlio import preview
 
 
 class Frozen(BaseModel):
@@ -14,9 +24,29 @@ class Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
-# a coordinate in a world, bounded so that geometry on it (squares, lengths) cannot overflow
-Coordinate_m = Annotated[float, Field(ge=-1e6, le=1e6)]
+# --- physical bounds: every numeric key is bounded by what its unit (the key's suffix) can mean
+# for a kart or a line tracker, generously (every shipped scenario is far inside), so that no
+# value runs nonsense physics or overflows geometry. A key's own bounds narrow these:
+#   m +-1e4 (10 km: wider than any race circuit), m/s +-100 (a kart tops 30 m/s),
+#   m/s^2 +-100 (10 g), m/s^3 +-1e4, s +-3600 (the longest run; periods > 0), Hz 0-1e5,
+#   rad +-2 pi, rad/s +-1e3 (a kart's wheel spins at 250 rad/s), kg, kg m^2, N m 0-1e5,
+#   1/m +-1e3, 1/s +-1e4, per sqrt(s) 0-1e3, friction 0-10 (rubber: about 1),
+#   dimensionless gains, weights and scales +-1e6, pixels 1-8192, counts 0-1e6.
+Length_m = Annotated[float, Field(ge=-1e4, le=1e4)]
+Coordinate_m = Length_m  # a coordinate in a world
 Point_m = tuple[Coordinate_m, Coordinate_m]
+Angle_rad = Annotated[float, Field(ge=-2 * math.pi, le=2 * math.pi)]
+LATERAL_MAX_M = 100.0  # a start this far beside a line or centreline is off any course
+UNITS = {"_mps2": "m/s^2", "_mps3": "m/s^3", "_mps": "m/s",
+         "_radps": "rad/s", "_rad": "rad", "_kgm2": "kg m^2", "_kg": "kg", "_nm": "N m",
+         "_hz": "Hz", "_px": "px", "_per_m": "1/m", "_per_s": "1/s", "_m": "m", "_s": "s"}
+
+
+def unit_of(key: str) -> str:
+    """The unit a key's name states (`v1_mps`: m/s), or '' for a dimensionless one."""
+    if key.endswith("_per_sqrt_s"):
+        return f"{unit_of(key.removesuffix('_per_sqrt_s'))}/sqrt(s)"
+    return next((unit for suffix, unit in UNITS.items() if key.endswith(suffix)), "")
 
 
 # --- what plugins extend: each registered type validates its own parameters -----------------
@@ -26,7 +56,8 @@ class ControllerParams(Frozen):
     """Parameters of a controller type (`controller: {type: NAME, ...}`)."""
 
     type: str = Field(description="a registered controller (`kartci plugins`)")
-    period_s: float = Field(0.02, gt=0.0, description="control period, s: a whole multiple of "
+    period_s: float = Field(0.02, gt=0.0, le=3600.0,
+                            description="control period, s: a whole multiple of "
                             "physics.dt_s")
 
 
@@ -34,7 +65,8 @@ class NodeParams(Frozen):
     """Parameters of a node type (`agents.<name>.nodes: {NAME: {...}}`): localization, a
     detector, anything that runs beside the controller in the robot's namespace."""
 
-    period_s: float = Field(0.02, gt=0.0, description="node period, s: a whole multiple of "
+    period_s: float = Field(0.02, gt=0.0, le=3600.0,
+                            description="node period, s: a whole multiple of "
                             "physics.dt_s")
 
 
@@ -84,7 +116,8 @@ class CircleCourse(Frozen):
                               "frame")
     radius_m: float = Field(1.0, gt=0.05, le=1e6, description="radius of the line's axis, m "
                             "(seed 001 Sec. 7.2 does not give it; line_lab/circle uses 0.362 m)")
-    start_rad: float = Field(-1.5707963267948966, description="polar angle of the start point "
+    start_rad: float = Field(-1.5707963267948966, ge=-math.tau, le=math.tau,
+                             description="polar angle of the start point "
                              "about the centre, rad (-pi/2: the bottom of the circle, heading +x)")
 
 
@@ -94,11 +127,12 @@ Course = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]
 class Box(Frozen):
     """A static box obstacle standing on the floor."""
 
-    center_m: tuple[float, float] = Field(description="centre of the box's footprint, (x, y) "
+    center_m: Point_m = Field(description="centre of the box's footprint, (x, y) "
                                           "in m, world frame")
-    size_m: tuple[float, float, float] = Field((0.1, 0.1, 0.1), description="edge lengths "
+    size_m: tuple[Length_m, Length_m, Length_m] = Field((0.1, 0.1, 0.1), description="edge lengths "
                                                "(x, y, z) in m, before the yaw rotation")
-    yaw_rad: float = Field(0.0, description="rotation about the vertical axis, rad, "
+    yaw_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
+                           description="rotation about the vertical axis, rad, "
                            "counter-clockwise")
 
 
@@ -115,7 +149,8 @@ class LineLabWorld(WorldParams):
         description="luminance of the white floor as the line cameras see it (0-1, Eq. 5.1); "
         "calibrated so that the sensor sweep gives the seed's slope, Eq. 6.12 (39.4 per m)",
     )
-    floor_friction: float = Field(1.0, ge=0.0, description="Coulomb friction coefficient of "
+    floor_friction: float = Field(1.0, ge=0.0, le=10.0,
+                                  description="Coulomb friction coefficient of "
                                   "the floor (dimensionless); seed 001 Sec. 5.6: no slip")
     course: Course = Field(description="the black line: `{type: straight, ...}` or "
                            "`{type: circle, ...}`")
@@ -127,9 +162,9 @@ class FloorZone(Frozen):
     """A rectangle of floor with its own friction coefficient (mu = pull force / weight)."""
 
     name: str = Field(description="name of the surface, e.g. `coated`")
-    min_m: tuple[float, float] = Field(description="lower-left corner (x, y), m, world frame")
-    max_m: tuple[float, float] = Field(description="upper-right corner (x, y), m, world frame")
-    friction: float = Field(ge=0.0, description="friction coefficient mu = pull force / "
+    min_m: Point_m = Field(description="lower-left corner (x, y), m, world frame")
+    max_m: Point_m = Field(description="upper-right corner (x, y), m, world frame")
+    friction: float = Field(ge=0.0, le=10.0, description="friction coefficient mu = pull force / "
                             "weight (seed 000 Sec. 4.2; REFERENCE.md: about 0.6 for a coated "
                             "floor)")
 
@@ -138,7 +173,8 @@ class TrackWorldParams(WorldParams):
     """What every world around a closed race track has (each kind documents its own)."""
 
     track: str = Field(description="closed track, TUMFTM CSV on the project's world path")
-    floor_friction: float = Field(0.9, ge=0.0, description="friction coefficient of the floor")
+    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
+                                  description="friction coefficient of the floor")
     zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
     obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor")
 
@@ -148,16 +184,18 @@ class HallWorld(TrackWorldParams):
 
     kind: Literal["hall"] = Field("hall", description="world kind: an indoor hall")
     description: str = Field("", description="one line about the world, shown in reports")
-    size_m: tuple[float, float] = Field((32.0, 20.0), description="interior (x, y) extent, m, "
+    size_m: Point_m = Field((32.0, 20.0), description="interior (x, y) extent, m, "
                                         "from (0, 0) (an approximation of the Winti lab, "
                                         "REFERENCE.md)")
-    wall_height_m: float = Field(4.0, gt=0.5, description="height of walls and pillars, m")
-    wall_thickness_m: float = Field(0.3, description="thickness of the walls, m, outside the "
+    wall_height_m: float = Field(4.0, gt=0.5, le=1e4, description="height of walls and pillars, m")
+    wall_thickness_m: float = Field(0.3, gt=0.0, le=1e4,
+                                    description="thickness of the walls, m, outside the "
                                     "interior")
-    pillars_m: tuple[tuple[float, float], ...] = Field((), description="centres (x, y) of "
+    pillars_m: tuple[Point_m, ...] = Field((), description="centres (x, y) of "
                                                        "square pillars, m")
-    pillar_size_m: float = Field(0.5, description="side of a square pillar, m")
-    floor_friction: float = Field(0.9, ge=0.0, description="friction coefficient of the floor "
+    pillar_size_m: float = Field(0.5, gt=0.0, le=1e4, description="side of a square pillar, m")
+    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
+                                  description="friction coefficient of the floor "
                                   "outside any zone (mu = pull force / weight, seed 000 Sec. "
                                   "4.2); 0.9: tire on concrete (REFERENCE.md)")
     zones: tuple[FloorZone, ...] = Field((), description="rectangles of floor with their own "
@@ -179,17 +217,19 @@ class CircuitWorld(TrackWorldParams):
     track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
                        "w_tr_left_m`: relative to a world folder on the project's search path, "
                        "or absolute")
-    margin_m: float = Field(10.0, ge=1.0, description="ground beyond the track's extent, m")
-    floor_friction: float = Field(0.9, ge=0.0, description="friction coefficient of the ground "
+    margin_m: float = Field(10.0, ge=1.0, le=1e4, description="ground beyond the track's extent, m")
+    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
+                                  description="friction coefficient of the ground "
                                   "(mu, dimensionless): tyre on asphalt or concrete, about 0.9 "
                                   "(REFERENCE.md)")
     zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
     barriers: bool = Field(True, description="walls along both track edges")
-    barrier_offset_m: float = Field(1.0, ge=0.0, description="gap from the track edge to the "
+    barrier_offset_m: float = Field(1.0, ge=0.0, le=1e4,
+                                    description="gap from the track edge to the "
                                     "barrier's inner face, m")
-    barrier_height_m: float = Field(0.8, gt=0.0, description="barrier height, m")
-    barrier_thickness_m: float = Field(0.3, gt=0.0, description="barrier thickness, m")
-    barrier_segment_m: float = Field(3.0, gt=0.2, description="length of one barrier box "
+    barrier_height_m: float = Field(0.8, gt=0.0, le=1e4, description="barrier height, m")
+    barrier_thickness_m: float = Field(0.3, gt=0.0, le=1e4, description="barrier thickness, m")
+    barrier_segment_m: float = Field(3.0, gt=0.2, le=1e4, description="length of one barrier box "
                                      "along the edge, m (shorter follows curves closer)")
     obstacles: tuple[Box, ...] = Field((), description="static boxes on or beside the track")
 
@@ -204,18 +244,22 @@ class LogSource(Frozen):
                      "relative to the scenario file, or absolute")
     topic: str | None = Field(None, description="topic to replay; default: the only topic of a "
                               "suitable message type")
-    time_offset_s: float = Field(0.0, description="sim time of the log's first message, s")
+    time_offset_s: float = Field(0.0, ge=-3600.0, le=3600.0,
+                                 description="sim time of the log's first message, s")
 
 
 class Pose2D(Frozen):
     """Start pose relative to the course start, in the course frame: of the line-sensor
     midpoint for a line tracker, of base_link for a kart (along the track's centreline)."""
 
-    along_m: float = Field(0.0, ge=0.0, description="distance along the course (line or track "
+    along_m: float = Field(0.0, ge=0.0, le=1e4,
+                           description="distance along the course (line or track "
                            "centreline) from its start, m")
-    lateral_m: float = Field(0.0, description="offset from the line or centreline, m; left of "
-                             "it is positive")
-    heading_rad: float = Field(0.0, description="heading relative to the course direction at "
+    lateral_m: float = Field(0.0, ge=-LATERAL_MAX_M, le=LATERAL_MAX_M, description="offset "
+                                "from the line or centreline, m; left of it is positive; on a "
+                                "track, within the track's width there")
+    heading_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
+                               description="heading relative to the course direction at "
                                "that point, rad; counter-clockwise is positive")
 
 
@@ -223,9 +267,10 @@ class Carry(Frozen):
     """The robot carried once, without its knowledge (a kidnap): its pose jumps, its motion
     is kept."""
 
-    at_s: float = Field(ge=0.0, description="when, sim time, s")
-    offset_m: tuple[float, float] = Field(description="the jump (x, y) in the world frame, m")
-    yaw_rad: float = Field(0.0, description="turned by this much too, rad")
+    at_s: float = Field(ge=0.0, le=3600.0, description="when, sim time, s")
+    offset_m: Point_m = Field(description="the jump (x, y) in the world frame, m")
+    yaw_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
+                           description="turned by this much too, rad")
 
 
 class AgentSpec(Frozen):
@@ -247,6 +292,13 @@ class AgentSpec(Frozen):
                                 "for robots that can be re-placed (go-kart, line tracker)")
 
 
+# An agent name is a ROS 2 name token (design.ros2.org "Topic and Service name mapping to DDS":
+# alphanumerics and `_`, no leading digit, no repeated `_`; tokens do not end in `_`); kartci's
+# own limit on its length keeps `/<agent>/<longest topic>` far inside rmw's 255 characters.
+AGENT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*(?<!_)")
+AGENT_NAME_MAX = 64  # characters
+
+
 # --- scenario ---------------------------------------------------------------------------------
 
 
@@ -256,19 +308,23 @@ class PhysicsSpec(Frozen):
     dt_s: float = Field(0.002, ge=1e-5, le=0.01, description="fixed physics step, s; every "
                         "controller period and sensor rate is a whole multiple of it (seed 001 "
                         "Sec. 7.2 ran its fastest control at 0.002 s)")
-    odom_rate_hz: float = Field(50.0, gt=0.0, description="rate of each robot's ground-truth "
+    odom_rate_hz: float = Field(50.0, gt=0.0, le=1e5,
+                                description="rate of each robot's ground-truth "
                                 "odometry (`odom`, nav_msgs/Odometry), Hz")
 
 
 class LineMetricsParams(MetricParams):
     """Parameters of the line tracker's tracking metrics."""
 
-    transient_s: float = Field(5.0, ge=0.0, description="start-up transient excluded from "
+    transient_s: float = Field(5.0, ge=0.0, le=3600.0,
+                               description="start-up transient excluded from "
                                "the cross-track errors, s")
-    lost_threshold_m: float = Field(0.021, gt=0.0, description="the sensor's range, m: farther "
+    lost_threshold_m: float = Field(0.021, gt=0.0, le=1e4,
+                                    description="the sensor's range, m: farther "
                                     "from the line axis counts as lost (seed 001 Eq. 6.15: "
                                     "+-0.021 m)")
-    settle_band_m: float = Field(0.002, gt=0.0, description="the cross-track error band that "
+    settle_band_m: float = Field(0.002, gt=0.0, le=1e4,
+                                 description="the cross-track error band that "
                                  "ends settling (settle_time_s), m")
 
 
@@ -297,8 +353,9 @@ class Scenario(Frozen):
     agents: dict[str, AgentSpec] = Field(min_length=1, description="the robots by name; the "
                                          "name is their topic namespace (`/kart0/...`)")
     duration_s: float = Field(gt=0.0, le=3600.0, description="simulated time to run, s")
-    seed: int = Field(0, ge=0, description="seed of the run's one random generator: the same "
-                      "scenario and seed give the same numbers on every run")
+    seed: int = Field(0, ge=0, le=2**63 - 1, description="seed of the run's one random "
+                      "generator (fits an int64): the same scenario and seed give the same "
+                      "numbers on every run")
     physics: PhysicsSpec = Field(PhysicsSpec(), description="physics step and odometry rate")
     metrics: dict[str, SerializeAsAny[MetricParams]] = Field(
         {}, description="metric sets to compute besides the robots' own, and parameters of "
@@ -313,6 +370,18 @@ class Scenario(Frozen):
         {}, description="a grid: `dotted.key: [values]`, one run per combination when the "
         "scenario is run by name without `--sweep` (each point judged against its own baseline, "
         "`<scenario>@<key>=<value>`); a scenario with a sweep stays out of a plain `kartci run`")
+
+    @field_validator("agents")
+    @classmethod
+    def _agent_names_are_ros_names(cls, agents: dict[str, AgentSpec]) -> dict[str, AgentSpec]:
+        """An agent's name is its topics' namespace (`/<name>/odom`), so it must be one ROS 2
+        name token: what rcl, rmw and rosbags accept, and never a path (`../../etc`)."""
+        for name in agents:
+            if not AGENT_NAME.fullmatch(name) or "__" in name or len(name) > AGENT_NAME_MAX:
+                raise ValueError(f"agent name {preview(name, 40)} is not a ROS 2 name token: "
+                                 "a letter, then letters, digits and single underscores, not "
+                                 f"ending in one, at most {AGENT_NAME_MAX} characters (e.g. kart0)")
+        return agents
 
     @model_validator(mode="before")
     @classmethod

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 from pydantic import Field
 
-from kartci.spec.models import Frozen, RobotParams
+from kartci.spec.models import Angle_rad, Frozen, Length_m, RobotParams
 
 
 class Tyre(Frozen):
@@ -14,9 +15,10 @@ class Tyre(Frozen):
     ETH kart's MPC (Liniger et al. 2015; REFERENCE.md): F_y = m_axle D sin(C atan(B alpha)),
     m_axle the static load on the axle in kg, alpha the slip angle in rad."""
 
-    b: float = Field(gt=0.0, description="stiffness factor B, 1/rad")
-    c: float = Field(gt=0.0, description="shape factor C (dimensionless)")
-    d_mps2: float = Field(gt=0.0, description="peak factor D, m/s^2: the largest force per kg "
+    b: float = Field(gt=0.0, le=1e6, description="stiffness factor B, 1/rad")
+    c: float = Field(gt=0.0, le=1e6, description="shape factor C (dimensionless)")
+    d_mps2: float = Field(le=100.0, gt=0.0,
+                          description="peak factor D, m/s^2: the largest force per kg "
                           "of axle load, on a floor of `tyre_reference_friction`; also the "
                           "radius of the axle's friction circle (longitudinal and lateral)")
 
@@ -30,52 +32,66 @@ class GokartModel(RobotParams):
                                                     "(Table 3.6) differ")
     urdf: str = Field("bumblebee.urdf", description="the kart's URDF: absolute, or relative to "
                       "gokart/ on the project's model path")
-    rear_wheel_radius_m: float = Field(0.127, description="rear tyre radius, m (Table 3.1)")
-    front_wheel_radius_m: float = Field(0.117, description="front tyre radius, m (Table 3.1)")
-    wheel_torque_limit_nm: float = Field(95.0, description="torque limit per rear wheel, N m "
+    rear_wheel_radius_m: float = Field(0.127, ge=-1e4, le=1e4,
+                                       description="rear tyre radius, m (Table 3.1)")
+    front_wheel_radius_m: float = Field(0.117, ge=-1e4, le=1e4,
+                                        description="front tyre radius, m (Table 3.1)")
+    wheel_torque_limit_nm: float = Field(95.0, ge=0.0, le=1e5,
+                                         description="torque limit per rear wheel, N m "
                                          "(REFERENCE.md: two rear motors, 95 Nm per wheel)")
-    max_speed_mps: float = Field(10.0, description="top forward speed of the rear-wheel speed "
+    max_speed_mps: float = Field(10.0, ge=-100.0, le=100.0,
+                                 description="top forward speed of the rear-wheel speed "
                                  "reference, m/s (REFERENCE.md: ETH MPCC limit 10 m/s)")
-    max_accel_mps2: float = Field(5.0, description="largest motor acceleration command, m/s^2 "
+    max_accel_mps2: float = Field(5.0, ge=-100.0, le=100.0,
+                                  description="largest motor acceleration command, m/s^2 "
                                   "(REFERENCE.md: ETH longitudinal limit 5 m/s^2)")
-    max_brake_mps2: float = Field(8.0, description="largest brake deceleration command, m/s^2")
-    reverse_speed_mps: float = Field(2.0, description="top reverse speed, m/s")
+    max_brake_mps2: float = Field(8.0, ge=-100.0, le=100.0,
+                                  description="largest brake deceleration command, m/s^2")
+    reverse_speed_mps: float = Field(2.0, ge=-100.0, le=100.0, description="top reverse speed, m/s")
     steering: Literal["measured", "ackermann"] = Field("measured", description="front-wheel "
                                                        "angles from the column angle: "
                                                        "`measured` map (Eq. 3.4/3.5, Table "
                                                        "3.3) or ideal `ackermann` (Eq. 3.1/3.2)")
-    steering_limit_rad: tuple[float, float] = Field((-1.845, 1.732), description="steering-"
+    steering_limit_rad: tuple[Angle_rad, Angle_rad] = Field((-1.845, 1.732), description="steering-"
                                                     "column angle range (min, max), rad "
                                                     "(measured in Table 3.3)")
-    steering_rate_radps: float = Field(4.0, description="column angle slew rate, rad/s")
-    wheelbase_m: float = Field(1.27, description="l of Eq. 3.1/3.2, m (Ackermann option)")
-    track_m: float = Field(0.94, description="w of Eq. 3.1/3.2, m (Ackermann option)")
-    tire_friction: float = Field(1.0, description="tyre friction factor (dimensionless): "
+    steering_rate_radps: float = Field(4.0, ge=-1e3, le=1e3,
+                                       description="column angle slew rate, rad/s")
+    wheelbase_m: float = Field(1.27, ge=-1e4, le=1e4,
+                               description="l of Eq. 3.1/3.2, m (Ackermann option)")
+    track_m: float = Field(0.94, ge=-1e4, le=1e4,
+                           description="w of Eq. 3.1/3.2, m (Ackermann option)")
+    tire_friction: float = Field(1.0, ge=0.0, le=10.0,
+                                 description="tyre friction factor (dimensionless): "
                                  "scales the tyres' D on top of the floor's or zone's friction")
-    mass_kg: float = Field(283.4, gt=0.0, description="total mass, kg (seed 000 Table 3.1, "
+    mass_kg: float = Field(283.4, gt=0.0, le=1e5, description="total mass, kg (seed 000 Table 3.1, "
                            "Bumblebee); the URDF's link masses add up to it")
-    cog_to_rear_axle_m: float = Field(0.46, gt=0.0, description="centre of mass ahead of the "
+    cog_to_rear_axle_m: float = Field(0.46, gt=0.0, le=1e4,
+                                      description="centre of mass ahead of the "
                                       "rear axle, m (REFERENCE.md: ETH kart, 0.46 m)")
-    cog_height_m: float = Field(0.24, gt=0.0, description="centre of mass above the floor, m "
+    cog_height_m: float = Field(0.24, gt=0.0, le=1e4,
+                                description="centre of mass above the floor, m "
                                 "(seed 000 Table 3.1)")
-    yaw_inertia_kgm2: float = Field(20.0, gt=0.0, description="yaw moment of inertia about "
+    yaw_inertia_kgm2: float = Field(20.0, gt=0.0, le=1e5, description="yaw moment of inertia about "
                                     "the centre of mass, kg m^2 (REFERENCE.md: ETH kart, about "
                                     "20 kg m^2)")
     front_tyre: Tyre = Field(Tyre(b=9.0, c=1.0, d_mps2=10.0), description="front tyres "
                              "(REFERENCE.md: ETH B 9, C 1, D 10 m/s^2)")
     rear_tyre: Tyre = Field(Tyre(b=5.2, c=1.1, d_mps2=10.0), description="rear tyres "
                             "(REFERENCE.md: ETH B 5.2, C 1.1, D 10 m/s^2)")
-    tyre_reference_friction: float = Field(0.9, gt=0.0, description="floor friction at which "
+    tyre_reference_friction: float = Field(0.9, gt=0.0, le=10.0,
+                                           description="floor friction at which "
                                            "the tyres' D applies (concrete, REFERENCE.md); a "
                                            "floor or zone of friction mu scales D by "
                                            "mu / this")
-    rolling_decel_mps2: float = Field(0.15, ge=0.0, description="rolling resistance and "
+    rolling_decel_mps2: float = Field(0.15, ge=0.0, le=100.0, description="rolling resistance and "
                                       "drivetrain drag as a deceleration, m/s^2")
-    air_drag_per_m: float = Field(0.004, ge=0.0, description="aerodynamic deceleration = this "
+    air_drag_per_m: float = Field(0.004, ge=0.0, le=1e3,
+                                  description="aerodynamic deceleration = this "
                                   "* v^2, 1/m")
-    speed_gain_per_s: float = Field(2.0, gt=0.0, description="drive-by-wire speed loop for "
+    speed_gain_per_s: float = Field(2.0, gt=0.0, le=1e4, description="drive-by-wire speed loop for "
                                     "ackermann_cmd and cmd_vel, 1/s: accel = gain * (v_cmd - v)")
-    wheel_xy_m: tuple[tuple[float, float], ...] = Field(
+    wheel_xy_m: tuple[tuple[Length_m, Length_m], ...] = Field(
         ((-0.077, 0.5625), (-0.077, -0.5625), (1.129, 0.47), (1.129, -0.47)),
         description="rl, rr, fl, fr wheel centres (x, y) in base_link, m (Table 3.2)")
 
@@ -88,12 +104,16 @@ class LidarSpec(Frozen):
     model: Literal["vlp16", "hdl32e"] = Field("vlp16", description="Velodyne model: channels, "
                                               "vertical field of view and resolutions of "
                                               "Table 3.5")
-    rate_hz: float = Field(10.0, gt=0.0, description="rotation rate, Hz (Table 3.5: 5-20 Hz)")
-    range_m: float = Field(100.0, description="measurement range, m (Table 3.5: 100 m)")
-    range_noise_std_m: float | None = Field(None, description="range noise, 1 sigma, m; "
+    rate_hz: float = Field(10.0, gt=0.0, le=1e5,
+                           description="rotation rate, Hz (Table 3.5: 5-20 Hz)")
+    range_m: float = Field(100.0, ge=-1e4, le=1e4,
+                           description="measurement range, m (Table 3.5: 100 m)")
+    range_noise_std_m: float | None = Field(None, ge=-1e4, le=1e4,
+                                            description="range noise, 1 sigma, m; "
                                             "default: the Table 3.5 accuracy (3 cm VLP-16, 2 cm "
                                             "HDL-32E)")
-    record_every: int = Field(10, ge=1, description="write every Nth scan to the log (the "
+    record_every: int = Field(10, ge=1, le=1_000_000,
+                              description="write every Nth scan to the log (the "
                               "others still reach the nodes and controller that read them)")
     dropout_prob: float = Field(0.0, ge=0.0, lt=1.0, description="probability that a return "
                                 "is lost (no echo: dark or specular surfaces), per beam, "
@@ -108,21 +128,27 @@ class ImuSpec(Frozen):
     """IMU on imu_link (Table 3.6): specific force including gravity, angular rate."""
 
     enabled: bool = Field(True, description="simulate the IMU (`imu`, sensor_msgs/Imu)")
-    rate_hz: float = Field(100.0, gt=0.0, description="output rate, Hz (Table 3.6: 1-1000 Hz "
+    rate_hz: float = Field(100.0, gt=0.0, le=1e5,
+                           description="output rate, Hz (Table 3.6: 1-1000 Hz "
                            "IRIMU-V2, 10-480 Hz 3DM-GX5)")
-    accel_noise_std_mps2: float | None = Field(None, description="accelerometer noise, 1 sigma, "
+    accel_noise_std_mps2: float | None = Field(None, ge=-100.0, le=100.0,
+                                               description="accelerometer noise, 1 sigma, "
                                                "m/s^2; default: Table 3.6 accuracy x the "
                                                "default 8 g full scale of the variant's IMU")
-    gyro_noise_std_radps: float | None = Field(None, description="gyroscope noise, 1 sigma, "
+    gyro_noise_std_radps: float | None = Field(None, ge=-1e3, le=1e3,
+                                               description="gyroscope noise, 1 sigma, "
                                                "rad/s; default: Table 3.6 accuracy x the "
                                                "default full scale of the variant's IMU")
-    accel_bias_std_mps2: float = Field(0.0, ge=0.0, description="constant accelerometer bias, "
+    accel_bias_std_mps2: float = Field(0.0, ge=0.0, le=100.0,
+                                       description="constant accelerometer bias, "
                                        "1 sigma per axis, m/s^2: drawn once per run, seeded")
-    gyro_bias_std_radps: float = Field(0.0, ge=0.0, description="constant gyroscope bias, "
+    gyro_bias_std_radps: float = Field(0.0, ge=0.0, le=1e3, description="constant gyroscope bias, "
                                        "1 sigma per axis, rad/s: drawn once per run, seeded")
-    accel_bias_walk_mps2_per_sqrt_s: float = Field(0.0, ge=0.0, description="accelerometer "
+    accel_bias_walk_mps2_per_sqrt_s: float = Field(0.0, ge=0.0, le=1e3,
+                                                   description="accelerometer "
                                                    "bias random walk, m/s^2 per sqrt(s)")
-    gyro_bias_walk_radps_per_sqrt_s: float = Field(0.0, ge=0.0, description="gyroscope bias "
+    gyro_bias_walk_radps_per_sqrt_s: float = Field(0.0, ge=0.0, le=1e3,
+                                                   description="gyroscope bias "
                                                    "random walk, rad/s per sqrt(s)")
 
 
@@ -133,7 +159,8 @@ class WheelSpec(Frozen):
     slip_std: float = Field(0.0, ge=0.0, lt=0.5, description="relative wheel-speed error "
                             "(dimensionless, 1 sigma), a first-order Gauss-Markov process per "
                             "wheel, seeded: reported = true * (1 + slip)")
-    slip_corr_s: float = Field(0.5, gt=0.0, description="correlation time of the slip, s")
+    slip_corr_s: float = Field(0.5, gt=0.0, le=3600.0,
+                               description="correlation time of the slip, s")
 
 
 class CameraSpec(Frozen):
@@ -142,10 +169,11 @@ class CameraSpec(Frozen):
 
     enabled: bool = Field(False, description="render images (`camera/image_raw`, "
                           "sensor_msgs/Image)")
-    rate_hz: float = Field(5.0, description="frame rate, Hz")
-    width_px: int = Field(80, description="image width, pixels")
-    height_px: int = Field(60, description="image height, pixels")
-    fov_rad: float = Field(1.2, description="horizontal field of view, rad")
+    rate_hz: float = Field(5.0, ge=0.0, le=1e5, description="frame rate, Hz")
+    width_px: int = Field(80, ge=1, le=8192, description="image width, pixels")
+    height_px: int = Field(60, ge=1, le=8192, description="image height, pixels")
+    fov_rad: float = Field(1.2, ge=-math.tau, le=math.tau,
+                           description="horizontal field of view, rad")
 
 
 class KartSensors(Frozen):
