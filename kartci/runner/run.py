@@ -294,7 +294,7 @@ def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, baselines: 
     if drawn is not None:
         drawn = replace(drawn, reference=reference)
     return ScenarioResult(folder.name, scenario.description, verdicts, crit, None, run, drawn,
-                          warnings=tuple(one_line(w) for w in [*doubts, *warnings]),
+                          warnings=tuple(one_line(w) for w in [*warnings, *doubts]),
                           strict_warnings=tuple(one_line(w) for w in strict))
 
 
