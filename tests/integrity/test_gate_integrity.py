@@ -7,6 +7,7 @@ import json
 import shutil
 import tomllib
 from pathlib import Path
+from typing import Any
 
 import pytest
 from helpers import ROOT, kartci
@@ -51,8 +52,8 @@ def _copy(accepted: Path, tmp_path: Path) -> Path:
     return proj
 
 
-def _scenario(out: Path) -> dict[str, object]:
-    doc: dict[str, object] = json.loads((out / "summary.json").read_text())["scenarios"]["q"]
+def _scenario(out: Path) -> dict[str, Any]:
+    doc: dict[str, Any] = json.loads((out / "summary.json").read_text())["scenarios"]["q"]
     return doc
 
 
