@@ -65,8 +65,9 @@ OutOpt = Annotated[Path | None, typer.Option(
 BaselinesOpt = Annotated[Path | None, typer.Option(
     help="Folder of baseline files (default: the project's baselines/).")]
 StrictOpt = Annotated[bool | None, typer.Option(
-    "--strict/--no-strict", help="Fail a scenario without a baseline or with a metric its "
-    "baseline lacks [default: strict when the CI environment variable is set].")]
+    "--strict/--no-strict", help="Fail a scenario without a baseline, with a metric its "
+    "baseline lacks, with a stale baseline (accepted from another scenario) or a tolerance "
+    "loosened beyond the policy [default: strict when the CI environment variable is set].")]
 
 
 def strict_mode(flag: bool | None) -> bool:
