@@ -74,7 +74,8 @@ class RunResult:
         finished_course: True when every robot finished its course before the duration ran out.
         replaced_agents: Agents driven by an object handed in, by name: the object's class.
         warnings: Worth a reader's attention, not failures: a baseline made on another
-            platform, an ill-conditioned metric, a run in a process that is not pinned.
+            platform or from another scenario (stale), a tolerance loosened beyond the policy,
+            an ill-conditioned metric, a run in a process that is not pinned.
     """
 
     scenario: Scenario
@@ -198,7 +199,7 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     import time
 
     from kartci import portable, project
-    from kartci.runner.run import check_criteria_names, run_pinned
+    from kartci.runner.run import check_criteria_names, run_pinned, trusted
     from kartci.spec.load import with_overrides
     from kartci.spec.models import Scenario
     from kartci.verdict import (
@@ -225,14 +226,15 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     values = read_metrics(folder / "metrics.json")
     base_dir = Path(baselines) if baselines is not None else project.current().baselines
     base_file = base_dir / f"{spec.name}.json"
-    verdicts = compare(values, load(base_file))
+    baseline = load(base_file)
+    verdicts, doubts, _ = trusted(compare(values, baseline), baseline, spec, base_file)
     crit = check_criteria(values, spec.criteria)
     note = portable.mismatch(made_where(base_file).get("platform"), facts.get("platform", {}))
     unpinned = facts.get("platform", {}).get("simd") == portable.Pin.UNPINNED.value
     warnings = ([note] if note else []) + ill_conditioned(verdicts) + (
         ["this Python process was not started pinned (numpy or the process came before "
          "`import kartci`) and agent objects run here: last bits may differ from `kartci run`; "
-         "see kartci.portable"] if unpinned else [])
+         "see kartci.portable"] if unpinned else []) + doubts
     return RunResult(
         scenario=spec, folder=folder,
         metrics={name: _metric(name, m)

@@ -19,12 +19,16 @@ from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from kartci.errors import SpecError
 
 BUILTIN = Path(__file__).resolve().parent / "data"
 CONFIG_NAMES = ("kartci.toml", "pyproject.toml")
+# A baseline tolerance may be this many times its metric's default before it counts as loosened:
+# the same margin as the spread rule (3 x spread), wide enough for a default computed at an older
+# baseline value (the committed baselines reach 1.8x), far below a tolerance set to get a PR green.
+LOOSEN_FACTOR = 3.0
 
 
 class Origin(Enum):
@@ -50,6 +54,20 @@ class ProjectConfig(BaseModel):
                                      "controllers, robots, worlds and metrics")
     builtin_scenarios: bool = Field(False, description="run kartci's built-in scenarios too "
                                     "when `kartci run` is given no names")
+    loosen_factor: float = Field(LOOSEN_FACTOR, ge=1.0, le=1e6, description="a baseline "
+                                 "tolerance wider than this many times its metric's default "
+                                 "(and than 3x its spread) is loosened: flagged, and a failure "
+                                 "in CI unless allowed below")
+    allow_loose_tolerances: dict[str, str] = Field({}, description="loosened tolerances allowed "
+                                                   "anyway: `\"SCENARIO:METRIC\" = \"reason\"`")
+
+    @field_validator("allow_loose_tolerances")
+    @classmethod
+    def _named_with_a_reason(cls, value: dict[str, str]) -> dict[str, str]:
+        for key, reason in value.items():
+            if not key.partition(":")[2] or not reason.strip():
+                raise ValueError(f"{key[:80]!r}: expected \"SCENARIO:METRIC\" = \"reason\"")
+        return value
 
 
 @dataclass(frozen=True)
@@ -65,6 +83,8 @@ class Project:
     reports: Path
     plugins: tuple[str, ...] = ()
     builtin_scenarios: bool = False
+    loosen_factor: float = LOOSEN_FACTOR
+    allow_loose_tolerances: tuple[tuple[str, str], ...] = ()  # ("scenario:metric", reason)
 
     @property
     def scenario_path(self) -> tuple[Path, ...]:
@@ -238,7 +258,8 @@ def find_project(start: Path | None = None) -> Project:
         raise SpecError(f"{path}: [tool.kartci] {key}: {first['msg']}") from err
     return Project(root, path, tuple(root / s for s in cfg.scenarios),
                    tuple(root / w for w in cfg.worlds), tuple(root / m for m in cfg.models),
-                   root / cfg.baselines, root / cfg.reports, cfg.plugins, cfg.builtin_scenarios)
+                   root / cfg.baselines, root / cfg.reports, cfg.plugins, cfg.builtin_scenarios,
+                   cfg.loosen_factor, tuple(sorted(cfg.allow_loose_tolerances.items())))
 
 
 _CURRENT: Project | None = None

@@ -59,6 +59,9 @@ class ScenarioResult:
     # gate failures beyond metrics and criteria (strict mode: no baseline, a metric not in it)
     problems: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()  # worth a reader's attention, not a failure
+    # those warnings a strict run fails on (a stale baseline, a loosened tolerance): see
+    # runner.gate, which moves them to problems
+    strict_warnings: tuple[str, ...] = ()
 
     @property
     def status(self) -> Status:

@@ -69,10 +69,12 @@ def baseline_update(
         if replicas:
             _replicate(out, target, labels, replicas, jobs)
         # the traces' plots read the logs: after the cheap checks, still before any write
-        traced = [(label, values, reference_plots(out / label)) for label, values in checked]
-        for label, values, drawn in traced:
+        traced = [(label, values, reference_plots(out / label), _fields(out / label))
+                  for label, values in checked]
+        for label, values, drawn, fields in traced:
             spreads, made = _conditioning(out / label) if replicas else (None, _made(out / label))
-            changes = update(target / f"{label}.json", label, values, spreads, made)
+            _print_scenario_diff(target / f"{label}.json", label, fields)
+            changes = update(target / f"{label}.json", label, values, spreads, made, fields)
             moved = [c for c in changes if c.kind != "unchanged"]
             out_console.print(f"{label}: {len(moved)} of {len(changes)} metrics changed",
                               highlight=False, markup=False)
@@ -80,6 +82,7 @@ def baseline_update(
                 out_console.print(f"  {c.kind:8s} {c.metric}: {exact(c.old)} -> {exact(c.new)}",
                                   highlight=False, markup=False)
             _print_conditioning(target / f"{label}.json")
+            _print_kept_loose(target / f"{label}.json", label)
             if drawn is not None and drawn.tracks:
                 size = write_trace(trace_path(target, label), drawn)
                 out_console.print(f"  reference trace {trace_path(target, label)} ({size} bytes)",
@@ -159,3 +162,61 @@ def _print_conditioning(path: Path) -> None:
     for line in ill_conditioned([v for v in verdicts if v.conditioning is Conditioning.ILL]):
         err_console.print(f"kartci: warning: {path.stem}: {line}", highlight=False,
                           markup=False)
+
+
+def _fields(folder: Path) -> dict[str, Any]:
+    """The resolved scenario a run folder's log recorded, as a baseline stores it."""
+    from kartci.runner.run import recorded_scenario
+    from kartci.verdict import fingerprint
+
+    return fingerprint.fields(recorded_scenario(folder))
+
+
+def _print_scenario_diff(path: Path, label: str, fields: dict[str, Any]) -> None:
+    """The scenario change this update accepts, field by field (old -> new), before it writes."""
+    import json
+
+    from kartci.verdict import fingerprint, read_json
+
+    if not path.is_file():
+        return
+    try:
+        found, old = fingerprint.recorded(read_json(path))
+    except (OSError, ValueError, UnicodeDecodeError):  # load() checked it: cannot happen
+        found, old = None, {}
+    if found is None:
+        out_console.print(f"{label}: scenario hash recorded (the baseline had none)",
+                          highlight=False, markup=False)
+        return
+    if found == fingerprint.digest(fields):
+        return
+    moved = fingerprint.changed(old, fields)
+    out_console.print(f"{label}: accepting a changed scenario ({len(moved) or 'unrecorded'} "
+                      "fields)", highlight=False, markup=False)
+
+    def text(key: str, side: dict[str, Any]) -> str:
+        shown = json.dumps(side[key]) if key in side else "—"
+        return shown if len(shown) <= 80 else shown[:79] + "…"
+
+    for key in moved:
+        out_console.print(f"  scenario {key}: {text(key, old)} -> {text(key, fields)}",
+                          highlight=False, markup=False)
+
+
+def _print_kept_loose(path: Path, label: str) -> None:
+    """A line for every tolerance the update kept above the policy bound: never silent."""
+    from kartci import project
+    from kartci.verdict import load
+    from kartci.verdict.baseline import above, policy_bound
+
+    proj = project.current()
+    allowed = dict(proj.allow_loose_tolerances)
+    for name, entry in sorted((load(path) or {}).items()):
+        bound = policy_bound(name, entry, proj.loosen_factor)
+        if bound is None or not above(float(entry["tolerance"]), bound):
+            continue
+        reason = allowed.get(f"{label}:{name}")
+        why = (f"allowed: {reason}" if reason else "not allowed: a strict run fails on it; "
+               "narrow it, or allow it in [tool.kartci.allow_loose_tolerances]")
+        out_console.print(f"  kept tolerance {name}: {float(entry['tolerance']):.3g} above the "
+                          f"policy bound {bound:.3g} ({why})", highlight=False, markup=False)

@@ -68,8 +68,9 @@ AllowOutsideOpt = Annotated[bool, typer.Option(
     "--allow-outside-paths", help="Let track, world and model files (absolute paths, '..', "
     "symlinks) lie outside the project and kartci's data.")]
 StrictOpt = Annotated[bool | None, typer.Option(
-    "--strict/--no-strict", help="Fail a scenario without a baseline or with a metric its "
-    "baseline lacks [default: strict when the CI environment variable is set].")]
+    "--strict/--no-strict", help="Fail a scenario without a baseline, with a metric its "
+    "baseline lacks, with a stale baseline (accepted from another scenario) or a tolerance "
+    "loosened beyond the policy [default: strict when the CI environment variable is set].")]
 
 
 def strict_mode(flag: bool | None) -> bool:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from kartci.verdict import Conditioning, MetricVerdict, Status
+from kartci.verdict import Conditioning, MetricVerdict, Policy, Status
 
 MARK = {Status.PASS: "✅", Status.IMPROVED: "🟢", Status.REGRESSED: "❌", Status.FAILED: "❌",
         Status.NEW: "🆕", Status.MISSING: "⚠️", Status.ERROR: "💥"}
@@ -26,8 +26,15 @@ def delta(v: MetricVerdict) -> str:
 
 
 def tolerance(v: MetricVerdict) -> str:
-    """The tolerance and the direction it applies in; a dash when there is none."""
-    return "—" if v.tolerance is None else f"±{v.tolerance:.3g} ({v.direction.value})"
+    """The tolerance and the direction it applies in, and the policy bound when the tolerance
+    is above it; a dash when there is none."""
+    if v.tolerance is None:
+        return "—"
+    text = f"±{v.tolerance:.3g} ({v.direction.value})"
+    if v.policy in (Policy.LOOSENED, Policy.ALLOWED) and v.policy_bound is not None:
+        how = "LOOSENED" if v.policy is Policy.LOOSENED else "allowed"
+        text += f" {how}: bound ±{v.policy_bound:.3g}"
+    return text
 
 
 def conditioning(v: MetricVerdict) -> str:

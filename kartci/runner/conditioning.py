@@ -93,6 +93,9 @@ def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioRes
     verdicts = compare(read_metrics(folder / "metrics.json"), entries)
     verdicts = [v if v.baseline is not None or v.name not in measured else
                 _unjudged(v, measured[v.name]) for v in verdicts]
+    policed = {v.name: v for v in result.verdicts}  # the policy is the stored file's
+    verdicts = [replace(v, policy=policed[v.name].policy, policy_bound=policed[v.name]
+                        .policy_bound) if v.name in policed else v for v in verdicts]
     old = [w for w in result.warnings if " is ill-conditioned " not in w]
     return replace(result, verdicts=verdicts, warnings=(*old, *ill_conditioned(verdicts)))
 

@@ -1,5 +1,6 @@
-"""Strict baselines: in CI, a scenario without a baseline, or a metric its baseline lacks, is
-a failure, not a quiet NEW that lets anything through."""
+"""Strict baselines: in CI, a scenario without a baseline, a metric its baseline lacks, a
+baseline accepted from another scenario (stale) or a tolerance loosened beyond the policy is a
+failure, not a quiet NEW or a warning that lets anything through."""
 
 from __future__ import annotations
 
@@ -18,9 +19,14 @@ def strict_default() -> bool:
 
 
 def require_baselines(result: ScenarioResult, out: Path, baselines: Path) -> ScenarioResult:
-    """The result with a problem for every metric judged NEW, saying how to accept it."""
+    """The result with a problem for every metric judged NEW, saying how to accept it, and its
+    strict warnings (a stale baseline, a loosened tolerance) made problems."""
     if result.error is not None:
         return result
+    if result.strict_warnings:
+        result = replace(result, problems=(*result.problems, *result.strict_warnings),
+                         warnings=tuple(w for w in result.warnings
+                                        if w not in result.strict_warnings), strict_warnings=())
     new = [v.name for v in result.verdicts if v.status is Status.NEW]
     path = baselines / f"{result.name}.json"
     has_file = path.exists() or path.is_symlink()

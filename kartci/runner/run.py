@@ -35,11 +35,16 @@ from kartci.sim.session import describe
 from kartci.spec import Scenario
 from kartci.spec.models import LogSource
 from kartci.verdict import (
+    MetricVerdict,
     check_criteria,
     compare,
+    fingerprint,
     ill_conditioned,
     load,
+    loosened,
     made_where,
+    police,
+    read_json,
     read_metrics,
     write_json_atomic,
 )
@@ -273,7 +278,8 @@ def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, baselines: 
            with_plots: bool, reference: dict[str, pd.DataFrame]) -> ScenarioResult:
     scenario, _ = _recorded(folder)
     values = read_metrics(folder / "metrics.json")
-    verdicts = compare(values, baseline)
+    verdicts, doubts, strict = trusted(compare(values, baseline), baseline, scenario,
+                                       baselines / f"{folder.name}.json")
     crit = check_criteria(values, scenario.criteria)
     run_path = folder / "run.json"
     run = json.loads(run_path.read_text(encoding="utf-8")) if run_path.exists() else {}
@@ -288,7 +294,32 @@ def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, baselines: 
     if drawn is not None:
         drawn = replace(drawn, reference=reference)
     return ScenarioResult(folder.name, scenario.description, verdicts, crit, None, run, drawn,
-                          warnings=tuple(one_line(w) for w in warnings))
+                          warnings=tuple(one_line(w) for w in [*warnings, *doubts]),
+                          strict_warnings=tuple(one_line(w) for w in strict))
+
+
+def trusted(verdicts: list[MetricVerdict], baseline: dict[str, dict[str, Any]] | None,
+            scenario: Scenario, path: Path) -> tuple[list[MetricVerdict], list[str], list[str]]:
+    """How far the baseline at `path` can be trusted for a run of `scenario`: the verdicts with
+    each stored tolerance checked against the policy bound, the warnings a reader must see, and
+    those of them a strict run fails on (a stale baseline, a loosened tolerance not allowed by
+    the project's configuration)."""
+    if baseline is None:
+        return verdicts, [], []
+    proj, label = project.current(), path.stem
+    allowed = dict(proj.allow_loose_tolerances)  # "scenario:metric" -> reason
+    verdicts = police(verdicts, baseline, proj.loosen_factor,
+                      {name for name in baseline if f"{label}:{name}" in allowed})
+    loose = loosened(verdicts, label, proj.loosen_factor)
+    try:
+        doc = read_json(path)
+    except (OSError, ValueError, UnicodeDecodeError):  # load() read it a moment ago
+        doc = None
+    check = fingerprint.check(doc, fingerprint.fields(scenario))
+    note = check.message(path)
+    stale = [] if note is None else [note]
+    strict = [*(stale if check.freshness is fingerprint.Freshness.STALE else []), *loose]
+    return verdicts, [*stale, *loose], strict
 
 
 def recorded_scenario(folder: Path) -> Scenario:

@@ -7,12 +7,15 @@ from kartci.verdict.baseline import (
     Conditioning,
     CriterionResult,
     MetricVerdict,
+    Policy,
     Status,
     check_criteria,
     compare,
     ill_conditioned,
     load,
+    loosened,
     made_where,
+    police,
     read_json,
     read_metrics,
     spread,
@@ -22,6 +25,6 @@ from kartci.verdict.baseline import (
 )
 
 __all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Change", "Conditioning", "CriterionResult",
-           "MetricVerdict", "Status", "check_criteria", "compare", "ill_conditioned", "load",
-           "made_where",
+           "MetricVerdict", "Policy", "Status", "check_criteria", "compare", "ill_conditioned",
+           "load", "loosened", "made_where", "police",
            "read_json", "read_metrics", "spread", "update", "worst", "write_json_atomic"]

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from collections.abc import Collection, Mapping
+from dataclasses import dataclass, replace
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,7 @@ from kartci.atomic import write_json_atomic as write_json_atomic  # re-exported
 from kartci.errors import BaselineError
 from kartci.metrics.base import Direction, MetricDef
 from kartci.spec.models import Criterion
+from kartci.verdict.fingerprint import digest
 
 
 class Status(StrEnum):
@@ -51,6 +53,16 @@ class Conditioning(StrEnum):
 
 
 SPREAD_MULTIPLE = 3.0  # a tolerance below 3 x the chaotic spread could flip on chaos alone
+
+
+class Policy(StrEnum):
+    """A baseline's stored tolerance against the policy bound (`policy_bound`): a tolerance
+    widened by hand far beyond what the metric and its chaos need lets regressions through."""
+
+    WITHIN = "within"
+    LOOSENED = "loosened"  # above the bound: flagged, and a failure in a strict run
+    ALLOWED = "allowed"  # above the bound, allowed by name in the project's configuration
+    UNCHECKED = "unchecked"  # no baseline entry, or a metric with no registered default
 
 
 def conditioning(spread: float | None, declared: float, measured: bool = True) -> Conditioning:
@@ -93,6 +105,8 @@ class MetricVerdict:
     status: Status
     spread: float | None = None  # range over the baseline's replicas (None: see conditioning)
     conditioning: Conditioning = Conditioning.UNMEASURED
+    policy: Policy = Policy.UNCHECKED  # the stored tolerance against the policy bound
+    policy_bound: float | None = None  # that bound, in the metric's unit
 
     @property
     def delta(self) -> float | None:
@@ -114,6 +128,51 @@ def ill_conditioned(verdicts: list[MetricVerdict]) -> list[str]:
                    f"change. Make the scenario or controller decide robustly, or set the "
                    f"tolerance to at least {SPREAD_MULTIPLE:g}x the spread by hand")
     return out
+
+
+def policy_bound(name: str, entry: Mapping[str, Any], factor: float) -> float | None:
+    """The widest tolerance a baseline entry may hold without the project's leave, by the rule
+    `judge` widens by: the larger of `factor` x the metric's default tolerance at the baseline
+    value and SPREAD_MULTIPLE x its spread; None for a metric with no registered default."""
+    d = definition(name)
+    if d is None:
+        return None
+    base = _num(entry.get("value"))
+    return max(factor * d.default_tolerance(math.nan if base is None else base),
+               SPREAD_MULTIPLE * (_num(entry.get("spread")) or 0.0))
+
+
+def above(tolerance: float, bound: float) -> bool:
+    """A stored tolerance above its policy bound (not on float noise at the bound)."""
+    return tolerance > bound * (1 + 1e-9)
+
+
+def police(verdicts: list[MetricVerdict], baseline: Mapping[str, Mapping[str, Any]] | None,
+           factor: float, allowed: Collection[str]) -> list[MetricVerdict]:
+    """Each verdict with its baseline entry's stored tolerance checked against the policy bound
+    (`allowed`: metric names the project allows above it)."""
+    out = []
+    for v in verdicts:
+        entry = (baseline or {}).get(v.name)
+        bound = None if entry is None else policy_bound(v.name, entry, factor)
+        if entry is None or bound is None:
+            out.append(v)
+            continue
+        policy = Policy.WITHIN
+        if above(float(entry["tolerance"]), bound):
+            policy = Policy.ALLOWED if v.name in allowed else Policy.LOOSENED
+        out.append(replace(v, policy=policy, policy_bound=bound))
+    return out
+
+
+def loosened(verdicts: list[MetricVerdict], label: str, factor: float) -> list[str]:
+    """One line per loosened tolerance: which, its bound, and the two ways out."""
+    return [f"{v.name}: baseline tolerance {v.tolerance:.3g} is loosened beyond the policy bound "
+            f"{v.policy_bound:.3g} (the larger of {factor:g}x its default tolerance and "
+            f"{SPREAD_MULTIPLE:g}x its spread); narrow it in the baseline, or allow it in "
+            f'[tool.kartci.allow_loose_tolerances] as "{label}:{v.name}" = "<reason>"'
+            for v in verdicts if v.policy is Policy.LOOSENED and v.tolerance is not None
+            and v.policy_bound is not None]
 
 
 @dataclass(frozen=True)
@@ -283,10 +342,12 @@ class Change:
 
 def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
            spreads: dict[str, float | None] | None = None,
-           made: dict[str, Any] | None = None) -> list[Change]:
+           made: dict[str, Any] | None = None,
+           fields: Mapping[str, Any] | None = None) -> list[Change]:
     """Write a scenario's baseline from a run's metrics, keeping hand-set tolerances; with each
-    metric's spread over replicas (`spreads`) and where it was made (`made`: the platform and
-    how the replicas were perturbed)."""
+    metric's spread over replicas (`spreads`), where it was made (`made`: the platform and
+    how the replicas were perturbed) and the resolved scenario it was made from (`fields`,
+    kartci.verdict.fingerprint, with their hash: a later run of a changed scenario is stale)."""
     old = load(path) or {}
     new: dict[str, dict[str, Any]] = {}
     changes = []
@@ -309,7 +370,9 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
         changes.append(Change(name, old_value, value, kind))
     changes += [Change(n, _num(e.get("value")), None, "removed") for n, e in old.items()
                 if n not in new]
-    write_json_atomic(path, {"scenario": scenario, **(made or {}), "metrics": new})
+    record = {} if fields is None else {"scenario_hash": digest(fields),
+                                        "scenario_fields": dict(fields)}
+    write_json_atomic(path, {"scenario": scenario, **(made or {}), **record, "metrics": new})
     return changes
 
 
