@@ -4,9 +4,9 @@ asserts one line naming the file (never its contents) and exit 2."""
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -19,6 +19,8 @@ PARAMS = (ROOT / "kartci" / "data" / "models" / "gokart" / "params.yaml").read_t
 PS4 = (ROOT / "kartci" / "data" / "models" / "gokart" / "joy" / "ps4.yaml").read_text(
     encoding="utf-8")
 
+Case = tuple[list[str | Path], str]  # CLI arguments, a regular expression the error line matches
+SOURCE = f"{{log: {LOGS}/kart_manual_ps4.mcap, topic: /kart0/joy}}"
 # the issue's case: criteria that fail (two laps in one second), then `criteria: {}` (line 12)
 SCENARIO = f"""description: q
 world: WORLD
@@ -27,7 +29,7 @@ agents:
   kart0:
     model: MODEL
     start: {{along_m: 0.0}}
-    controller: {{type: manual, mapping: ps4, source: {{log: {LOGS}/kart_manual_ps4.mcap, topic: /kart0/joy}}}}
+    controller: {{type: manual, mapping: ps4, source: {SOURCE}}}
 criteria:
   laps_completed: {{min: 2}}
   collisions: {{equal: 0}}
@@ -58,13 +60,13 @@ def _place(line: int, column: int) -> str:
     return rf"(:{line}:{column}:|: line {line}:)"
 
 
-def _scenario_top(tmp: Path) -> tuple[list[str], str]:
+def _scenario_top(tmp: Path) -> Case:
     _project(tmp)
     return (["show", "q"],
             rf"scenarios/q\.yaml{_place(12, 1)} duplicate key 'criteria' \(first at line 9\)$")
 
 
-def _scenario_nested(tmp: Path) -> tuple[list[str], str]:
+def _scenario_nested(tmp: Path) -> Case:
     path = _project(tmp)
     text = path.read_text(encoding="utf-8").replace("    start: {along_m: 0.0}\n",
                                                     "    start: {along_m: 0.0, along_m: 5.0}\n")
@@ -73,7 +75,7 @@ def _scenario_nested(tmp: Path) -> tuple[list[str], str]:
             rf"scenarios/q\.yaml{_place(7, 29)} duplicate key 'along_m' \(first at line 7\)$")
 
 
-def _world(tmp: Path) -> tuple[list[str], str]:
+def _world(tmp: Path) -> Case:
     path = _project(tmp, world="dup")
     path.write_text(path.read_text(encoding="utf-8").replace("criteria: {}\n", ""),
                     encoding="utf-8")
@@ -86,7 +88,7 @@ def _world(tmp: Path) -> tuple[list[str], str]:
                            rf"\(first at line {first}\)$")
 
 
-def _model(tmp: Path) -> tuple[list[str], str]:
+def _model(tmp: Path) -> Case:
     path = _project(tmp, model="dupkart")
     path.write_text(path.read_text(encoding="utf-8").replace("criteria: {}\n", ""),
                     encoding="utf-8")
@@ -99,7 +101,7 @@ def _model(tmp: Path) -> tuple[list[str], str]:
                            rf" duplicate key '{key}' \(first at line {first}\)$")
 
 
-def _mapping(tmp: Path) -> tuple[list[str], str]:
+def _mapping(tmp: Path) -> Case:
     (tmp / "pad.yaml").write_text(PS4 + "axes: {}\n", encoding="utf-8")
     first = next(i for i, x in enumerate(PS4.splitlines(), 1) if x.startswith("axes:"))
     return (["replay", LOGS / "kart_manual_ps4.mcap", "--mapping", "pad.yaml", "--set",
@@ -108,14 +110,14 @@ def _mapping(tmp: Path) -> tuple[list[str], str]:
             rf"\(first at line {first}\)$")
 
 
-def _profile(tmp: Path) -> tuple[list[str], str]:
+def _profile(tmp: Path) -> Case:
     (tmp / "p.yaml").write_text("name: p\npose: {topic: /a}\nimu: {topic: /b}\n"
                                 "pose: {topic: /c}\n", encoding="utf-8")
     return (["score", LOGS / "kart_manual_ps4.mcap", "--profile", "p.yaml", "--out", "out"],
             rf"p\.yaml{_place(4, 1)} duplicate key 'pose' \(first at line 2\)$")
 
 
-def _toml(tmp: Path) -> tuple[list[str], str]:
+def _toml(tmp: Path) -> Case:
     """TOML refuses duplicates itself (tomllib); the line says where, never what."""
     (tmp / "pyproject.toml").write_text('[tool.kartci]\nscenarios = ["a"]\n'
                                         'scenarios = ["SECRET"]\n', encoding="utf-8")
@@ -125,10 +127,11 @@ def _toml(tmp: Path) -> tuple[list[str], str]:
 
 @pytest.mark.parametrize("make", [_scenario_top, _scenario_nested, _world, _model, _mapping,
                                   _profile, _toml])
-def test_duplicate_keys_exit_2_naming_both_lines(tmp_path: Path, make: object) -> None:
+def test_duplicate_keys_exit_2_naming_both_lines(tmp_path: Path,
+                                                 make: Callable[[Path], Case]) -> None:
     """Defect 3: the last of two equal keys won silently (`criteria: {}` turned exit 1 into
     0). Now a duplicate at any level of any YAML a command reads is exit 2 with both lines."""
-    args, expected = make(tmp_path)  # type: ignore[operator]
+    args, expected = make(tmp_path)
     line = _one_error_line(kartci(*args, cwd=tmp_path))
     assert re.search(expected, line), line
     assert "SECRET" not in line and "laps_completed" not in line
