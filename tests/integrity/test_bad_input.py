@@ -4,6 +4,7 @@ asserts one line naming the file (never its contents) and exit 2."""
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 from collections.abc import Callable
@@ -136,3 +137,102 @@ def test_duplicate_keys_exit_2_naming_both_lines(tmp_path: Path,
     assert re.search(expected, line), line
     assert "SECRET" not in line and "laps_completed" not in line
     assert not (tmp_path / "out" / "report.html").exists()
+
+
+@pytest.mark.parametrize(("number", "shown"), [("9" * 400, "400-digit integer"),
+                                               ("1e999", "float overflow")])
+def test_history_number_out_of_range_names_file_and_field(tmp_path: Path, number: str,
+                                                          shown: str) -> None:
+    """Defect 8: a 400-digit integer in a summary gave "internal error: OverflowError"."""
+    summary = tmp_path / "c1.json"
+    summary.write_text('{"scenarios": {"q": {"metrics": {"cte": {"value": ' + number + "}}}}}",
+                       encoding="utf-8")
+    line = _one_error_line(kartci("history", summary, "--out", "h", cwd=tmp_path))
+    assert line == (f"{summary}: scenarios.q.metrics.cte.value: a number out of range (beyond "
+                    "a float's ±1.8e308)"), shown
+    assert not (tmp_path / "h").exists()
+
+
+def _fifo(tmp: Path, name: str) -> Path:
+    path = tmp / name
+    os.mkfifo(path)
+    return path
+
+
+def _sparse(tmp: Path, name: str, n_bytes: int) -> Path:
+    path = tmp / name
+    with path.open("wb") as f:
+        f.truncate(n_bytes)  # no data blocks: cheap on any file system with holes
+    return path
+
+
+def _inputs() -> list[tuple[str, Callable[[Path], tuple[list[str | Path], str]]]]:
+    """(name, make) where make(tmp) gives the CLI arguments and the error line expected."""
+    log = LOGS / "kart_manual_ps4.mcap"
+    fifo = "not a regular file (a FIFO)"
+
+    def history_fifo(t: Path) -> tuple[list[str | Path], str]:
+        return ["history", _fifo(t, "c1.json"), "--out", "h"], f"{t}/c1.json: {fifo}"
+
+    def history_zero(t: Path) -> tuple[list[str | Path], str]:
+        return (["history", "/dev/zero", "--out", "h"],
+                "/dev/zero: not a regular file (a character device)")
+
+    def history_huge(t: Path) -> tuple[list[str | Path], str]:
+        big = _sparse(t, "c1.json", (64 << 20) + 1)
+        return (["history", big, "--out", "h"],
+                f"{big}: {(64 << 20) + 1} bytes, more than the 64 MiB allowed")
+
+    def replay_fifo(t: Path) -> tuple[list[str | Path], str]:
+        return (["replay", _fifo(t, "in.mcap"), "--set", "duration_s=1", "--out", "out"],
+                f"{t}/in.mcap: {fifo}")
+
+    def extract_fifo(t: Path) -> tuple[list[str | Path], str]:
+        return (["extract", _fifo(t, "in.mcap"), "-t", "/kart0/joy", "--out", "x.mcap"],
+                f"{t}/in.mcap: {fifo}")
+
+    def rosbag2_with_fifo(t: Path) -> tuple[list[str | Path], str]:
+        (t / "bag").mkdir()
+        (t / "bag" / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n",
+                                                 encoding="utf-8")
+        _fifo(t / "bag", "bag_0.mcap")
+        return (["extract", t / "bag", "-t", "/a", "--out", "x.mcap"],
+                f"{t}/bag: bag_0.mcap in it: {fifo}")
+
+    def diff_fifo(t: Path) -> tuple[list[str | Path], str]:
+        return ["diff", log, _fifo(t, "b.mcap")], f"{t}/b.mcap: {fifo}"
+
+    def mapping_fifo(t: Path) -> tuple[list[str | Path], str]:
+        return (["replay", log, "--mapping", _fifo(t, "pad.yaml"), "--set", "duration_s=1",
+                 "--out", "out"], f"{t}/pad.yaml: {fifo}")
+
+    def profile_fifo(t: Path) -> tuple[list[str | Path], str]:
+        return (["score", log, "--profile", _fifo(t, "p.yaml"), "--out", "out"],
+                f"{t}/p.yaml: {fifo}")
+
+    return [(f.__name__, f) for f in (history_fifo, history_zero, history_huge, replay_fifo,
+                                      extract_fifo, rosbag2_with_fifo, diff_fifo, mapping_fifo,
+                                      profile_fifo)]
+
+
+@pytest.mark.parametrize("make", [m for _, m in _inputs()], ids=[n for n, _ in _inputs()])
+def test_file_inputs_must_be_bounded_regular_files(
+        tmp_path: Path, make: Callable[[Path], tuple[list[str | Path], str]]) -> None:
+    """Defect 8: history read /dev/zero without a limit, and history and replay hung on a
+    FIFO. Every file a command reads is a regular file (a log without a size cap, a rosbag2
+    folder of regular files) within its bound, or one line naming it and exit 2."""
+    args, expected = make(tmp_path)
+    line = _one_error_line(kartci(*args, cwd=tmp_path))
+    assert expected in line, line
+    assert not (tmp_path / "out" / "report.html").exists()
+
+
+def test_baseline_fifo_is_an_error_not_a_hang(tmp_path: Path) -> None:
+    """Defect 8, baselines: a FIFO where a baseline belongs hung the judging of a run."""
+    (tmp_path / "bl").mkdir()
+    _fifo(tmp_path / "bl", "kart_manual.json")
+    proc = kartci("run", "kart_manual", "--set", "duration_s=1", "--baselines", "bl",
+                  "--out", "out", cwd=tmp_path)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "kart_manual: 💥 error: bl/kart_manual.json: not a regular file (a FIFO)" \
+        in proc.stdout
