@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci.atomic import write_text_atomic
+from kartci.boundedio import JSON_MAX_BYTES, read_bytes
 from kartci.errors import KartciError
 
 __all__ = ["Better", "Change", "Comparison", "Figure", "Record", "compare", "load"]
@@ -126,7 +127,7 @@ class Record:
 def load(path: Path) -> dict[str, Figure]:
     """The figures of one or more benchmark JSON files (a later file's figure wins)."""
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(read_bytes(Path(path), JSON_MAX_BYTES))
         if data.get("format") != FORMAT:
             raise KartciError(f"{path}: not a kartci benchmark file (format "
                               f"{data.get('format')!r}, expected {FORMAT!r})")
@@ -134,7 +135,7 @@ def load(path: Path) -> dict[str, Figure]:
                              f.get("note", ""))
                 for name, f in data["figures"].items()}
     except OSError as err:
-        raise KartciError(f"{path}: cannot read ({err.strerror})") from err
+        raise KartciError(f"{path}: cannot read ({err.strerror or err})") from err
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         raise KartciError(f"{path}: malformed benchmark file ({err})") from err
 

@@ -99,13 +99,13 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> ScenarioFi
 def _tags(path: Path) -> list[str]:
     """The scenario's `tags:` as marker names (anything but letters, digits and _ becomes _);
     a file that does not parse has none (its item reports the problem when it runs)."""
-    import yaml
+    from kartci.spec.yamlio import read_yaml
 
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        data = read_yaml(path)
+    except KartciError:
         return []
-    tags = data.get("tags") if isinstance(data, dict) else None
+    tags = data.get("tags")
     if not isinstance(tags, list | tuple):
         return []
     out = []

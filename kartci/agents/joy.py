@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from kartci import project
@@ -17,6 +16,7 @@ from kartci.errors import SpecError
 from kartci.logs.types import header, msg
 from kartci.project import did_you_mean
 from kartci.robots.gokart.params import GokartModel
+from kartci.spec.yamlio import read_yaml
 from kartci.vehicle import KartInput
 
 
@@ -77,9 +77,7 @@ def load_mapping(name: str) -> JoyMapping:
     path to a YAML file (anything ending in .yaml / .yml or holding a path separator)."""
     if name.endswith((".yaml", ".yml")) or "/" in name or os.sep in name:
         path = Path(name).expanduser()
-        if not path.is_file():
-            raise SpecError(f"joystick mapping file {name}: not found")
-        return _parse(path)
+        return _parse(path)  # read_yaml names a missing file, a FIFO, a device
     known = known_mappings()
     if name not in known:
         raise SpecError(f"unknown joystick mapping '{name}'{did_you_mean(name, known)}; "
@@ -89,18 +87,9 @@ def load_mapping(name: str) -> JoyMapping:
 
 def _parse(path: Path) -> JoyMapping:
     """The mapping in a file; a problem is named by its place (key, or line and column), never
-    by quoting the file, which may be anything a user pointed at."""
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as err:
-        raise SpecError(f"{path}: cannot read the joystick mapping ({type(err).__name__})") from err
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise SpecError(f"{path}: invalid joystick mapping (not YAML{where})") from err
-    if not isinstance(data, dict):
-        raise SpecError(f"{path}: invalid joystick mapping (expected keys: "
-                        f"{', '.join(JoyMapping.model_fields)})")
+    by quoting the file, which may be anything a user pointed at. Read as scenario files are
+    (yamlio: a small regular file, no duplicate keys)."""
+    data = read_yaml(path)
     try:
         return JoyMapping.model_validate(data)
     except ValidationError as err:

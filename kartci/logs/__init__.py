@@ -1,11 +1,20 @@
 """Logs: writing runs as MCAP (ROS 2 types, CDR) and reading ROS 1 / ROS 2 / MCAP logs."""
 
+import warnings
 from pathlib import Path
 from typing import Any
 
 from kartci.errors import LogError
 from kartci.logs.damage import describe
-from kartci.logs.reader import LogReader, SalvagedLog, TopicInfo, messages, open_log, topics
+from kartci.logs.reader import (
+    LogReader,
+    SalvagedLog,
+    TopicInfo,
+    messages,
+    open_log,
+    topics,
+    warn_salvaged,
+)
 from kartci.logs.tables import tables
 from kartci.logs.types import for_writing, header, msg, stamp_ns, typestore
 from kartci.logs.writer import McapLogWriter
@@ -48,8 +57,18 @@ def extract(src: Path, wanted: list[str], dst: Path) -> int:
 
     Types that only the log defines (a ROS 1 bag's turtlesim/msg/Pose) are written with the
     log's own definitions. The file appears only when the copy is complete (see
-    McapLogWriter); from a damaged log, what could be salvaged is copied (SalvagedLog warns)."""
+    McapLogWriter); from a damaged log, what could be salvaged is copied (SalvagedLog warns).
+    A copy with no message is a LogError that says why, and writes nothing."""
     _check_output(src, dst)
+    with warnings.catch_warnings():  # the notes are told with the outcome: in the error, or after
+        warnings.simplefilter("ignore", SalvagedLog)
+        n, notes = _extract(src, wanted, dst)
+    for text in notes:
+        warn_salvaged(text)
+    return n
+
+
+def _extract(src: Path, wanted: list[str], dst: Path) -> tuple[int, list[str]]:
     with open_log(src) as log:
         known = {i.topic for i in log.topics()}
         missing = [t for t in wanted if t not in known]
@@ -62,17 +81,24 @@ def extract(src: Path, wanted: list[str], dst: Path) -> int:
             raise LogError(f"{src}: its message types cannot be written as ROS 2 "
                            f"({describe(err)})") from err
         try:
-            return _copy(log, wanted, McapLogWriter(dst, store))
+            return _copy(log, wanted, McapLogWriter(dst, store)), log.notes
         except OSError as err:
             raise LogError(f"{dst}: cannot write ({err.strerror or err})") from err
 
 
 def _copy(log: LogReader, wanted: list[str], out: McapLogWriter) -> int:
+    """The messages copied; none is an error (raised inside `with out`, so no file appears)."""
     n = 0
     with out:
         for topic, t_ns, m in log.messages(wanted):
             _write(out, log, topic, m, t_ns)
             n += 1
+        if n == 0:
+            prefix = f"{log.path}: "
+            why = "; ".join(t.removeprefix(prefix) for t in log.notes) or (
+                "the log holds none on " + ("this topic" if len(wanted) == 1 else "these topics"))
+            raise LogError(f"{log.path}: no message of {', '.join(wanted)} could be read ({why}); "
+                           f"nothing written to {out.path}")
     return n
 
 
@@ -90,4 +116,5 @@ __all__ = [
     "tables",
     "topics",
     "typestore",
+    "warn_salvaged",
 ]

@@ -21,6 +21,7 @@ from typing import Any, Protocol
 from rosbags.highlevel import AnyReader
 from rosbags.typesys.store import Typestore
 
+from kartci.boundedio import RefusedFileError, check_log
 from kartci.errors import LogError
 from kartci.logs.damage import count_of, describe
 from kartci.logs.salvage import NotStreamableError, Salvage, salvage
@@ -167,6 +168,15 @@ class _Position:
         return False
 
 
+def warn_salvaged(text: str) -> None:
+    """Warn that a log was only partly read. Issued as if from "kartci", line 0, so that
+    Python's default display is one line (`kartci:0: SalvagedLog: <path>: ...`) and not two
+    with a line of kartci's source; the registry shows a note once, however often the log is
+    read."""
+    warnings.warn_explicit(SalvagedLog(text), SalvagedLog, "kartci", 0, module=__name__,
+                           registry=_SHOWN)
+
+
 class LogReader:
     """An open log. `notes` lists, one line each, what was wrong and what was salvaged; empty
     when the log read cleanly. Each note is also issued as a SalvagedLog warning."""
@@ -220,12 +230,9 @@ class LogReader:
         self._source.close()
 
     def note(self, text: str) -> None:
-        """Keep the note and warn. Issued as if from "kartci", line 0, so that Python's default
-        display is one line (`kartci:0: SalvagedLog: <path>: ...`) and not two with a line of
-        kartci's source; the registry shows a note once, however often the log is read."""
+        """Keep the note and warn (warn_salvaged)."""
         self.notes.append(text)
-        warnings.warn_explicit(SalvagedLog(text), SalvagedLog, "kartci", 0, module=__name__,
-                               registry=_SHOWN)
+        warn_salvaged(text)
 
     def _raws(self, wanted: Sequence[str] | None, position: _Position,
               resume: bool) -> Iterator[Raw]:
@@ -312,9 +319,19 @@ def _salvaged(path: Path, why: str, err: Exception) -> tuple[_Streamed, str]:
 
 
 
+def _check(path: Path) -> None:
+    """A log is a regular file or a rosbag2 folder of them: a FIFO would hang the reader."""
+    try:
+        check_log(path)
+    except FileNotFoundError as err:
+        raise LogError(f"{path}: no such file or directory") from err
+    except (OSError, ValueError) as err:  # ValueError: a NUL character in the path
+        raise LogError(f"{path}: {err if isinstance(err, RefusedFileError) else describe(err)}"
+                       ) from err
+
+
 def _open(path: Path) -> LogReader:
-    if not path.exists():
-        raise LogError(f"{path}: no such file or directory")
+    _check(path)
     try:
         reader = AnyReader([path], default_typestore=typestore())
         reader.open()
@@ -347,4 +364,5 @@ def messages(path: Path, wanted: Sequence[str] | None = None) -> Iterator[tuple[
         yield from log.messages(wanted)
 
 
-__all__ = ["LogReader", "Raw", "SalvagedLog", "TopicInfo", "messages", "open_log", "topics"]
+__all__ = ["LogReader", "Raw", "SalvagedLog", "TopicInfo", "messages", "open_log", "topics",
+           "warn_salvaged"]

@@ -17,6 +17,7 @@ from kartci.logs import McapLogWriter, header, msg, open_log, stamp_ns
 from kartci.logs.types import for_writing, yaw_of
 from kartci.realdata.profile import Profile
 from kartci.spec import Scenario
+from kartci.spec.yamlio import TRACK_MAX_BYTES, read_text_bounded
 from kartci.track import TRACK_TOPIC
 
 # where each role's messages go, relative to the robot's namespace (commands by type)
@@ -163,7 +164,5 @@ def _check_frame(log: Path, frames: dict[str, str], topic: str, m: Any) -> None:
 
 
 def _read(path: str) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8")
-    except OSError as err:
-        raise LogError(f"{path}: cannot read the track ({err.strerror or err})") from err
+    """The profile's track file: a small regular text file (yamlio's bounds), or a SpecError."""
+    return read_text_bounded(Path(path), TRACK_MAX_BYTES)

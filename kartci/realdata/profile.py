@@ -10,12 +10,12 @@ import re
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import Field, ValidationError
 
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
 from kartci.spec.models import Criterion, Frozen
+from kartci.spec.yamlio import read_yaml
 
 POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",
               "geometry_msgs/msg/PoseWithCovarianceStamped")
@@ -88,14 +88,7 @@ class Profile(Frozen):
 
 def load_profile(path: Path) -> Profile:
     """A profile file, validated; a SpecError naming the file and the key otherwise."""
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as err:
-        raise SpecError(f"{path}: cannot read the profile ({err.strerror or err})") from err
-    except yaml.YAMLError as err:
-        raise SpecError(f"{path}: not valid YAML ({' '.join(str(err).split())})") from err
-    if not isinstance(data, dict):
-        raise SpecError(f"{path}: a profile is a mapping of roles to topics")
+    data = read_yaml(path)  # as scenario files are: a small regular file, no duplicate keys
     data.setdefault("name", re.sub(r"[^a-z0-9_]", "_", path.stem.lower()))
     try:
         profile = Profile.model_validate(data)

@@ -12,22 +12,33 @@ from typing import Any
 import numpy as np
 
 from kartci.atomic import write_text_atomic
+from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
 from kartci.errors import SpecError
 from kartci.report.figures import Axis, Figure, Series
 from kartci.report.html import CSS
 from kartci.report.interactive import body_assets, figures_block, head_assets
+from kartci.spec.yamlio import clip
 
 History = dict[str, dict[str, list[float | None]]]  # scenario -> metric -> value per commit
 
 
 def load_summary(path: Path) -> dict[str, Any]:
-    """One commit's summary.json; anything else is a SpecError naming the file."""
+    """One commit's summary.json (a regular file within JSON_MAX_BYTES, every number a float
+    can hold); anything else is a SpecError naming the file."""
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        doc = json.loads(read_bytes(path, JSON_MAX_BYTES))
         if not isinstance(doc["scenarios"], dict):
             raise TypeError("scenarios is not a mapping")
-    except (OSError, ValueError, KeyError, TypeError) as err:
-        raise SpecError(f"{path}: not a kartci summary.json ({err})") from None
+    except FileNotFoundError:
+        raise SpecError(f"{path}: file not found") from None
+    except RefusedFileError as err:
+        raise SpecError(f"{path}: {err}") from None
+    except (OSError, ValueError, KeyError, TypeError, RecursionError) as err:
+        why = "nested too deeply" if isinstance(err, RecursionError) else clip(str(err))
+        raise SpecError(f"{path}: not a kartci summary.json ({why})") from None
+    field = out_of_range(doc)
+    if field is not None:
+        raise SpecError(f"{path}: {field}: a number out of range (beyond a float's ±1.8e308)")
     return dict(doc)
 
 

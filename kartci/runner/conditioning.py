@@ -8,7 +8,6 @@ verdict. `kartci run --conditioning K` measures the spread and judges with it;
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -26,14 +25,14 @@ from kartci.verdict import (
     read_metrics,
     spread,
 )
-from kartci.verdict.baseline import conditioning, definition
+from kartci.verdict.baseline import conditioning, definition, read_json
 
 DEFAULT_REPLICAS = 4  # the run itself and 3 nudged: enough to see a bifurcation, 4x the cost
 
 
 def _run_fact(folder: Path, key: str) -> dict[str, Any]:
     try:
-        run = json.loads((folder / "run.json").read_text(encoding="utf-8"))
+        run = read_json(folder / "run.json")
     except (OSError, ValueError):
         return {}
     found = run.get(key) if isinstance(run, dict) else None

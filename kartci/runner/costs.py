@@ -20,6 +20,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from kartci.atomic import write_text_atomic
+from kartci.boundedio import JSON_MAX_BYTES, read_bytes
 from kartci.cachedir import cache_dir
 from kartci.runner.jobs import Job, Outcome
 
@@ -42,7 +43,7 @@ def load() -> dict[str, tuple[float, float]]:
     """key -> (wall s, sim s) of its last run; empty when the file is missing or unreadable
     (a cache is never worth a failed run)."""
     try:
-        raw = json.loads(_path().read_text(encoding="utf-8"))
+        raw = json.loads(read_bytes(_path(), JSON_MAX_BYTES))
         return {str(k): (float(v["wall_s"]), float(v["sim_s"])) for k, v in raw.items()
                 if float(v["wall_s"]) > 0 and float(v["sim_s"]) > 0}
     except (OSError, ValueError, TypeError, KeyError, AttributeError):

@@ -7,7 +7,6 @@ still seen as missing, not silently skipped.
 
 from __future__ import annotations
 
-import json
 import shutil
 import tempfile
 from pathlib import Path
@@ -153,7 +152,7 @@ def _relocate_log(folder: Path, final: Path) -> None:
     """Point run.json's `log` at where the folder will be (`final`)."""
     for run_json in [folder / "run.json", *folder.glob("*/run.json")]:
         try:
-            doc = json.loads(run_json.read_text(encoding="utf-8"))
+            doc = read_json(run_json)
         except (OSError, ValueError):
             continue
         if isinstance(doc, dict) and "log" in doc:

@@ -8,7 +8,6 @@ reports and, for a shard, `shard.json`. A sweep point's folder is `<scenario>@<k
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import shutil
@@ -227,7 +226,7 @@ def failed_reason(folder: Path) -> str | None:
     if not marker.exists() and not marker.is_symlink():
         return None
     try:
-        reason = json.loads(marker.read_text(encoding="utf-8")).get("error", "")
+        reason = read_json(marker).get("error", "")
     except (OSError, ValueError, AttributeError):
         reason = ""
     return f"the last run failed: {one_line(str(reason))}".rstrip(": ")
@@ -281,10 +280,7 @@ def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, baselines: 
     verdicts, doubts, strict = trusted(compare(values, baseline), baseline, scenario,
                                        baselines / f"{folder.name}.json")
     crit = check_criteria(values, scenario.criteria)
-    run_path = folder / "run.json"
-    run = json.loads(run_path.read_text(encoding="utf-8")) if run_path.exists() else {}
-    if not isinstance(run, dict):
-        raise LogError(f"{run_path}: expected a JSON object")
+    run = _run_record(folder / "run.json")
     warnings = [str(w) for w in run.get("warnings") or [] if isinstance(w, str)]
     made = made_where(baselines / f"{folder.name}.json").get("platform")
     note = portable.mismatch(made, run.get("platform") or {}) if made else None
@@ -320,6 +316,19 @@ def trusted(verdicts: list[MetricVerdict], baseline: dict[str, dict[str, Any]] |
     stale = [] if note is None else [note]
     strict = [*(stale if check.freshness is fingerprint.Freshness.STALE else []), *loose]
     return verdicts, [*stale, *loose], strict
+
+
+def _run_record(path: Path) -> dict[str, Any]:
+    """A run folder's run.json ({} when there is none); a LogError naming it when unreadable."""
+    if not path.exists():
+        return {}
+    try:
+        run = read_json(path)
+    except (OSError, ValueError) as err:
+        raise LogError(f"{path}: unreadable run record ({err})") from None
+    if not isinstance(run, dict):
+        raise LogError(f"{path}: expected a JSON object")
+    return run
 
 
 def recorded_scenario(folder: Path) -> Scenario:

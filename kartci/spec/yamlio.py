@@ -12,15 +12,14 @@ from __future__ import annotations
 
 import contextlib
 import json
-import os
 import re
-import stat
 from pathlib import Path
 from typing import Any
 
 import yaml
-from yaml.nodes import Node, ScalarNode
+from yaml.nodes import MappingNode, Node, ScalarNode
 
+from kartci.boundedio import RefusedFileError, read_bytes, size_text
 from kartci.errors import SpecError
 
 SPEC_MAX_BYTES = 1 << 20  # a scenario, world or model file; the real ones are 2 KB or less
@@ -30,11 +29,7 @@ YAML_MAX_NODES = 100_000  # nodes of one document with every alias expanded
 YAML_MAX_DEPTH_LEVELS = 64  # nodes on the path from a document's root to its deepest leaf
 YAML_INT_MAX_CHARS = 1000  # `1:2:3:...` (base 60) costs quadratic time in its length
 PROBLEM_MAX_CHARS = 200  # of a YAML problem or a key echoed back in a message
-
-_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO"),
-          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-          (stat.S_ISSOCK, "a socket"))
-
+_STR, _MERGE = "tag:yaml.org,2002:str", "tag:yaml.org,2002:merge"
 
 def clip(text: str, limit_chars: int = PROBLEM_MAX_CHARS) -> str:
     """`text` on one line, cut to `limit_chars` (cut first, so a huge text costs nothing)."""
@@ -51,50 +46,18 @@ def shown(path: Path, limit_chars: int = 300) -> str:
     return text if len(text) <= limit_chars else text[: limit_chars - 1] + "…"
 
 
-def _size(n_bytes: int) -> str:
-    return f"{n_bytes >> 20} MiB" if n_bytes >= 1 << 20 else f"{n_bytes >> 10} KiB"
-
-
-def _check_file(path: Path, st: os.stat_result, limit_bytes: int) -> None:
-    for is_kind, kind in _KINDS:
-        if is_kind(st.st_mode):
-            raise SpecError(f"{shown(path)}: not a regular file ({kind})")
-    if not stat.S_ISREG(st.st_mode):
-        raise SpecError(f"{shown(path)}: not a regular file")
-    if st.st_size > limit_bytes:
-        raise SpecError(f"{shown(path)}: {st.st_size} bytes, more than the "
-                        f"{_size(limit_bytes)} allowed")
-
-
 def read_bytes_bounded(path: Path, limit_bytes: int) -> bytes:
-    """The bytes of a regular file of at most `limit_bytes`. The stat comes before the open and
-    the open does not block, so a FIFO or a device is refused without waiting or reading."""
+    """The bytes of a regular file of at most `limit_bytes` (kartci.boundedio.read_bytes: a
+    FIFO or a device is refused without waiting or reading); a SpecError naming it otherwise."""
     try:
-        _check_file(path, path.stat(), limit_bytes)
-        flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
-        fd = os.open(path, flags | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0))
+        return read_bytes(path, limit_bytes)
     except FileNotFoundError as err:
         raise SpecError(f"{shown(path)}: file not found") from err
+    except RefusedFileError as err:
+        raise SpecError(f"{shown(path)}: {err}") from err
     except (OSError, ValueError) as err:  # ValueError: a NUL character in the path
         reason = clip(str(getattr(err, "strerror", None) or err))
         raise SpecError(f"{shown(path)}: cannot read ({reason})") from err
-    try:
-        _check_file(path, os.fstat(fd), limit_bytes)  # the same file, should it have been swapped
-        chunks: list[bytes] = []
-        total = 0
-        while total <= limit_bytes:  # a file may grow, or lie about its size (/proc)
-            chunk = os.read(fd, limit_bytes + 1 - total)
-            if not chunk:
-                break
-            chunks.append(chunk)
-            total += len(chunk)
-    except OSError as err:
-        raise SpecError(f"{shown(path)}: cannot read ({clip(str(err.strerror or err))})") from err
-    finally:
-        os.close(fd)
-    if total > limit_bytes:
-        raise SpecError(f"{shown(path)}: more than the {_size(limit_bytes)} allowed")
-    return b"".join(chunks)
 
 
 def read_text_bounded(path: Path, limit_bytes: int) -> str:
@@ -177,6 +140,23 @@ class _BoundedLoader(yaml.SafeLoader):
             self._measured[id(node)] = (self._nodes - before, self._reach - level + 1)
         if outer_reach > self._reach:
             self._reach = outer_reach
+        return node
+
+    def compose_mapping_node(self, anchor: Any) -> MappingNode:
+        """Composer's, refusing a key given twice in one mapping: PyYAML keeps the last one
+        silently, so a second `criteria: {}` would turn a failing scenario into a passing one.
+        Keys are compared as their values (`1`, `0x1` and `true` are one key in Python), and
+        keys a `<<` merge brings in may still be overridden."""
+        node = super().compose_mapping_node(anchor)
+        first: dict[Any, Node] = {}
+        for key_node, _ in node.value:
+            if not isinstance(key_node, ScalarNode) or key_node.tag == _MERGE:
+                continue
+            key = key_node.value if key_node.tag == _STR else self.construct_object(key_node)
+            earlier = first.setdefault(key, key_node)
+            if earlier is not key_node:
+                raise _Refused(None, None, "duplicate key (first at line "  # no key: contents
+                               f"{earlier.start_mark.line + 1})", key_node.start_mark)
         return node
 
 
@@ -275,7 +255,7 @@ def parse_value(text: str, where: str) -> Any:
     n_bytes = len(text.encode("utf-8", "surrogatepass"))
     if n_bytes > OVERRIDE_MAX_BYTES:
         raise SpecError(f"{where}: the value is {n_bytes} bytes, more than the "
-                        f"{_size(OVERRIDE_MAX_BYTES)} allowed")
+                        f"{size_text(OVERRIDE_MAX_BYTES)} allowed")
     return _load(text, where, lenient=True)
 
 

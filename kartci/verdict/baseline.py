@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci.atomic import write_json_atomic as write_json_atomic  # re-exported
+from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
 from kartci.errors import BaselineError
 from kartci.metrics.base import Direction, MetricDef
 from kartci.spec.models import Criterion
@@ -204,9 +205,18 @@ def _is_number(x: Any) -> bool:
     return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
 
 
-def read_json(path: Path) -> Any:
-    """JSON without NaN / Infinity; any problem is a ValueError or OSError."""
-    return json.loads(path.read_text(encoding="utf-8"), parse_constant=_no_constants)
+def read_json(path: Path, limit_bytes: int = JSON_MAX_BYTES) -> Any:
+    """JSON from a regular file of at most `limit_bytes`, without NaN / Infinity or a number a
+    float cannot hold; any problem is a ValueError or OSError (RefusedFileError: not a regular
+    file, or too large)."""
+    try:
+        doc = json.loads(read_bytes(path, limit_bytes), parse_constant=_no_constants)
+    except RecursionError:
+        raise ValueError("nested too deeply") from None
+    field = out_of_range(doc)
+    if field is not None:
+        raise ValueError(f"{field}: a number out of range (beyond a float's ±1.8e308)")
+    return doc
 
 
 def load(path: Path) -> dict[str, dict[str, Any]] | None:
@@ -234,7 +244,8 @@ def load(path: Path) -> dict[str, dict[str, Any]] | None:
                                                         and entry["spread"] >= 0):
                 raise ValueError(f"{name}: spread must be a number >= 0 or null")
     except (OSError, ValueError, UnicodeDecodeError) as err:
-        raise BaselineError(f"{path}: malformed baseline ({err})") from None
+        why = err if isinstance(err, RefusedFileError) else f"malformed baseline ({err})"
+        raise BaselineError(f"{path}: {why}") from None
     return dict(metrics)
 
 
@@ -251,6 +262,8 @@ def read_metrics(path: Path) -> dict[str, dict[str, Any]]:
                 raise ValueError(f"{name}: expected {{\"value\": number or null, ...}}")
     except FileNotFoundError:
         raise BaselineError(f"{path}: not found; run `kartci run` first") from None
+    except RefusedFileError as err:
+        raise BaselineError(f"{path}: {err}") from None
     except (OSError, ValueError, UnicodeDecodeError) as err:
         raise BaselineError(f"{path}: malformed metrics file ({err})") from None
     return dict(metrics)

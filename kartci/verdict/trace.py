@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from kartci.atomic import write_text_atomic
+from kartci.boundedio import JSON_MAX_BYTES, read_bytes
 from kartci.errors import BaselineError
 from kartci.results import Plots
 
@@ -75,7 +76,7 @@ def load_trace(path: Path) -> dict[str, pd.DataFrame]:
     if not path.is_file():
         return {}
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        doc = json.loads(read_bytes(path, JSON_MAX_BYTES))
         if not isinstance(doc, dict) or doc.get("version") != VERSION:
             raise ValueError(f"expected a version {VERSION} trace document")
         out = {}

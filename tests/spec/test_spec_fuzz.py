@@ -174,11 +174,11 @@ def test_deep_nesting_is_refused_before_python_runs_out_of_stack(tmp_path: Path)
 def test_bad_explicit_tags_are_one_line_naming_the_line(tmp_path: Path) -> None:
     for tagged in ("!!int x", "!!float y", "!!bool maybe", "!!timestamp 2001-13-45",
                    "!!int 1:2:x", "!!int ''", "!!float ''"):
-        message = _scenario_error(_file(tmp_path, _with(f"seed: {tagged}")))
-        assert ":1:7: not a valid !!" in message
+        message = _scenario_error(_file(tmp_path, _with(f"probe: {tagged}")))  # seed: taken
+        assert ":1:8: not a valid !!" in message
         assert "not a valid !!" in _scenario_error("line_straight", f"seed={tagged}")
     sexagesimal = "1" + ":59" * 100_000  # base 60: quadratic time to build the integer
-    assert "1000 characters" in _scenario_error(_file(tmp_path, _with(f"seed: {sexagesimal}")))
+    assert "1000 characters" in _scenario_error(_file(tmp_path, _with(f"probe: {sexagesimal}")))
     assert "1000 characters" in _scenario_error("line_straight", f"seed={sexagesimal[:30_000]}")
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import yaml
+from kartci.spec.yamlio import read_yaml
 
 Vec = tuple[float, float, float]
 # imu_link and velodyne_link translations (Table 3.4)
@@ -20,7 +20,7 @@ VARIANTS: dict[str, tuple[Vec, Vec]] = {
 }
 REAR_R, FRONT_R, TIRE_MASS, STEER_MASS, FRAME_MASS = 0.127, 0.117, 2.0, 0.5, 0.01
 REAR_X, FRONT_X, REAR_Y, FRONT_Y = -0.077, 1.129, 0.5625, 0.47  # Table 3.2
-PARAMS = yaml.safe_load(Path(__file__).with_name("params.yaml").read_text(encoding="utf-8"))
+PARAMS = read_yaml(Path(__file__).with_name("params.yaml"))
 
 
 def _others() -> list[tuple[float, float, float, float, float]]:
