@@ -4,7 +4,9 @@ baseline is stale instead of passing as "improved".
 A baseline stores the resolved scenario as a flat map `dotted.field -> value` and the hash of
 that map. Flat values rather than value hashes: the keys are most of the size either way, a
 pull request's diff of the baseline then shows which fields were accepted with which values,
-and a stale run can name the fields that moved.
+and a stale run can name the fields that moved. A data file a field names (a track CSV, a URDF,
+a replayed log) adds a `FIELD#sha256` entry with the hash of its bytes, so that editing the
+file in place makes the baseline stale as editing the scenario does.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 from collections.abc import Mapping
 from contextlib import suppress
 from dataclasses import dataclass
@@ -20,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci import project
+from kartci.boundedio import open_regular
 from kartci.spec.models import Scenario
 
 # what neither the run nor its metrics depend on: criteria are checked from the run's own
@@ -44,7 +48,29 @@ def fields(scenario: Scenario) -> dict[str, Any]:
     out: dict[str, Any] = {}
     dumped = scenario.model_dump(mode="json")
     _flatten({k: v for k, v in dumped.items() if k not in IGNORED}, "", out, roots)
+    files = {f"{k}#sha256": content_hash(Path(v)) for k, v in _flat_raw(dumped)
+             if isinstance(v, str) and Path(v).is_absolute()}
+    out.update({k: v for k, v in files.items() if v is not None})
     return dict(sorted(out.items()))
+
+
+def _flat_raw(node: Any, prefix: str = "") -> list[tuple[str, Any]]:
+    """(dotted key, value) of every leaf, values as dumped (absolute paths kept)."""
+    if isinstance(node, dict) and node:
+        return [kv for key, value in node.items() if not (not prefix and key in IGNORED)
+                for kv in _flat_raw(value, f"{prefix}.{key}" if prefix else str(key))]
+    return [(prefix, node)]
+
+
+def content_hash(path: Path) -> str | None:
+    """sha256 of a regular file's bytes; None for anything else (a folder, a missing file: the
+    path field itself still records it)."""
+    try:
+        fd = open_regular(path, None)
+    except (OSError, ValueError):
+        return None
+    with os.fdopen(fd, "rb") as f:
+        return "sha256:" + hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def _flatten(node: Any, prefix: str, out: dict[str, Any],

@@ -152,3 +152,33 @@ def test_committed_baselines_keep_the_tolerance_policy() -> None:
                    if (b := policy_bound(name, entry, config.get("loosen_factor", 3.0)))
                    is not None and above(float(entry["tolerance"]), b))
     assert loose == sorted(allowed) == ["perception_obstacles:kart0.recall_15m"]
+
+
+def test_a_data_file_edited_in_place_makes_the_fields_differ(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The track CSV is named by path in the scenario; its bytes are hashed beside it, so a
+    track edited in place moves the scenario hash as an edited scenario does."""
+    from kartci import project
+    from kartci.spec import load_scenario
+    from kartci.verdict import fingerprint
+
+    world = tmp_path / "worlds" / "my"
+    shutil.copytree(ROOT / "kartci" / "data" / "worlds" / "winti", world)
+    hall = world / "hall.yaml"
+    hall.write_text(hall.read_text().replace("track: winti/track.csv", "track: my/track.csv"))
+    (tmp_path / "pyproject.toml").write_text('[tool.kartci]\nworlds = ["worlds"]\n')
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("KARTCI_ROOT", raising=False)
+    project.activate(None)
+
+    def flat() -> dict[str, Any]:
+        return fingerprint.fields(load_scenario("kart_manual", ["world=my/hall"]))
+
+    before = flat()
+    assert before["world.track"] == "worlds/my/track.csv"  # portable: relative to the project
+    track = world / "track.csv"
+    lines = track.read_text().splitlines(keepends=True)
+    track.write_text("".join([*lines[:-1], lines[-1].replace("1", "2", 1)]))
+    after = flat()
+    assert fingerprint.changed(before, after) == ["world.track#sha256"]
+    assert fingerprint.digest(before) != fingerprint.digest(after)
