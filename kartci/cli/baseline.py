@@ -42,8 +42,8 @@ def baseline_update(
     complete, current, pinned run is taken: a scenario whose last run failed or did not finish
     is refused, and with no names only the scenarios of the last run in OUT are taken. A metric
     whose spread exceeds its tolerance is flagged ill-conditioned."""
-    from kartci.runner.outdir import locked, read_manifest, valid_label
-    from kartci.runner.run import check_complete, reference_plots
+    from kartci.runner.outdir import check_inside, locked, read_manifest, valid_label
+    from kartci.runner.run import check_complete, check_finished, reference_plots
     from kartci.verdict import load, read_metrics, update
     from kartci.verdict.trace import trace_path, write_trace
 
@@ -59,6 +59,8 @@ def baseline_update(
             raise SpecError(f"{bad[0]}: not a scenario name (a folder directly in {out})")
         if not labels:
             raise SpecError(f"{out}: its last run had no scenarios")
+        check_inside(out, labels)
+        check_finished(out, labels)
         checked = []
         for label in labels:  # check everything before writing anything
             folder = out / label

@@ -69,7 +69,7 @@ def replay(
     from kartci.agents.kart import JOY
     from kartci.agents.params import CommandsController, ManualController
     from kartci.runner import Job, run_jobs
-    from kartci.runner.outdir import clear_reports, locked, write_manifest
+    from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
     from kartci.spec import load_scenario
     from kartci.spec.models import LogSource
 
@@ -93,6 +93,7 @@ def replay(
     err_console.print(f"replaying {chosen.topic} ({chosen.msgtype}, {chosen.count} messages) "
                       f"into {spec.name}/{name}", highlight=False, markup=False)
     with locked(out):
+        check_inside(out, [spec.name])
         clear_reports(out)
         write_manifest(out, "replay", [spec.name])
         finish(run_jobs([Job(spec, spec.name)], out, baselines_dir(baselines),

@@ -115,7 +115,7 @@ def run(
     from kartci.runner import shard as share
     from kartci.runner.jobs import Vary, default_suite
     from kartci.runner.merge import write_marker
-    from kartci.runner.outdir import clear_reports, locked, write_manifest
+    from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
 
     out = out_dir(out, "latest")
     if jobs is not None and jobs < 1:
@@ -148,6 +148,7 @@ def run(
     labels = [j.label for j in todo if j.repeat == 0]
     workers = jobs or (os.cpu_count() or 1 if executor is ExecutorKind.RAY else 1)
     with locked(out):  # an unusable or busy --out fails here, before any run
+        check_inside(out, labels)
         clear_reports(out)
         write_marker(out, index, total, labels)
         write_manifest(out, "run", labels)

@@ -30,6 +30,11 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+# every file write_all puts in OUT, by key; the one list (OUT clears these at a command's start)
+FILES = {"html": "report.html", "static": "report-static.html", "markdown": "summary.md",
+         "json": "summary.json", "junit": "junit.xml"}
+
+
 def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
     """summary.json: the exit code and, per scenario, its status, metric verdicts, criteria,
     problems and warnings."""
@@ -70,9 +75,7 @@ def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     and junit.xml in `out`. The old ones are removed
     first: a report that fails half-way leaves some missing, never an earlier one standing."""
     out.mkdir(parents=True, exist_ok=True)
-    paths = {"html": out / "report.html", "static": out / "report-static.html",
-             "markdown": out / "summary.md",
-             "json": out / "summary.json", "junit": out / "junit.xml"}
+    paths = {key: out / name for key, name in FILES.items()}
     for path in paths.values():
         path.unlink(missing_ok=True)
     from kartci.report.html import report_html
@@ -88,5 +91,5 @@ def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     return paths
 
 
-__all__ = ["COMPARE", "RUN", "Wording", "junit_xml", "report_html", "summary_json", "summary_md",
-           "write_all"]
+__all__ = ["COMPARE", "FILES", "RUN", "Wording", "junit_xml", "report_html", "summary_json",
+           "summary_md", "write_all"]

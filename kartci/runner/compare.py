@@ -10,6 +10,7 @@ from pathlib import Path
 from kartci.errors import SpecError
 from kartci.results import ScenarioResult, overlay
 from kartci.runner.jobs import REPEAT_PREFIX
+from kartci.runner.outdir import check_inside
 from kartci.runner.run import evaluate, failed_reason, scenario_folders
 from kartci.verdict import load, read_metrics
 from kartci.verdict.runs import ALPHA, Samples, compare_runs
@@ -37,6 +38,7 @@ def compare_outs(base_out: Path, head_out: Path, baselines: Path,
     base = {p.name: p for p in scenario_folders(base_out)}
     head = {p.name: p for p in scenario_folders(head_out)}
     for side, d, found in (("base", base_out, base), ("head", head_out, head)):
+        check_inside(d, found)  # judging marks a bad folder: never through a symlink
         if not found:  # else every metric of the other side would be NEW, and pass
             hint = (f"run `kartci report {d}` to score its logs" if any(d.glob("*/run.mcap"))
                     else "run `kartci run` first")

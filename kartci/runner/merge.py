@@ -14,8 +14,8 @@ from pathlib import Path
 from kartci.errors import SpecError
 from kartci.results import ScenarioResult
 from kartci.runner.gate import require_baselines
-from kartci.runner.outdir import valid_label
-from kartci.runner.run import STAGE_PREFIX, evaluate, scenario_folders
+from kartci.runner.outdir import check_inside, valid_label
+from kartci.runner.run import STAGE_PREFIX, UNFINISHED, evaluate, mark_failed, scenario_folders
 from kartci.verdict import read_json, write_json_atomic
 
 SHARD_NAME = "shard.json"
@@ -109,12 +109,18 @@ def merge(dirs: list[Path], out: Path, baselines: Path,
           strict: bool = False) -> list[ScenarioResult]:
     """Copy every shard's scenario folders into OUT and judge them as one run would. Labels
     and folders are checked first (shard artifacts are untrusted); nothing is written outside
-    OUT, and a folder is replaced only by a complete copy."""
+    OUT, and a folder is replaced only by a complete copy. Until then, OUT's older folder of
+    each label is marked unfinished: an interrupted merge leaves none passing as merged."""
     sources = _sources(dirs)
     for src in sources.values():
         if src is not None:
             _check_tree(src)
     out.mkdir(parents=True, exist_ok=True)
+    check_inside(out, sources)
+    for label, src in sources.items():
+        dst = out / label
+        if dst.is_dir() and (src is None or src.resolve() != dst.resolve()):
+            mark_failed(dst, label, UNFINISHED)
     root = out.resolve()
     results = []
     for label, src in sorted(sources.items()):

@@ -8,22 +8,27 @@ so a killed run never leaves OUT locked.
 `OUT/manifest.json` lists the labels of the last command that wrote scenario folders (run,
 replay, merge, report). OUT is reused (`reports/latest` by default), so it may also hold folders
 of older runs; `kartci baseline update OUT` with no names takes only the manifest's labels.
+
+No command reads or writes through a symlink that leaves OUT (`check_inside`): OUT may be an
+artifact someone else made, and a symlinked `OUT/<label>` would have kartci write elsewhere.
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 from kartci.errors import RunError, SpecError
+from kartci.report import FILES
 from kartci.verdict import read_json, write_json_atomic
 
 LOCK_NAME = ".kartci.lock"
 MANIFEST_NAME = "manifest.json"
-REPORT_NAMES = ("report.html", "summary.md", "summary.json", "junit.xml")
+REPORT_NAMES = tuple(FILES.values())  # what the report writers put in OUT
 _LABEL = re.compile(r"^[A-Za-z0-9_=@+,-][A-Za-z0-9_.=@+,-]*$")  # as jobs._safe makes them
 
 
@@ -42,7 +47,13 @@ def locked(out: Path) -> Iterator[None]:
         yield
         return
     out.mkdir(parents=True, exist_ok=True)
-    fd = os.open(out / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:  # O_NOFOLLOW: a symlinked lock file would have the pid written over its target
+        fd = os.open(out / LOCK_NAME, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0),
+                     0o644)
+    except OSError as err:
+        if err.errno != errno.ELOOP:
+            raise
+        raise SpecError(f"{out / LOCK_NAME}: a symlink; remove it") from None
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -65,6 +76,23 @@ def clear_reports(out: Path) -> None:
         (out / name).unlink(missing_ok=True)
 
 
+def check_inside(out: Path, labels: Iterable[str]) -> None:
+    """Refuse (SpecError) a label folder that is a symlink, or that holds a symlink resolving
+    outside OUT: reading or writing through it would touch files elsewhere. Every command that
+    uses label folders checks them before it changes anything."""
+    root = out.resolve()
+    for label in labels:
+        folder = out / label
+        if folder.is_symlink():
+            raise SpecError(f"{folder}: a symlink; kartci uses only folders inside {out} "
+                            "(replace it with the folder itself)")
+        for where, dirs, files in os.walk(folder):  # does not descend into symlinked folders
+            for name in (*dirs, *files):
+                path = Path(where, name)
+                if path.is_symlink() and not path.resolve().is_relative_to(root):
+                    raise SpecError(f"{path}: a symlink leading outside {out}; remove it")
+
+
 def write_manifest(out: Path, command: str, labels: list[str]) -> None:
     """manifest.json in OUT: the command that wrote it and its scenarios' labels, which later
     commands use when given no names."""
@@ -74,6 +102,8 @@ def write_manifest(out: Path, command: str, labels: list[str]) -> None:
 def read_manifest(out: Path) -> list[str]:
     """The labels of the last run in OUT (SpecError when OUT has no usable manifest)."""
     path = out / MANIFEST_NAME
+    if path.is_symlink():
+        raise SpecError(f"{path}: a symlink; remove it, or name the scenarios to use")
     if not path.is_file():
         raise SpecError(f"{out}: no {MANIFEST_NAME} (not written by `kartci run`, `replay`, "
                         "`merge` or `report`); name the scenarios to use")
@@ -88,6 +118,6 @@ def read_manifest(out: Path) -> list[str]:
 
 def manifest_labels(out: Path) -> list[str] | None:
     """The manifest's labels, or None when OUT has no manifest (a folder of an older kartci)."""
-    if not (out / MANIFEST_NAME).is_file():
+    if not (out / MANIFEST_NAME).is_file() and not (out / MANIFEST_NAME).is_symlink():
         return None
     return read_manifest(out)

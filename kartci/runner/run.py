@@ -28,7 +28,7 @@ from kartci.logs import tables
 from kartci.project import did_you_mean
 from kartci.report.data import PlotContext
 from kartci.results import Plots, ScenarioResult, one_line
-from kartci.runner.outdir import manifest_labels
+from kartci.runner.outdir import check_inside, manifest_labels
 from kartci.sim import simulate
 from kartci.sim.session import describe
 from kartci.spec import Scenario
@@ -105,7 +105,8 @@ def run_one(scenario: Scenario, out: Path,
         _commit(stage, folder)
     except BaseException as err:
         keep_outputs(stage, folder)
-        mark_failed(folder, scenario.name, failure_text(err), err)
+        if isinstance(err, Exception):  # an interrupt (Ctrl-C) keeps the unfinished mark
+            mark_failed(folder, scenario.name, failure_text(err), err)
         raise
     finally:
         shutil.rmtree(stage, ignore_errors=True)
@@ -220,16 +221,32 @@ def reference_plots(folder: Path) -> Plots | None:
     return plots(folder, scenario)
 
 
-def failed_reason(folder: Path) -> str | None:
-    """Why a folder's last run failed, or None when it is not marked failed."""
+def _marked(folder: Path) -> str | None:
+    """The reason in a folder's failure mark ("" when unreadable), None when it has none."""
     marker = folder / ERROR_NAME
     if not marker.exists() and not marker.is_symlink():
         return None
     try:
-        reason = read_json(marker).get("error", "")
+        return str(read_json(marker).get("error", ""))
     except (OSError, ValueError, AttributeError):
-        reason = ""
-    return f"the last run failed: {one_line(str(reason))}".rstrip(": ")
+        return ""
+
+
+def failed_reason(folder: Path) -> str | None:
+    """Why a folder's last run failed, or None when it is not marked failed."""
+    reason = _marked(folder)
+    return None if reason is None else f"the last run failed: {one_line(reason)}".rstrip(": ")
+
+
+def check_finished(out: Path, labels: list[str]) -> None:
+    """Refuse (SpecError, naming them all) labels still marked unfinished: the command that
+    selected them stopped before their run completed, so their outputs are an older run's."""
+    late = [label for label in labels if _marked(out / label) == UNFINISHED]
+    if late:
+        one = len(late) == 1
+        raise SpecError(f"{', '.join(late)}: not finished in {out} (the command that selected "
+                        f"{'it' if one else 'them'} was interrupted); run {'it' if one else 'them'}"
+                        " again")
 
 
 def check_complete(folder: Path) -> None:
@@ -368,6 +385,7 @@ def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:
         for p in out.glob(pattern)}
     if not names:
         raise LogError(f"{out}: no <scenario>/{LOG_NAME} logs found")
+    check_inside(out, names)
     return [_rescore_one(out / name, baselines) for name in sorted(names)]
 
 

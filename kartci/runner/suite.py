@@ -10,6 +10,7 @@ from kartci.runner import conditioning, costs
 from kartci.runner.executors import Event, Listener, execute
 from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome, Vary
 from kartci.runner.kinds import ExecutorKind
+from kartci.runner.run import UNFINISHED, mark_failed
 
 
 def _ignore(_: Event) -> None:
@@ -22,8 +23,15 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
              on_event: Listener | None = None) -> list[ScenarioResult]:
     """A run that fails is an ERROR result for its label only (a failed repeat included);
     earlier outputs of a failed run stay in place, marked failed. `strict`: a scenario without
-    a baseline, or with a metric its baseline lacks, fails (see runner.gate)."""
+    a baseline, or with a metric its baseline lacks, fails (see runner.gate).
+
+    Every job's folder is marked unfinished before the first run starts, and only that job's
+    completed run clears the mark: if this command is interrupted, no older result in OUT can
+    pass for one of this command's (report, compare and baseline update refuse marked ones)."""
     emit = on_event or _ignore
+    for job in jobs:
+        if (out / job.folder).is_dir():
+            mark_failed(out / job.folder, job.spec.name, UNFINISHED)
     ctx = Context(out, baselines, timeout_s, strict)
     outcomes: dict[str, Outcome] = {}
     for outcome in execute(costs.order(jobs), ctx, emit, workers, executor, ray_address):
