@@ -31,6 +31,16 @@ def _warning_line(message: Warning | str, category: type[Warning], filename: str
     return f"kartci: warning: {message}\n"
 
 
+def _interrupted(err: BaseException) -> bool:
+    """True when a KeyboardInterrupt is among the causes of `err`."""
+    seen: BaseException | None = err
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
+
+
 def main() -> None:
     """Entry point: every KartciError becomes one line on stderr and exit code 2."""
     warnings.formatwarning = _warning_line
@@ -46,6 +56,10 @@ def main() -> None:
     except KeyboardInterrupt:
         print("kartci: interrupted", file=sys.stderr)
         sys.exit(130)
+    except SystemExit as exit_:
+        if _interrupted(exit_):  # typer turns Ctrl-C into a silent exit 130
+            print("kartci: interrupted", file=sys.stderr)
+        raise
     except Exception as err:  # a bug: still one line, and exit 2, never CI's "regression" 1
         if os.environ.get("KARTCI_TRACEBACK"):
             raise

@@ -88,6 +88,7 @@ def test_an_interrupted_run_leaves_no_older_result_to_promote(tmp_path: Path,
                                               "--baselines", str(baselines)], proj)
     assert stopped.returncode == 130, stopped.stderr
     assert "Traceback" not in stopped.stdout + stopped.stderr
+    assert stopped.stderr.splitlines()[-1] == "kartci: interrupted"  # typer would exit silently
     assert not [name for name in FILES.values() if (out / name).exists()]
     assert (out / "q" / "run.mcap").is_file()  # the older outputs stay, marked
 
