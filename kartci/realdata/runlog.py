@@ -10,6 +10,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from kartci.runner.outdir import check_inside
 from kartci.runner.run import (
     ERROR_NAME,
     LOG_NAME,
@@ -25,7 +26,8 @@ from kartci.verdict import write_json_atomic
 def write_result(folder: Path, name: str, make_log: Callable[[Path], object],
                  facts: dict[str, Any]) -> None:
     """`make_log(path)` writes the run log; it is scored into metrics.json and, with `facts`
-    as run.json, moved into `folder`."""
+    as run.json, moved into `folder` (never through a symlink leading out of OUT)."""
+    check_inside(folder.parent, [folder.name])
     folder.mkdir(parents=True, exist_ok=True)
     mark_failed(folder, name, UNFINISHED)
     stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=folder))

@@ -175,3 +175,21 @@ def test_no_command_follows_a_symlink_out_of_out(command: str, one_run: Path, tm
                      one_run / "q" / "run.mcap")
     assert "a symlink leading outside" in line
     assert _tree(outside) == before
+
+
+def test_score_does_not_write_through_a_symlinked_folder(one_run: Path, tmp_path: Path,
+                                                          baselines: Path) -> None:
+    """`kartci score LOG --out OUT` writes OUT/<profile>: a symlink there is refused, as for
+    every command that writes label folders; the folder it points to stays as it was."""
+    out = tmp_path / "scored"
+    log = one_run / "q" / "run.mcap"
+    p = kartci("score", log, "--out", out, "--baselines", baselines)
+    assert p.returncode == 0, p.stdout + p.stderr
+    (folder,) = [f for f in out.iterdir() if f.is_dir()]
+    outside = tmp_path / "outside"
+    os.replace(folder, outside)
+    folder.symlink_to(outside, target_is_directory=True)
+    before = _tree(outside)
+    line = _one_line(kartci("score", log, "--out", out, "--baselines", baselines), folder)
+    assert "a symlink" in line
+    assert _tree(outside) == before
