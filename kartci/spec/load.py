@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import json
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -174,12 +175,53 @@ def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str],
                                                                  allow_outside))
             else:  # raises: not on the search path
                 project.current().world_file(str(track), allow_outside)
-    for agent in (data.get("agents") or {}).values() if isinstance(data.get("agents"),
-                                                                     dict) else ():
-        controller = agent.get("controller") if isinstance(agent, dict) else None
-        source = controller.get("source") if isinstance(controller, dict) else None
+    agents = data.get("agents")
+    for name, agent in agents.items() if isinstance(agents, dict) else ():
+        if isinstance(agent, dict):
+            _check_run_time_files(agent, f"agents.{clip(str(name), 80)}", allow_outside)
+
+
+def _check_run_time_files(agent: dict[str, Any], where: str, allow_outside: bool) -> None:
+    """Files an agent reads when it runs (its controller's source log and joystick mapping,
+    a node's map) become absolute paths checked here, where `allow_outside` is known, as
+    world.track is: a worker then reads only what passed. A log typed on the command line
+    (`kartci replay LOG`, `score`, `extract`) is the user's explicit choice and is not checked;
+    it does not come through here."""
+    proj = project.current()
+    controller = agent.get("controller")
+    if isinstance(controller, dict):
+        source = controller.get("source")
         if isinstance(source, dict) and isinstance(source.get("log"), str):
-            source["log"] = str(Path(source["log"]).resolve())
+            # relative to the scenario file (made absolute by _resolve_agent) or, from --set,
+            # to the working directory
+            source["log"] = str(proj.contained(Path(source["log"]),
+                                               f"{where}.controller.source.log", allow_outside))
+        if isinstance(controller.get("mapping"), str):
+            controller["mapping"] = _mapping(controller["mapping"], f"{where}.controller.mapping",
+                                             proj, allow_outside)
+    nodes = agent.get("nodes")
+    for node, params in nodes.items() if isinstance(nodes, dict) else ():
+        if isinstance(params, dict) and isinstance(params.get("map"), str):
+            # a node's map (the localization's PLY): on the world path, or absolute
+            given = Path(params["map"])
+            what = f"{where}.nodes.{clip(str(node), 80)}.map"
+            params["map"] = str(proj.contained(given, what, allow_outside) if given.is_absolute()
+                                else proj.world_file(str(given), allow_outside))
+
+
+def _mapping(value: str, what: str, proj: project.Project, allow_outside: bool) -> str:
+    """A joystick mapping given by path (kartci.agents.joy.load_mapping's rule: ending in
+    .yaml / .yml or holding a separator) as its absolute, checked path; a name stays a name
+    (it reads better in `kartci show`), its file on the model path checked for a link out."""
+    if value.endswith((".yaml", ".yml")) or "/" in value or os.sep in value:
+        return str(proj.contained(Path(value).expanduser(), what, allow_outside))
+    for folder in proj.model_path:
+        for suffix in (".yaml", ".yml"):
+            found = folder / "gokart" / "joy" / f"{value}{suffix}"
+            if found.is_file():
+                proj.contained(found, what, allow_outside)
+                return value
+    return value  # unknown: the agent names the known mappings when it starts
 
 
 def apply_override(data: dict[str, Any], assignment: str) -> None:
