@@ -43,7 +43,7 @@ def read_ply(path: Path) -> Array:
         data = read_bytes(path, PLY_MAX_BYTES)
     except (OSError, ValueError) as err:  # RefusedFileError: not regular, too large
         reason = err.strerror if isinstance(err, OSError) and err.strerror else err
-        raise LogError(f"{path}: cannot read the map ({reason})") from err
+        raise LogError(f"{path}: cannot read the map: {reason}") from err
     end = data.find(b"end_header\n")
     if not data.startswith(b"ply") or end < 0:
         raise LogError(f"{path}: not a PLY file (no 'ply' ... 'end_header')")

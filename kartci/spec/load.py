@@ -18,7 +18,9 @@ from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
 from kartci.spec.dispatch import ParamsError, with_allowed_keys
 from kartci.spec.models import Scenario, WorldParams, unit_of
-from kartci.spec.yamlio import clip, parse_value, preview, read_yaml
+from kartci.spec.yamlio import Mark, clip, parse_value, preview, read_yaml_marked
+
+Marks = dict[str, Mark]  # dotted key -> where it was written (yamlio.read_yaml_marked)
 
 
 def project_root() -> Path:
@@ -66,8 +68,26 @@ def scenario_catalogue() -> list[ScenarioEntry]:
     return out
 
 
-def _read_yaml(path: Path) -> dict[str, Any]:
-    return read_yaml(path)
+def _read_yaml(path: Path, marks: Marks, prefix: str = "", keep: tuple[str, ...] = ()
+               ) -> dict[str, Any]:
+    """A world, model or scenario file, its keys' marks grafted into `marks` under `prefix`
+    (`world`, `agents.kart0.model`): the marks of what it replaces go, those of the keys in
+    `keep` (given beside `from:` in the scenario) stay."""
+    data, found = read_yaml_marked(path)
+    if prefix:
+        _forget(marks, prefix, keep)
+        marks.update({f"{prefix}.{k}": m for k, m in found.items()
+                      if k.partition(".")[0] not in keep})
+    else:
+        marks.update(found)
+    return data
+
+
+def _forget(marks: Marks, key: str, keep: tuple[str, ...] = ()) -> None:
+    """Drop the marks of everything under `key` (a --set or a file replaced it), but `keep`."""
+    for k in [k for k in marks if k.startswith(f"{key}.")
+              and k[len(key) + 1:].partition(".")[0] not in keep]:
+        del marks[k]
 
 
 def scenario_path(name: str | Path) -> Path:
@@ -77,31 +97,33 @@ def scenario_path(name: str | Path) -> Path:
     return project.current().find_scenario(name)
 
 
-def _resolve_refs(data: dict[str, Any], path: Path, allow_outside: bool) -> None:
+def _resolve_refs(data: dict[str, Any], path: Path, allow_outside: bool, marks: Marks) -> None:
     """World and model names become their files' contents; data files named inside them become
     absolute paths found on the project's search path (never outside it, nor outside the
     project and kartci's data through an absolute path or a symlink, unless `allow_outside`)."""
     proj = project.current()
-    _resolve_world(data, proj, allow_outside)
+    _resolve_world(data, proj, allow_outside, marks)
     agents = data.get("agents")
     if not isinstance(agents, dict):
         return
     for name, agent in agents.items():
         if isinstance(agent, dict):
-            _resolve_agent(agent, proj, path, allow_outside)
+            _resolve_agent(agent, proj, path, allow_outside, (marks, f"agents.{name}.model"))
             _check_urdf(agent, f"agents.{clip(str(name), 80)}", proj, allow_outside)
 
 
-def _resolve_world(data: dict[str, Any], proj: project.Project, allow_outside: bool) -> None:
+def _resolve_world(data: dict[str, Any], proj: project.Project, allow_outside: bool,
+                   marks: Marks) -> None:
     """`world: <name>` or `world: {from: <name>, ...}` becomes the world file's keys (with those
     given replacing its own), and a relative track file its path on the search path."""
     world = data.get("world")
     if isinstance(world, str):
-        data["world"] = _read_yaml(proj.find_world(world, allow_outside))
+        data["world"] = _read_yaml(proj.find_world(world, allow_outside), marks, "world")
     elif isinstance(world, dict) and isinstance(world.get("from"), str):
         # `world: {from: winti/hall, obstacles: [...]}`: a world file with keys replaced
-        data["world"] = {**_read_yaml(proj.find_world(world["from"], allow_outside)),
-                         **{k: v for k, v in world.items() if k != "from"}}
+        given = {k: v for k, v in world.items() if k != "from"}
+        data["world"] = {**_read_yaml(proj.find_world(world["from"], allow_outside), marks,
+                                      "world", tuple(given)), **given}
     world = data.get("world")
     if isinstance(world, dict) and isinstance(world.get("track"), str):
         track = world["track"]
@@ -120,14 +142,14 @@ def load_world(name: str) -> tuple[WorldParams, Path]:
     proj = project.current()
     path = proj.find_world(name)
     data: dict[str, Any] = {"world": name}
-    _resolve_world(data, proj, allow_outside=False)
+    _resolve_world(data, proj, allow_outside=False, marks={})
     world = dispatch(data)["world"]
     assert isinstance(world, WorldParams)  # dispatch validated it by its kind
     return world, path
 
 
 def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path,
-                   allow_outside: bool) -> None:
+                   allow_outside: bool, marked: tuple[Marks, str]) -> None:
     """`model: <name>` becomes the model's parameters (its URDF a path on the search path), and
     a controller's relative source log a path relative to the scenario file at `path`."""
     model = agent.get("model")
@@ -137,7 +159,7 @@ def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path,
         given = {k: v for k, v in model.items() if k != "from"}
         model = model["from"]
     if isinstance(model, str):
-        params = _read_yaml(proj.find_model(model, allow_outside))
+        params = _read_yaml(proj.find_model(model, allow_outside), *marked, tuple(given))
         urdf = params.get("urdf")
         if isinstance(urdf, str) and not Path(urdf).is_absolute():
             params["urdf"] = str(proj.model_file(f"{model}/{urdf}", allow_outside))
@@ -241,15 +263,16 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
     node[parts[-1]] = parse_value(raw, f"--set {key}")
 
 
-def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
+def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str], marks: Marks,
               prefix: tuple[str | int, ...] = ()) -> str:
-    """The first validation error as `file: dotted.key (from --set): problem (got value)`;
-    the value only when it came from `--set`."""
+    """The first validation error as `file:LINE:COLUMN: dotted.key: problem` for a value from
+    a file (the key as written in that file: a world's, a model's), or `file: dotted.key
+    (from --set): problem (got value)`; the value only when it came from `--set`."""
     first = errors[0]
     parts = [str(p) for p in (*prefix, *first.get("loc", ()))]
     # a discriminated union (a line course) puts its tag into the location: not a key
-    loc = clip(".".join(p for p in parts if not p.startswith(("function-", "tagged"))
-                        and p not in COURSE_TAGS))
+    keys = [p for p in parts if not p.startswith(("function-", "tagged")) and p not in COURSE_TAGS]
+    head, loc = _place(keys, path, overrides, marks)
     source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
     msg = clip(first["msg"].removeprefix("Value error, "))
     if first["type"] in BOUNDS:
@@ -267,7 +290,22 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str],
                                                   "unknown_plugin") or isinstance(
         got, dict) else f" (got {preview(got, 60)})"
     more = f" [+{len(errors) - 1} more]" if len(errors) > 1 else ""
-    return f"{path}: {loc or '<top>'}{source}: {msg}{shown}{more}"
+    return f"{head}: {clip(loc) or '<top>'}{source}: {msg}{shown}{more}"
+
+
+def _place(keys: list[str], path: Path, overrides: list[str], marks: Marks) -> tuple[str, str]:
+    """Where an error at `keys` was written, `file:LINE:COLUMN`, and its key in that file:
+    the mark of the longest recorded prefix of `keys`, unless a `--set` gave the value (a
+    `--set` at least as deep as that prefix), when it is the scenario's `path` and its key."""
+    loc = ".".join(keys)
+    given = max((len(k) for o in overrides if loc == (k := o.split("=")[0].strip())
+                 or loc.startswith(f"{k}.")), default=-1)
+    for n in range(len(keys), 0, -1):
+        mark = marks.get(".".join(keys[:n]))
+        if mark is not None and len(".".join(keys[:n])) > given:
+            where, line, column, inner = mark
+            return f"{where}:{line}:{column}", ".".join([inner, *keys[n:]])
+    return str(path), loc
 
 
 COURSE_TAGS = ("straight", "circle")
@@ -306,12 +344,15 @@ def scenario_loader(name: str | Path, *, allow_outside_paths: bool = False
     if path != Path(name):  # found by name in a scenario folder: maybe a symlink out of it
         project.current().contained(path, f"scenario {clip(str(name), 80)!r}",
                                     allow_outside_paths)
-    data = _read_yaml(path)
+    marks: Marks = {}
+    data = _read_yaml(path, marks)
     data.setdefault("name", path.stem)
-    _resolve_refs(data, path, allow_outside_paths)  # what _validated does first: a no-op again
+    # what _validated does first: a no-op again
+    _resolve_refs(data, path, allow_outside_paths, marks)
 
     def load(overrides: Sequence[str]) -> Scenario:
-        return _validated(copy.deepcopy(data), path, list(overrides), allow_outside_paths)
+        return _validated(copy.deepcopy(data), path, list(overrides), allow_outside_paths,
+                          dict(marks))
 
     return load
 
@@ -324,22 +365,27 @@ def with_overrides(scenario: Scenario, overrides: Sequence[str], *,
         return scenario
     data = json.loads(scenario.model_dump_json())
     return _validated(data, Path(f"scenario {scenario.name}"), list(overrides),
-                      allow_outside_paths)
+                      allow_outside_paths, {})
 
 
 def _validated(data: dict[str, Any], path: Path, overrides: list[str],
-               allow_outside: bool) -> Scenario:
-    _resolve_refs(data, path, allow_outside)
+               allow_outside: bool, marks: Marks) -> Scenario:
+    """`data` with the overrides applied, validated; `marks` (where each key was written) name
+    the file and line of a bad value."""
+    _resolve_refs(data, path, allow_outside, marks)
     for assignment in overrides:
         apply_override(data, assignment)
-        _resolve_refs(data, path, allow_outside)  # `--set world=line_lab/circle` names a file
+        _forget(marks, assignment.partition("=")[0].strip())  # what it replaced
+        # `--set world=line_lab/circle` names a file
+        _resolve_refs(data, path, allow_outside, marks)
     _resolve_command_line_paths(data, overrides, allow_outside)
     try:
         return Scenario.model_validate(data)
     except ParamsError as err:
-        raise SpecError(_one_line(err.errors, path, overrides, err.loc)) from err
+        raise SpecError(_one_line(err.errors, path, overrides, marks, err.loc)) from err
     except ValidationError as err:
-        raise SpecError(_one_line(with_allowed_keys(Scenario, err), path, overrides)) from err
+        raise SpecError(_one_line(with_allowed_keys(Scenario, err), path, overrides,
+                                  marks)) from err
     except (ArithmeticError, RecursionError) as err:  # a validator's arithmetic on odd values
         raise SpecError(f"{path}: a value is out of range ({clip(str(err))})") from err
 
