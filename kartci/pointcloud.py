@@ -13,9 +13,13 @@ from typing import Any
 import numpy as np
 
 from kartci.atomic import write_bytes_atomic
+from kartci.boundedio import read_bytes
 from kartci.errors import LogError
 
 Array = np.ndarray
+# The hall's map (32 x 20 m) is 1 MB, 12 bytes a point; 256 MiB (22 M float32 points) holds a
+# map of an area 250 times larger, an outdoor circuit's, and still stops a runaway file.
+PLY_MAX_BYTES = 256 << 20
 PLY_TYPES = {"char": "i1", "uchar": "u1", "short": "<i2", "ushort": "<u2", "int": "<i4",
              "uint": "<u4", "float": "<f4", "double": "<f8", "int8": "i1", "uint8": "u1",
              "int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4",
@@ -35,10 +39,11 @@ def write_ply(path: Path, xyz: Array, comment: str = "") -> None:
 def read_ply(path: Path) -> Array:
     """The x y z (N, 3) float64 of a PLY file's vertices; a LogError naming the file when it is
     not a PLY kartci can read (binary big-endian, list properties before xyz)."""
-    try:
-        data = path.read_bytes()
-    except OSError as err:
-        raise LogError(f"{path}: cannot read the map ({err.strerror or err})") from err
+    try:  # bounded: a FIFO named as the map would hang, /dev/zero fill the memory
+        data = read_bytes(path, PLY_MAX_BYTES)
+    except (OSError, ValueError) as err:  # RefusedFileError: not regular, too large
+        reason = err.strerror if isinstance(err, OSError) and err.strerror else err
+        raise LogError(f"{path}: cannot read the map: {reason}") from err
     end = data.find(b"end_header\n")
     if not data.startswith(b"ply") or end < 0:
         raise LogError(f"{path}: not a PLY file (no 'ply' ... 'end_header')")

@@ -21,10 +21,12 @@ from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from kartci.boundedio import RefusedFileError, read_bytes
 from kartci.errors import SpecError
 
 BUILTIN = Path(__file__).resolve().parent / "data"
 CONFIG_NAMES = ("kartci.toml", "pyproject.toml")
+CONFIG_MAX_BYTES = 4 << 20  # a pyproject.toml; large real ones (with lock-like tables) are < 100 KB
 # A baseline tolerance may be this many times its metric's default before it counts as loosened:
 # the same margin as the spread rule (3 x spread), wide enough for a default computed at an older
 # baseline value (the committed baselines reach 1.8x), far below a tolerance set to get a PR green.
@@ -113,7 +115,7 @@ class Project:
         `allow_outside` (the user's `--allow-outside-paths`)."""
         try:
             real = path.resolve()
-        except (OSError, RuntimeError) as err:  # a symlink loop, a name too long
+        except (OSError, RuntimeError, ValueError) as err:  # a loop, a long name, a NUL
             raise SpecError(f"{what}: {_shown(path)}: cannot be resolved ({err})") from err
         if allow_outside or any(real.is_relative_to(root) for root in self.data_roots):
             return real
@@ -219,10 +221,12 @@ def _config_in(folder: Path) -> tuple[Path, dict[str, object]] | None:
     """The kartci table of a folder's kartci.toml or pyproject.toml, if it has one."""
     for name in CONFIG_NAMES:
         path = folder / name
-        if not path.is_file():
+        if not path.exists():  # not is_file(): a FIFO or a folder here is named, not skipped
             continue
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        try:  # bounded: a FIFO would hang the read, a 1 GB file fill the memory
+            data = tomllib.loads(read_bytes(path, CONFIG_MAX_BYTES).decode("utf-8"))
+        except RefusedFileError as err:
+            raise SpecError(f"{path}: {err}") from err
         except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
             raise SpecError(f"{path}: cannot read ({err})") from err
         if name == "kartci.toml":

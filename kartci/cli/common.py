@@ -65,8 +65,9 @@ OutOpt = Annotated[Path | None, typer.Option(
 BaselinesOpt = Annotated[Path | None, typer.Option(
     help="Folder of baseline files (default: the project's baselines/).")]
 AllowOutsideOpt = Annotated[bool, typer.Option(
-    "--allow-outside-paths", help="Let track, world and model files (absolute paths, '..', "
-    "symlinks) lie outside the project and kartci's data.")]
+    "--allow-outside-paths", help="Let data files (tracks, worlds, models, maps, joystick "
+    "mappings, a scenario's or profile's log and track; absolute paths, '..', symlinks) lie "
+    "outside the project and kartci's data.")]
 StrictOpt = Annotated[bool | None, typer.Option(
     "--strict/--no-strict", help="Fail a scenario without a baseline, with a metric its "
     "baseline lacks, with a stale baseline (accepted from another scenario) or a tolerance "

@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from kartci.cli.common import (
+    AllowOutsideOpt,
     BaselinesOpt,
     OutOpt,
     SetOpt,
@@ -28,7 +29,8 @@ ProfileOpt = Annotated[Path | None, typer.Option(
 
 @app.command("score")
 def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
-              baselines: BaselinesOpt = None, strict: StrictOpt = None) -> None:
+              baselines: BaselinesOpt = None, strict: StrictOpt = None,
+              allow_outside_paths: AllowOutsideOpt = False) -> None:
     """Score a recorded log with the same metric code as a run (duration, distance, speeds;
     laps, lap times and cross-track error with a track; localization error with an estimate),
     write the same reports and judge it against baselines/<profile name>.json."""
@@ -40,7 +42,7 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
     with locked(out):
         clear_reports(out)
         base = baselines_dir(baselines)
-        result = score_log(log, profile, out, base)
+        result = score_log(log, profile, out, base, allow_outside_paths)
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "score", [result.name])
@@ -61,6 +63,7 @@ def simreal_cmd(
     out: OutOpt = None,
     baselines: BaselinesOpt = None,
     strict: StrictOpt = None,
+    allow_outside_paths: AllowOutsideOpt = False,
 ) -> None:
     """Replay a log's commands into the simulated robot from the log's state, over the whole
     log and in windows re-started every --window-s, and report the divergence: APE / RPE (as
@@ -74,7 +77,8 @@ def simreal_cmd(
     with locked(out):
         clear_reports(out)
         base = baselines_dir(baselines)
-        result = simreal_log(log, profile, scenario, set_ or [], window_s, out, base)
+        result = simreal_log(log, profile, scenario, set_ or [], window_s, out, base,
+                             allow_outside_paths)
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "simreal", [result.name])

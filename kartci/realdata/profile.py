@@ -12,6 +12,7 @@ from typing import Any
 
 from pydantic import Field, ValidationError
 
+from kartci import project
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
 from kartci.spec.models import Criterion, Frozen
@@ -86,8 +87,10 @@ class Profile(Frozen):
         return out
 
 
-def load_profile(path: Path) -> Profile:
-    """A profile file, validated; a SpecError naming the file and the key otherwise."""
+def load_profile(path: Path, allow_outside: bool = False) -> Profile:
+    """A profile file, validated; a SpecError naming the file and the key otherwise. Its track
+    must lie inside the project or kartci's data, as a scenario's does, unless
+    `allow_outside`: the profile is the user's choice, the file it names may not be."""
     data = read_yaml(path)  # as scenario files are: a small regular file, no duplicate keys
     data.setdefault("name", re.sub(r"[^a-z0-9_]", "_", path.stem.lower()))
     try:
@@ -96,9 +99,10 @@ def load_profile(path: Path) -> Profile:
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"]) or "(top)"
         raise SpecError(f"{path}: {where}: {first['msg']}") from err
-    if profile.track is not None and not Path(profile.track).is_absolute():
-        profile = profile.model_copy(update={"track": str((path.parent / profile.track)
-                                                          .resolve())})
+    if profile.track is not None:  # relative to the profile file
+        track = project.current().contained(path.parent / profile.track, f"{path}: track",
+                                            allow_outside)
+        profile = profile.model_copy(update={"track": str(track)})
     return profile
 
 
@@ -137,7 +141,9 @@ def check_profile(log: Path, profile: Profile) -> dict[str, TopicInfo]:
     return out
 
 
-def resolve_profile(log: Path, path: Path | None) -> tuple[Profile, dict[str, TopicInfo]]:
+def resolve_profile(log: Path, path: Path | None, allow_outside: bool = False
+                    ) -> tuple[Profile, dict[str, TopicInfo]]:
     """The profile (from its file, else guessed from the log) and the log's topic per role."""
-    profile = load_profile(path) if path is not None else auto_profile(log, topics(log))
+    profile = (load_profile(path, allow_outside) if path is not None
+               else auto_profile(log, topics(log)))
     return profile, check_profile(log, profile)

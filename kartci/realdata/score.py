@@ -15,11 +15,13 @@ from kartci.results import ScenarioResult
 from kartci.runner.run import evaluate
 
 
-def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path) -> ScenarioResult:
+def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
+              allow_outside_paths: bool = False) -> ScenarioResult:
     """Import `log` into OUT/<profile name>/run.mcap, compute metrics.json from it and judge it
-    against `baselines/<profile name>.json`. Bad input (profile, missing topics) raises before
-    anything is written."""
-    profile, info = resolve_profile(log, profile_path)
+    against `baselines/<profile name>.json`. Bad input (profile, missing topics, a profile's
+    track outside the project without `allow_outside_paths`) raises before anything is
+    written."""
+    profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
     folder = out / profile.name
     write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst),
@@ -29,12 +31,12 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path) 
 
 def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
                 overrides: Sequence[str], window_s: float, out: Path,
-                baselines: Path) -> ScenarioResult:
+                baselines: Path, allow_outside_paths: bool = False) -> ScenarioResult:
     """The log's commands replayed into the sim (whole and windowed) into
     OUT/<profile name>_simreal/, scored for divergence and judged like a run."""
     from kartci.realdata import simreal
 
-    profile, info = resolve_profile(log, profile_path)
+    profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
     setup = simreal.sim_setup(profile, scenario, overrides)
     simreal.check_commands(setup, profile, types)

@@ -13,6 +13,7 @@ from kartci.sim.line_lab import COURSE_TOPIC, path_message
 from kartci.sim.markers import CUBE, TRACK_MARKERS_TOPIC, array, marker, track_markers
 from kartci.sim.world import World
 from kartci.spec.models import Pose2D, TrackWorldParams, WorldParams
+from kartci.spec.yamlio import TRACK_MAX_BYTES, read_text_bounded
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, load_track
 
 
@@ -50,7 +51,7 @@ class TrackWorld(World):
         left, right = (edge[::step] for edge in self.track.bounds())
         return [(COURSE_TOPIC, path_message(xy)),
                 (TRACK_TOPIC, msg("std_msgs/msg/String",
-                                  data=self.track_file.read_text(encoding="utf-8"))),
+                                  data=read_text_bounded(self.track_file, TRACK_MAX_BYTES))),
                 (OBSTACLES_TOPIC, obstacle_markers(self.spec.obstacles)),
                 (TRACK_MARKERS_TOPIC, track_markers(xy, left, right))]
 

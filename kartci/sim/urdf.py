@@ -14,6 +14,9 @@ from numpy.typing import NDArray
 
 from kartci.atomic import write_text_atomic
 from kartci.errors import SpecError
+from kartci.spec.yamlio import read_bytes_bounded, read_text_bounded
+
+URDF_MAX_BYTES = 8 << 20  # a URDF (meshes are files of their own); the shipped ones are 6 KB
 
 
 def urdf_path(model: Any) -> Path:
@@ -23,6 +26,20 @@ def urdf_path(model: Any) -> Path:
 
     path = Path(str(model.urdf))
     return path if path.is_absolute() else project.current().model_file(f"{model.kind}/{path}")
+
+
+def _parsed(path: Path) -> ET.Element:
+    """The URDF's root element, read as a bounded regular file (a FIFO or /dev/zero named as a
+    URDF would hang or fill the memory); a SpecError naming the file otherwise."""
+    try:
+        return ET.fromstring(read_bytes_bounded(path, URDF_MAX_BYTES))
+    except ET.ParseError as err:  # expat's message gives the place, not the text
+        raise SpecError(f"{path}: cannot read URDF ({err})") from err
+
+
+def urdf_text(path: Path) -> str:
+    """The URDF's text, read within URDF_MAX_BYTES."""
+    return read_text_bounded(path, URDF_MAX_BYTES)
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> NDArray[np.float64]:
@@ -37,12 +54,8 @@ def rpy_matrix(roll: float, pitch: float, yaw: float) -> NDArray[np.float64]:
 def fixed_frames(path: Path, root: str = "base_link") -> dict[str, tuple[NDArray[np.float64],
                                                                           NDArray[np.float64]]]:
     """Every link reachable from `root` through fixed joints: (position, rotation) in root."""
-    try:
-        tree = ET.parse(path)
-    except (OSError, ET.ParseError) as err:
-        raise SpecError(f"{path}: cannot read URDF ({err})") from err
     children: dict[str, list[tuple[str, NDArray[np.float64], NDArray[np.float64]]]] = {}
-    for joint in tree.getroot().iter("joint"):
+    for joint in _parsed(path).iter("joint"):
         if joint.get("type") != "fixed":
             continue
         parent = joint.find("parent")
@@ -74,11 +87,7 @@ def physics_urdf(path: Path) -> Path:
     dropped here and their frames come from `fixed_frames` instead. Written once to a cache
     folder, named by content.
     """
-    try:
-        tree = ET.parse(path)
-    except (OSError, ET.ParseError) as err:
-        raise SpecError(f"{path}: cannot read URDF ({err})") from err
-    root = tree.getroot()
+    root = _parsed(path)
     links = {link.get("name"): link for link in root.findall("link")}
     for joint in root.findall("joint"):
         child = joint.find("child")
@@ -113,7 +122,7 @@ def robot_descriptions(scenario: Any) -> list[tuple[str, Any]]:
     for name, spec in scenario.agents.items():
         if getattr(spec.model, "urdf", None) is None:
             continue
-        text = urdf_path(spec.model).read_text(encoding="utf-8")
+        text = urdf_text(urdf_path(spec.model))
         out.append((f"/{name}/robot_description",
                     msg("std_msgs/msg/String", data=prefixed_urdf(text, name))))
     return out

@@ -35,6 +35,7 @@ class Frozen(BaseModel):
 Length_m = Annotated[float, Field(ge=-1e4, le=1e4)]
 Coordinate_m = Length_m  # a coordinate in a world
 Point_m = tuple[Coordinate_m, Coordinate_m]
+Edge_m = Annotated[float, Field(gt=0.0, le=1e4)]  # a size: a box or a hall of no extent is no body
 Angle_rad = Annotated[float, Field(ge=-2 * math.pi, le=2 * math.pi)]
 LATERAL_MAX_M = 100.0  # a start this far beside a line or centreline is off any course
 UNITS = {"_mps2": "m/s^2", "_mps3": "m/s^3", "_mps": "m/s",
@@ -129,7 +130,7 @@ class Box(Frozen):
 
     center_m: Point_m = Field(description="centre of the box's footprint, (x, y) "
                                           "in m, world frame")
-    size_m: tuple[Length_m, Length_m, Length_m] = Field((0.1, 0.1, 0.1), description="edge lengths "
+    size_m: tuple[Edge_m, Edge_m, Edge_m] = Field((0.1, 0.1, 0.1), description="edge lengths "
                                                "(x, y, z) in m, before the yaw rotation")
     yaw_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
                            description="rotation about the vertical axis, rad, "
@@ -184,7 +185,7 @@ class HallWorld(TrackWorldParams):
 
     kind: Literal["hall"] = Field("hall", description="world kind: an indoor hall")
     description: str = Field("", description="one line about the world, shown in reports")
-    size_m: Point_m = Field((32.0, 20.0), description="interior (x, y) extent, m, "
+    size_m: tuple[Edge_m, Edge_m] = Field((32.0, 20.0), description="interior (x, y) extent, m, "
                                         "from (0, 0) (an approximation of the Winti lab, "
                                         "REFERENCE.md)")
     wall_height_m: float = Field(4.0, gt=0.5, le=1e4, description="height of walls and pillars, m")

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from yaml.nodes import MappingNode, Node, ScalarNode
+from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from kartci.boundedio import RefusedFileError, read_bytes, size_text
 from kartci.errors import SpecError
@@ -219,15 +219,22 @@ def _load(text: str, where: str, lenient: bool = False) -> Any:
     """One YAML document, or a SpecError `where:LINE:COLUMN: problem`. With `lenient`, text
     that is not YAML is taken as a string (a `--set` value) unless it was refused for its
     size, depth, a recursive alias or a bad tagged value."""
+    return _load_node(text, where, lenient)[0]
+
+
+def _load_node(text: str, where: str, lenient: bool = False) -> tuple[Any, Node | None]:
+    """_load's document and the node it was built from (for the marks of its keys)."""
     loader = None
     try:
         loader = _BoundedLoader(text)  # its reader checks the characters here
-        return loader.get_single_data()
+        node = loader.get_single_node()
+        data = None if node is None else loader.construct_document(node)
+        return data, node
     except _Refused as err:
         raise SpecError(_problem(err, text, where)) from err
     except yaml.YAMLError as err:
         if lenient:
-            return text
+            return text, None
         raise SpecError(_problem(err, text, where)) from err
     except RecursionError as err:  # only if called with the stack already deep
         raise SpecError(f"{where}: nested too deeply") from err
@@ -241,11 +248,45 @@ def _load(text: str, where: str, lenient: bool = False) -> Any:
 
 def read_yaml(path: Path, limit_bytes: int = SPEC_MAX_BYTES) -> dict[str, Any]:
     """A YAML file holding a mapping, read within the byte, node and depth limits."""
+    return read_yaml_marked(path, limit_bytes)[0]
+
+
+# Where a key was written: the file (as shown in messages), its line and column (1-based), and
+# the key's dotted path in that file (`floor_friction` of a world file inlined under `world`).
+Mark = tuple[str, int, int, str]
+
+
+def read_yaml_marked(path: Path, limit_bytes: int = SPEC_MAX_BYTES
+                     ) -> tuple[dict[str, Any], dict[str, Mark]]:
+    """read_yaml's mapping and the mark of every key and list item in it, by dotted path
+    (`agents.kart0.start.along_m`, `obstacles.0`): a validation error can then name the file
+    and line its bad value came from."""
     text = read_text_bounded(path, limit_bytes)
-    data = _load(text, shown(path))
-    if not isinstance(data, dict):
+    data, node = _load_node(text, shown(path))
+    if not isinstance(data, dict) or node is None:
         raise SpecError(f"{shown(path)}: expected a mapping of keys at the top level")
-    return data
+    return data, _marks(node, shown(path))
+
+
+def _marks(root: Node, where: str) -> dict[str, Mark]:
+    """The mark of every mapping key and sequence item under `root`; of a key given twice
+    through a `<<` merge, the one that wins (the constructor has merged the nodes already)."""
+    out: dict[str, Mark] = {}
+    stack: list[tuple[Node, str]] = [(root, "")]
+    while stack:  # bounded: the composer refused documents of more than YAML_MAX_NODES
+        node, prefix = stack.pop()
+        if isinstance(node, MappingNode):
+            items = {str(k.value): (k, v) for k, v in node.value
+                     if isinstance(k, ScalarNode) and k.tag != _MERGE}  # the last one wins
+        elif isinstance(node, SequenceNode):
+            items = {str(i): (item, item) for i, item in enumerate(node.value)}
+        else:
+            continue
+        for key, (at, value) in items.items():
+            dotted = f"{prefix}.{key}" if prefix else key
+            out[dotted] = (where, at.start_mark.line + 1, at.start_mark.column + 1, dotted)
+            stack.append((value, dotted))
+    return out
 
 
 def parse_value(text: str, where: str) -> Any:

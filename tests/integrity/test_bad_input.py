@@ -236,3 +236,91 @@ def test_baseline_fifo_is_an_error_not_a_hang(tmp_path: Path) -> None:
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert "kart_manual: 💥 error: bl/kart_manual.json: not a regular file (a FIFO)" \
         in proc.stdout
+
+
+def _line_of(text: str, start: str) -> int:
+    """The 1-based line of `text` that starts with `start`."""
+    return next(i for i, x in enumerate(text.splitlines(), 1) if x.startswith(start))
+
+
+def _bad_world(tmp: Path) -> tuple[list[str | Path], str]:
+    (tmp / "worlds" / "my").mkdir(parents=True)
+    hall = re.sub(r"(?m)^floor_friction:.*$", "floor_friction: 99", HALL)
+    (tmp / "worlds" / "my" / "hall.yaml").write_text(hall, encoding="utf-8")
+    return (["show", "q"], f"{tmp}/worlds/my/hall.yaml:{_line_of(hall, 'floor_friction:')}:1: "
+                           "floor_friction: must be at most 10")
+
+
+def _bad_model(tmp: Path) -> tuple[list[str | Path], str]:
+    (tmp / "models" / "mykart").mkdir(parents=True)
+    params = re.sub(r"(?m)^mass_kg:.*$", "mass_kg: -5", PARAMS)
+    (tmp / "models" / "mykart" / "params.yaml").write_text(params, encoding="utf-8")
+    urdf = ROOT / "kartci" / "data" / "models" / "gokart" / "bumblebee.urdf"
+    (tmp / "models" / "mykart" / "bumblebee.urdf").write_bytes(urdf.read_bytes())
+    return (["show", "q", "--set", "agents.kart0.model=mykart"],
+            f"{tmp}/models/mykart/params.yaml:{_line_of(params, 'mass_kg:')}:1: mass_kg: must "
+            "be more than 0 kg")
+
+
+def _bad_scenario(tmp: Path) -> tuple[list[str | Path], str]:
+    path = tmp / "scenarios" / "q.yaml"
+    path.write_text(path.read_text(encoding="utf-8").replace("along_m: 0.0", "along_m: -1"),
+                    encoding="utf-8")
+    return ["show", "q"], f"{path}:7:13: agents.kart0.start.along_m: must be at least 0 m"
+
+
+@pytest.mark.parametrize("make", [_bad_world, _bad_model, _bad_scenario])
+def test_a_bad_value_names_the_file_and_line_it_came_from(
+        tmp_path: Path, make: Callable[[Path], tuple[list[str | Path], str]]) -> None:
+    """A bad value in a world or model file was reported against the scenario file, and no
+    validation error had a line: now the file the value was written in, its line and column
+    and the key as written there (never the value: the file may be anything)."""
+    scenario = _project(tmp_path, world="my/hall" if make is _bad_world else "winti/hall")
+    scenario.write_text(scenario.read_text(encoding="utf-8").replace("criteria: {}\n", ""),
+                        encoding="utf-8")
+    args, expected = make(tmp_path)
+    assert _one_error_line(kartci(*args, cwd=tmp_path)) == expected
+
+
+@pytest.mark.parametrize(("make", "reason"), [
+    (lambda t: _fifo(t, "pyproject.toml"), "not a regular file (a FIFO)"),
+    (lambda t: _sparse(t, "pyproject.toml", 1 << 30),
+     f"{1 << 30} bytes, more than the 4 MiB allowed")], ids=["fifo", "1GB"])
+def test_the_project_file_is_a_bounded_regular_file(tmp_path: Path, make: Callable[[Path], Path],
+                                                    reason: str) -> None:
+    """kartci.toml / pyproject.toml were read whole with read_text: a FIFO would hang every
+    command and 1 GB be read into memory. Now one line naming the file, exit 2."""
+    path = make(tmp_path)
+    assert _one_error_line(kartci("list", cwd=tmp_path)) == f"{path}: {reason}"
+
+
+@pytest.mark.parametrize(("scenario", "key", "name", "reason"), [
+    ("kart_manual", "agents.kart0.model.urdf", "k.urdf", "not a regular file (a FIFO)"),
+    ("localization_lap", "agents.kart0.nodes.localization.map", "m.ply",
+     "cannot read the map: not a regular file (a FIFO)")], ids=["urdf", "ply"])
+def test_urdf_and_map_are_read_as_bounded_regular_files(tmp_path: Path, scenario: str, key: str,
+                                                        name: str, reason: str) -> None:
+    """A URDF and a PLY map were read unbounded: a FIFO hung the run. Now the run fails at
+    once naming the file (exit 2)."""
+    (tmp_path / "kartci.toml").write_text("", encoding="utf-8")
+    fifo = _fifo(tmp_path, name)
+    proc = kartci("run", scenario, "--set", "duration_s=0.1", "--set", f"{key}={fifo}",
+                  "--out", "out", cwd=tmp_path)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert f"{scenario}: 💥 error: {fifo}: {reason}" in proc.stdout
+
+
+def test_box_and_hall_sizes_must_be_positive(tmp_path: Path) -> None:
+    """`size_m` of a box (and of a hall) took any length in ±1e4 m, negative too: an edge
+    length is now more than 0."""
+    _project(tmp_path)
+    box = "world.obstacles=[{center_m: [5.0, 5.0], size_m: [-1.0, 1.0, 1.0]}]"
+    line = _one_error_line(kartci("show", "kart_manual", "--set", box, cwd=tmp_path))
+    assert line.endswith("kart_manual.yaml: world.obstacles.0.size_m.0: must be more than 0 m")
+    (tmp_path / "worlds").mkdir()
+    hall = re.sub(r"(?m)^size_m:.*$", "size_m: [32.0, -20.0]", HALL)
+    (tmp_path / "worlds" / "neg.yaml").write_text(hall, encoding="utf-8")
+    line = _one_error_line(kartci("show", "kart_manual", "--set", "world=neg", cwd=tmp_path))
+    row = _line_of(hall, "size_m:")
+    at = f"{row}:{hall.splitlines()[row - 1].index('-20.0') + 1}"  # the item's own column
+    assert line == f"{tmp_path}/worlds/neg.yaml:{at}: size_m.1: must be more than 0 m"

@@ -72,7 +72,7 @@ def test_a_start_far_off_the_line_is_refused_with_its_bound(tmp_path: Path) -> N
     path = _scenario(tmp_path, "    start: {lateral_m: 1.0e+308}\n")
     p = kartci("run", path, "--out", tmp_path / "out")
     assert p.returncode == 2
-    assert p.stderr == (f"kartci: error: {path}: agents.lt0.start.lateral_m: must be at most "
+    assert p.stderr == (f"kartci: error: {path}:8:13: agents.lt0.start.lateral_m: must be at most "
                         "100 m\n")
     assert not (tmp_path / "out").exists()
 
@@ -83,8 +83,8 @@ def test_a_speed_command_beyond_physics_is_refused_with_its_bound(tmp_path: Path
     path.write_text(SCENARIO.replace("{type: line_pid}", "{type: line_pid, v1_mps: 1.0e+308}"))
     p = kartci("run", path, "--out", tmp_path / "out")
     assert p.returncode == 2
-    assert p.stderr == (f"kartci: error: {path}: agents.lt0.controller.v1_mps: must be at most "
-                        "100 m/s\n")
+    assert p.stderr == (f"kartci: error: {path}:7:34: agents.lt0.controller.v1_mps: must be at "
+                        "most 100 m/s\n")
 
 
 def test_a_start_beside_the_track_is_refused_where_the_track_is_known(tmp_path: Path) -> None:
@@ -104,7 +104,7 @@ def test_an_agent_name_that_is_not_a_ros_name_is_refused(tmp_path: Path) -> None
     path.write_text(SCENARIO.replace("  lt0:", "  ../../etc:"))
     p = kartci("run", path, "--out", tmp_path / "out")
     assert p.returncode == 2
-    assert p.stderr == (f'kartci: error: {path}: agents: agent name "../../etc" is not a ROS 2 '
+    assert p.stderr == (f'kartci: error: {path}:4:1: agents: agent name "../../etc" is not a ROS 2 '
                         "name token: a letter, then letters, digits and single underscores, not "
                         "ending in one, at most 64 characters (e.g. kart0)\n")
     assert not (tmp_path / "out").exists()

@@ -11,6 +11,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import pytest
 from helpers import kartci
@@ -102,6 +103,9 @@ def test_allow_outside_paths_lets_an_outside_track_through(proj: Path) -> None:
 
 
 GOKART = BUILTIN / "models" / "gokart"
+MASS_LINE = (GOKART / "params.yaml").read_text().splitlines().index(
+    next(x for x in (GOKART / "params.yaml").read_text().splitlines()
+         if x.startswith("mass_kg:"))) + 1
 BAD_FILES = {
     # a track whose first row is a secret: numpy's message quoted it
     "track CSV": ("worlds/my/track.csv", f"{SECRET}=hunter2,1,2,3\n0,0,1,1\n",
@@ -121,8 +125,9 @@ BAD_FILES = {
                    (GOKART / "params.yaml").read_text().replace("\nmass_kg:",
                                                                 f"\nmass_kg: {SECRET} #"),
                    ["kart_manual", *QUICK, "--set", "agents.kart0.model=mykart"],
-                   "agents.kart0.model.mass_kg: Input should be a valid number, unable to "
-                   "parse string as a number"),
+                   # the model file's own line and key (`mass_kg:` is on the same line)
+                   f"models/mykart/params.yaml:{MASS_LINE}:1: mass_kg: Input should be a valid "
+                   "number, unable to parse string as a number"),
 }
 
 
@@ -144,3 +149,83 @@ def test_file_contents_never_reach_an_artifact(proj: Path, case: str) -> None:
         for name in ("error.json", "junit.xml", "summary.md", "report.html"):
             assert message in next((proj / "out").rglob(name)).read_text(), name
     assert _leaks(proj / "out", p) == []
+
+
+LOG = BUILTIN / "scenarios" / "logs" / "kart_manual_ps4.mcap"
+SCENARIO_WITH_LOG = """description: q
+world: winti/hall
+duration_s: 1.0
+agents:
+  kart0:
+    model: gokart
+    controller: {type: manual, mapping: ps4, source: {log: LOG, topic: /kart0/joy}}
+"""
+
+
+def _source_log(proj: Path) -> tuple[list[str], str]:
+    """A scenario of the project naming a log beside the secret through `..`."""
+    (proj / "scenarios" / "q.yaml").write_text(
+        SCENARIO_WITH_LOG.replace("LOG", "../../outside/x.mcap"))
+    shutil.copy(LOG, proj.parent / "outside" / "x.mcap")
+    return (["show", "q"], f"agents.kart0.controller.source.log: "
+                           f"{(proj.parent / 'outside' / 'x.mcap').resolve()} {OUTSIDE}")
+
+
+def _mapping_path(proj: Path) -> tuple[list[str], str]:
+    """A joystick mapping named by a path out of the project."""
+    return (["show", "kart_manual", "--set",
+             "agents.kart0.controller.mapping=../outside/pad.yaml"],
+            f"agents.kart0.controller.mapping: ../outside/pad.yaml {OUTSIDE}")
+
+
+def _mapping_link(proj: Path) -> tuple[list[str], str]:
+    """A mapping by name whose file in the project's models/gokart/joy/ links out of it."""
+    joy = proj / "models" / "gokart" / "joy"
+    joy.mkdir(parents=True)
+    secret = (proj.parent / "outside" / "secret.csv").resolve()
+    (joy / "evil.yaml").symlink_to(secret)
+    return (["show", "kart_manual", "--set", "agents.kart0.controller.mapping=evil"],
+            f"agents.kart0.controller.mapping: {proj.resolve() / 'models/gokart/joy/evil.yaml'}"
+            f" (a link to {secret}) {OUTSIDE}")
+
+
+def _node_map(proj: Path) -> tuple[list[str], str]:
+    """The localization node's map (a PLY) given as an absolute path out of the project."""
+    secret = proj.parent / "outside" / "secret.csv"
+    return (["show", "localization_lap", "--set", f"agents.kart0.nodes.localization.map={secret}"],
+            f"agents.kart0.nodes.localization.map: {secret} {OUTSIDE}")
+
+
+def _profile_track(proj: Path) -> tuple[list[str], str]:
+    """An import profile (of the project) whose track is the secret, relative to the profile."""
+    (proj / "p.yaml").write_text("pose: {topic: /kart0/odom}\ntrack: ../outside/secret.csv\n")
+    return (["score", str(LOG), "--profile", "p.yaml", "--out", "out"],
+            f"p.yaml: track: ../outside/secret.csv {OUTSIDE}")
+
+
+@pytest.mark.parametrize("make", [_source_log, _mapping_path, _mapping_link, _node_map,
+                                  _profile_track])
+def test_files_read_at_run_time_are_contained_at_load_time(proj: Path, make: Any) -> None:
+    """Issue 24, defect 1, the files read only when the run starts (a controller's source
+    log and joystick mapping, a node's map, a profile's track) were never checked: each is
+    refused when the scenario or profile is loaded, as world.track is, and nothing runs."""
+    args, expected = make(proj)
+    p = kartci(*args, cwd=proj)
+    assert _one_line(p) == f"kartci: error: {expected}"
+    assert not list(proj.rglob("*.mcap"))  # nothing ran
+    assert _leaks(proj / "out", p) == []
+
+
+def test_a_source_log_inside_the_project_or_allowed_keeps_working(proj: Path) -> None:
+    """A scenario naming a log inside the project (relative to the scenario file) resolves to
+    it, as the shipped kart_manual's does; one outside runs with --allow-outside-paths."""
+    (proj / "logs").mkdir()
+    shutil.copy(LOG, proj / "logs" / "x.mcap")
+    (proj / "scenarios" / "q.yaml").write_text(SCENARIO_WITH_LOG.replace("LOG", "../logs/x.mcap"))
+    p = kartci("show", "q", cwd=proj)
+    assert p.returncode == 0, p.stderr
+    assert f'"log": "{(proj / "logs" / "x.mcap").resolve()}"' in p.stdout
+    args, _ = _source_log(proj)
+    assert kartci(*args, "--allow-outside-paths", cwd=proj).returncode == 0
+    p = kartci("show", "kart_manual", cwd=proj)
+    assert f'"log": "{LOG}"' in p.stdout
