@@ -180,7 +180,7 @@ def _checked_size(name: str, grid: Grid) -> int:
     count = math.prod(len(values) for _, values in grid)
     if count > MAX_SWEEP_POINTS:
         shown = f"{count:,}" if count < 10**15 else f"about 10^{int(math.log10(count))}"
-        raise SpecError(f"scenario {clip(name, 80)}: sweep: {shown} points, more than the "
+        raise SpecError(f"scenario {clip(name)}: sweep: {shown} points, more than the "
                         f"{MAX_SWEEP_POINTS:,} allowed; split the sweep")
     return count
 
