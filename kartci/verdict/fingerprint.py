@@ -42,9 +42,13 @@ class Freshness(StrEnum):
 
 def fields(scenario: Scenario) -> dict[str, Any]:
     """The scenario as `kartci show` prints it (world and model files inlined), flat, with data
-    file paths relative to kartci's built-in data (`<kartci>/...`) or to the project, so the
-    same scenario gives the same fields on every machine and checkout."""
-    roots = (("<kartci>", project.BUILTIN), ("", project.current().root))
+    file paths relative to the world, model or scenario folder they were found in (else to the
+    project, or `<kartci>/...` for kartci's data), so the same scenario gives the same fields on
+    every machine and checkout, and when a data folder moves; the file's bytes are hashed
+    beside its path."""
+    proj = project.current()
+    folders = (*proj.world_path, *proj.model_path, *proj.scenario_path)  # the most specific first
+    roots = (*(("", f) for f in folders), ("", proj.root), ("<kartci>", project.BUILTIN))
     out: dict[str, Any] = {}
     dumped = scenario.model_dump(mode="json")
     _flatten({k: v for k, v in dumped.items() if k not in IGNORED}, "", out, roots)

@@ -175,7 +175,7 @@ def test_a_data_file_edited_in_place_makes_the_fields_differ(
         return fingerprint.fields(load_scenario("kart_manual", ["world=my/hall"]))
 
     before = flat()
-    assert before["world.track"] == "worlds/my/track.csv"  # portable: relative to the project
+    assert before["world.track"] == "my/track.csv"  # portable: as named in its world folder
     track = world / "track.csv"
     lines = track.read_text().splitlines(keepends=True)
     track.write_text("".join([*lines[:-1], lines[-1].replace("1", "2", 1)]))
