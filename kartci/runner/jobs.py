@@ -146,6 +146,9 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
                                                allow_outside_paths).sweep.items()])
                  for name in names]
         total = sum(_checked_size(name, grid) for name, grid in grids)
+        if total * repeat > MAX_SWEEP_POINTS:  # each replica is a run of its own
+            raise SpecError(f"{total:,} runs x {repeat:,} replicas = {total * repeat:,} runs, "
+                            f"more than the {MAX_SWEEP_POINTS:,} allowed; split the command")
         jobs = _points(grids, overrides, repeat, vary, (total, progress), allow_outside_paths)
     check_criteria_names([j.spec for j in jobs if j.repeat == 0])
     return jobs

@@ -42,6 +42,18 @@ def test_a_sweep_over_the_cap_fails_before_any_point_is_expanded(tmp_path: Path)
     assert not (tmp_path / "out").exists()
 
 
+def test_replicas_count_against_the_cap(tmp_path: Path) -> None:
+    """200 points x 100 replicas are 20,000 runs: refused before any is expanded, as a sweep
+    over the cap is (each replica is a run, a folder and a process of its own)."""
+    values = "[" + ", ".join(str(i) for i in range(200)) + "]"
+    path = _scenario(tmp_path, f"sweep:\n  seed: {values}\n")
+    p = kartci("run", path, "--repeat", "100", "--out", tmp_path / "out")
+    assert p.returncode == 2
+    assert p.stderr == ("kartci: error: 200 runs x 100 replicas = 20,000 runs, more than the "
+                        "10,000 allowed; split the command\n")
+    assert not (tmp_path / "out").exists()
+
+
 def test_sweep_validation_is_reported_point_by_point(tmp_path: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """Each validated point reaches the progress callback as it is validated, and the CLI
