@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from kartci.core import Metric, MetricSet
 from kartci.metrics import ScoreContext, recorded_track
-from kartci.metrics.base import DEFS, Metric
+from kartci.metrics.defs import DEFS
 from kartci.metrics.detection import DEFS as DETECTION_DEFS
 from kartci.metrics.detection import DetectionMetricsParams, detection_metrics
 from kartci.metrics.kart import kart_metrics, kart_track
@@ -13,7 +14,6 @@ from kartci.metrics.line import line_metrics
 from kartci.metrics.localization import DEFS as LOCALIZATION_DEFS
 from kartci.metrics.localization import LocalizationMetricsParams, localization_metrics
 from kartci.metrics.race import kart_rects, race_metrics
-from kartci.plugins import MetricSet
 from kartci.spec.models import LineMetricsParams
 
 

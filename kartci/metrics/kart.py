@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from kartci.metrics.base import DEFS, Metric
+from kartci.core import Metric
+from kartci.metrics.defs import DEFS
 from kartci.robots.gokart.params import GokartModel
 from kartci.spec.models import Scenario
 from kartci.track import Track

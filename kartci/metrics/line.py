@@ -8,8 +8,9 @@ import numpy as np
 import pandas as pd
 
 from kartci import geometry
+from kartci.core import Metric
 from kartci.errors import SpecError
-from kartci.metrics.base import DEFS, Metric
+from kartci.metrics.defs import DEFS
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import LineMetricsParams, Scenario, StraightCourse
 

@@ -10,10 +10,9 @@ import numpy as np
 from pydantic import Field
 
 from kartci import geometry
+from kartci.core import Direction, Metric, MetricDef, MetricSet
 from kartci.metrics import ScoreContext
-from kartci.metrics.base import Direction, Metric, MetricDef
 from kartci.metrics.line import sensor_track
-from kartci.plugins import MetricSet
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import MetricParams, StraightCourse
 

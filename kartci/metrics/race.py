@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from kartci.metrics.base import Metric
+from kartci.core import Metric
 from kartci.spec.models import Box
 from kartci.vehicle import FOOTPRINT_M
 

@@ -9,8 +9,8 @@ from typing import Any, Literal
 
 from pydantic import Field
 
+from kartci.core import Controller, MetricSet, RobotKind, WorldKind, lazy
 from kartci.errors import SpecError
-from kartci.plugins import Controller, MetricSet, RobotKind, WorldKind, lazy
 from kartci.realdata.divergence import DEFS as SIMREAL_DEFS
 from kartci.realdata.divergence import SimrealParams, simreal_metrics
 from kartci.realdata.motion import (

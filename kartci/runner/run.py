@@ -21,7 +21,7 @@ from typing import Any
 
 import pandas as pd
 
-from kartci import metrics, plugins, portable, project
+from kartci import core, metrics, portable, project
 from kartci.atomic import write_text_atomic
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.logs import tables
@@ -207,7 +207,7 @@ def score(folder: Path) -> dict[str, Any]:
 def plots(folder: Path, scenario: Scenario) -> Plots | None:
     """The report's time series and geometry, from the log, drawn as the first agent's robot
     kind says (None when the kind draws nothing)."""
-    kind = plugins.ROBOTS.get(next(iter(scenario.agents.values())).model.kind)
+    kind = core.ROBOTS.get(next(iter(scenario.agents.values())).model.kind)
     if kind.plots is None:
         return None
     result: Plots = kind.plots(PlotContext(scenario, tables(folder / LOG_NAME),

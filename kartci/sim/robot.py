@@ -12,7 +12,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from kartci.agents.base import Agent
+from kartci.core import Agent
 from kartci.spec.models import AgentSpec, Pose2D, WorldParams
 
 

@@ -15,8 +15,8 @@ from typing import Any
 
 from kartci.atomic import write_json_atomic as write_json_atomic  # re-exported
 from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
+from kartci.core import Direction, MetricDef
 from kartci.errors import BaselineError
-from kartci.metrics.base import Direction, MetricDef
 from kartci.spec.models import Criterion
 from kartci.verdict.fingerprint import digest
 

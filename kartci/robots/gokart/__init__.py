@@ -1,6 +1,6 @@
 """The ETH go-kart (seed 000) as a robot kind: registered as `gokart` (entry point)."""
 
-from kartci.plugins import RobotKind, lazy
+from kartci.core import RobotKind, lazy
 from kartci.robots.gokart.params import GokartModel, KartSensors
 
 ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRobot"),
