@@ -11,10 +11,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from kartci import core
-from kartci.core import Direction, Metric, MetricDef, definition, definitions
+from kartci.core import Direction, Metric, MetricDef, MetricParams, definition, definitions
 from kartci.errors import LogError
 from kartci.spec import Scenario, scenario_from_json
-from kartci.spec.models import MetricParams
 
 if TYPE_CHECKING:  # pandas, the log readers and scipy load when a log is scored, not before
     import pandas as pd

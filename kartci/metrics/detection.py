@@ -16,11 +16,10 @@ from typing import Any
 import numpy as np
 from pydantic import Field
 
-from kartci.core import Direction, Metric, MetricDef
+from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.logs.reader import messages
 from kartci.logs.types import stamp_ns
 from kartci.metrics import ScoreContext
-from kartci.spec.models import MetricParams
 from kartci.track import OBSTACLES_TOPIC
 from kartci.vehicle import FOOTPRINT_M
 

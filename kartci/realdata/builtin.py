@@ -9,7 +9,16 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from kartci.core import Controller, MetricSet, RobotKind, WorldKind, lazy
+from kartci.core import (
+    Controller,
+    ControllerParams,
+    MetricSet,
+    RobotKind,
+    RobotParams,
+    WorldKind,
+    WorldParams,
+    lazy,
+)
 from kartci.errors import SpecError
 from kartci.realdata.divergence import DEFS as SIMREAL_DEFS
 from kartci.realdata.divergence import SimrealParams, simreal_metrics
@@ -18,7 +27,6 @@ from kartci.realdata.motion import (
     TRACK_DEFS,
     motion_metrics,
 )
-from kartci.spec.models import ControllerParams, RobotParams, WorldParams
 
 
 class RecordedWorld(WorldParams):

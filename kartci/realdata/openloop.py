@@ -14,13 +14,12 @@ from typing import Any
 import numpy as np
 
 from kartci import core
-from kartci.core import AgentContext
+from kartci.core import AgentContext, RobotParams
 from kartci.errors import LogError, SpecError
 from kartci.logs import McapLogWriter, messages, open_log, tables
 from kartci.logs.types import for_writing
 from kartci.metrics import recorded_scenario
 from kartci.realdata.builtin import RecordedRobot
-from kartci.spec.models import RobotParams
 
 
 def lookup(name: str) -> core.Node | core.Controller:

@@ -7,7 +7,8 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.spec.models import Angle_rad, Frozen, Length_m, RobotParams
+from kartci.core import Frozen, RobotParams
+from kartci.spec.models import Angle_rad, Length_m
 
 
 class Tyre(Frozen):
