@@ -9,7 +9,6 @@ from typing import Any
 
 import numpy as np
 
-from kartci.agents.joy import check_counts, kart_command, load_mapping, to_command, to_joy
 from kartci.agents.params import (
     CommandsController,
     JoyDriverController,
@@ -19,9 +18,10 @@ from kartci.agents.params import (
 from kartci.agents.source import Recorded
 from kartci.core import AgentContext, Outbox
 from kartci.logs.types import base_link, header, msg, yaw_of
+from kartci.robots.gokart import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
+from kartci.robots.gokart.joy import check_counts, kart_command, load_mapping, to_command, to_joy
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, Track, track_from_text
-from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
 
 JOY = ("sensor_msgs/msg/Joy",)
 COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",

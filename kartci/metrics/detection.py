@@ -20,8 +20,8 @@ from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.logs.reader import messages
 from kartci.logs.types import stamp_ns
 from kartci.metrics import ScoreContext
+from kartci.robots.gokart import FOOTPRINT_M
 from kartci.track import OBSTACLES_TOPIC
-from kartci.vehicle import FOOTPRINT_M
 
 
 class DetectionMetricsParams(MetricParams):

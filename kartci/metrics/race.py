@@ -11,8 +11,8 @@ import numpy as np
 import pandas as pd
 
 from kartci.core import Metric
+from kartci.robots.gokart import FOOTPRINT_M
 from kartci.spec.models import Box
-from kartci.vehicle import FOOTPRINT_M
 
 Rect = np.ndarray  # (4, 2) corners, counter-clockwise
 

@@ -231,7 +231,7 @@ def _check_run_time_files(agent: dict[str, Any], where: str, allow_outside: bool
 
 
 def _mapping(value: str, what: str, proj: project.Project, allow_outside: bool) -> str:
-    """A joystick mapping given by path (kartci.agents.joy.load_mapping's rule: ending in
+    """A joystick mapping given by path (kartci.robots.gokart.joy.load_mapping's rule: ending in
     .yaml / .yml or holding a separator) as its absolute, checked path; a name stays a name
     (it reads better in `kartci show`), its file on the model path checked for a link out."""
     if value.endswith((".yaml", ".yml")) or "/" in value or os.sep in value:
