@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 from kartci.atomic import write_json_atomic, write_text_atomic
 from kartci.report.tables import COMPARE, RUN, Wording
-from kartci.results import ScenarioResult, exit_code
+from kartci.verdict.result import ScenarioResult, exit_code
 
 if TYPE_CHECKING:
     from kartci.report.html import report_html

@@ -10,8 +10,8 @@ import os
 from pathlib import Path
 
 from kartci.report.tables import delta, num, regression_size
-from kartci.results import ScenarioResult
 from kartci.verdict import Status
+from kartci.verdict.result import ScenarioResult
 
 SUMMARY_LIMIT_BYTES = 1_000_000  # under GitHub's 1 MiB per step, with room for the note
 MAX_ANNOTATIONS = 10

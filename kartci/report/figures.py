@@ -11,7 +11,7 @@ from enum import StrEnum
 import numpy as np
 import pandas as pd
 
-from kartci.results import Plots
+from kartci.figures import Plots
 
 MAX_POINTS = 2000  # per series in a report: a 50 Hz, 60 s run is 3000 samples
 

@@ -13,7 +13,7 @@ from kartci.report.laps import lap_tables
 from kartci.report.markdown import VERDICT_WORD
 from kartci.report.static import scenario_svgs
 from kartci.report.tables import CSS, MARK, RUN, Wording, conditioning, delta, num, tolerance
-from kartci.results import ScenarioResult, exit_code
+from kartci.verdict.result import ScenarioResult, exit_code
 
 HELP = ("<p>Figures: hover to read values (the time cursor is shared by a scenario's plots and "
         "shown as a dot on the view from above), wheel to zoom, drag to zoom to a range, "

@@ -25,7 +25,6 @@ from typing import Any
 
 from kartci import project
 from kartci.errors import RunError, SpecError
-from kartci.results import ScenarioResult, one_line
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
     check_criteria_names,
@@ -36,6 +35,7 @@ from kartci.runner.run import (
 from kartci.spec import Scenario, load_scenario
 from kartci.spec.load import scenario_loader
 from kartci.spec.yamlio import clip
+from kartci.verdict.result import ScenarioResult, one_line
 
 REPEAT_PREFIX = "repeat_"
 START_STEP_M = 1e-9  # replica k starts k x 1 nm to the left: far below anything physical

@@ -24,10 +24,9 @@ import pandas as pd
 from kartci import metrics, plugins, portable, project
 from kartci.atomic import write_text_atomic
 from kartci.errors import KartciError, LogError, SpecError
+from kartci.figures import PlotContext, Plots
 from kartci.logs import tables
 from kartci.project import did_you_mean
-from kartci.report.data import PlotContext
-from kartci.results import Plots, ScenarioResult, one_line
 from kartci.runner.outdir import check_inside, manifest_labels
 from kartci.sim import simulate
 from kartci.sim.session import describe
@@ -47,6 +46,7 @@ from kartci.verdict import (
     read_metrics,
     write_json_atomic,
 )
+from kartci.verdict.result import ScenarioResult, one_line
 from kartci.verdict.trace import load_trace, trace_path
 
 LOG_NAME = "run.mcap"
