@@ -22,6 +22,8 @@ from typing import Any
 import pandas as pd
 
 from kartci import metrics, plugins, portable, project
+from kartci.agents.kart import COMMANDS, JOY
+from kartci.agents.source import Recorded
 from kartci.atomic import write_text_atomic
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.figures import PlotContext, Plots
@@ -168,9 +170,6 @@ def keep_outputs(stage: Path, folder: Path) -> None:
 def input_warnings(scenario: Scenario) -> list[str]:
     """Recorded inputs longer than the scenario: the rest is not replayed, which a user must be
     told (not silently cut)."""
-    from kartci.agents.kart import COMMANDS, JOY
-    from kartci.agents.source import Recorded
-
     out = []
     for name, agent in scenario.agents.items():
         source = getattr(agent.controller, "source", None)
