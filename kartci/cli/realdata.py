@@ -102,6 +102,7 @@ def calibrate_cmd(
         "--mpcc", help="Fit the MPCC's own prediction model instead (LOG: a kartci run log of a "
         "simulated kart; --params: its single-track parameters, e.g. "
         "mass_per_yaw_inertia_per_m2, front.d_mps2); writes OUT/mpcc_fit.json.")] = False,
+    allow_outside_paths: AllowOutsideOpt = False,
 ) -> None:
     """Fit model parameters to a log by minimising the windowed sim-vs-log divergence
     (scipy.optimize.least_squares, trust-region reflective, bounded); prints the values with 95 %
@@ -116,7 +117,8 @@ def calibrate_cmd(
     from kartci.realdata.calibrate import calibrate_log
 
     out = out_dir(out, "calibrate")
-    fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out)
+    fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out,
+                        allow_outside_paths)
     table = Table("parameter", "start", "fitted", "95 % interval",
                   title=f"calibration ({fit.evaluations} evaluations, {fit.method})",
                   title_justify="left")

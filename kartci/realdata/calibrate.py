@@ -200,14 +200,15 @@ def overlay_yaml(fit: Fit, log: str) -> str:
 
 def calibrate_log(log: Path, profile_path: Path | None, scenario: str | None,
                   overrides: Sequence[str], names: Sequence[str], window_s: float,
-                  out: Path) -> Fit:
-    """Fit `names` to `log`; writes OUT/calibration.json and OUT/overlay.yaml."""
+                  out: Path, allow_outside_paths: bool = False) -> Fit:
+    """Fit `names` to `log`; writes OUT/calibration.json and OUT/overlay.yaml. The profile's
+    files stay inside the project unless `allow_outside_paths` (`--allow-outside-paths`)."""
     from kartci.atomic import write_text_atomic
     from kartci.realdata.drive import read_drive
     from kartci.realdata.importer import import_log
     from kartci.realdata.profile import resolve_profile
 
-    profile, info = resolve_profile(log, profile_path)
+    profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
     setup = sim_setup(profile, scenario, overrides)
     check_commands(setup, profile, types)

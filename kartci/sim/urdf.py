@@ -28,7 +28,7 @@ def urdf_path(model: Any) -> Path:
     return path if path.is_absolute() else project.current().model_file(f"{model.kind}/{path}")
 
 
-def _parsed(path: Path) -> ET.Element:
+def parsed(path: Path) -> ET.Element:
     """The URDF's root element, read as a bounded regular file (a FIFO or /dev/zero named as a
     URDF would hang or fill the memory); a SpecError naming the file otherwise."""
     try:
@@ -55,7 +55,7 @@ def fixed_frames(path: Path, root: str = "base_link") -> dict[str, tuple[NDArray
                                                                           NDArray[np.float64]]]:
     """Every link reachable from `root` through fixed joints: (position, rotation) in root."""
     children: dict[str, list[tuple[str, NDArray[np.float64], NDArray[np.float64]]]] = {}
-    for joint in _parsed(path).iter("joint"):
+    for joint in parsed(path).iter("joint"):
         if joint.get("type") != "fixed":
             continue
         parent = joint.find("parent")
@@ -87,7 +87,7 @@ def physics_urdf(path: Path) -> Path:
     dropped here and their frames come from `fixed_frames` instead. Written once to a cache
     folder, named by content.
     """
-    root = _parsed(path)
+    root = parsed(path)
     links = {link.get("name"): link for link in root.findall("link")}
     for joint in root.findall("joint"):
         child = joint.find("child")

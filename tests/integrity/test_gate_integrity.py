@@ -182,3 +182,20 @@ def test_a_data_file_edited_in_place_makes_the_fields_differ(
     after = flat()
     assert fingerprint.changed(before, after) == ["world.track#sha256"]
     assert fingerprint.digest(before) != fingerprint.digest(after)
+
+
+def test_committed_baselines_were_accepted_from_the_scenarios_as_they_are() -> None:
+    """Every baseline in baselines/ records a scenario hash, and it matches the scenario (or
+    sweep point) as it loads today: a change to a shipped scenario, world, model or data file
+    without re-accepting its baselines fails here, not only in CI's run."""
+    from kartci.spec import load_scenario
+    from kartci.verdict import fingerprint
+
+    stale = []
+    for path in sorted((ROOT / "baselines").glob("*.json")):
+        name, _, point = path.stem.partition("@")
+        found, _ = fingerprint.recorded(json.loads(path.read_text()))
+        flat = fingerprint.fields(load_scenario(name, point.split(",") if point else []))
+        if found != fingerprint.digest(flat):
+            stale.append(path.stem)
+    assert stale == []

@@ -21,7 +21,7 @@ import numpy as np
 
 from kartci._bullet import pb
 from kartci.sim.line_lab import LineLab
-from kartci.sim.urdf import fixed_frames
+from kartci.sim.urdf import fixed_frames, parsed
 
 ARCS = 36  # 10 degrees each: 6 cm of line at r = 0.36 m, 2.5x a camera's footprint
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 (m)
@@ -119,7 +119,7 @@ def _spheres(urdf: Path) -> dict[str, list[tuple[np.ndarray, float] | None]]:
     """Bounding spheres (centre in base_link, radius, m) of each link's visuals, for links fixed to
     base_link or turning on a joint of one (a wheel: about its joint's origin, whatever its
     angle); None for a visual that cannot be bounded (a mesh). Other links are left out."""
-    root = ET.parse(urdf).getroot()
+    root = parsed(urdf)
     frames = fixed_frames(urdf)
     turning = {}
     for joint in root.iter("joint"):
