@@ -97,6 +97,9 @@ class RobotKind:
     plots: Callable[..., Any] | None = None  # (PlotContext) -> results.Plots
     description: str = ""
     sensors: type[Frozen] | None = None  # the robot's sensor specs (agents.<name>.sensors)
+    # its outline in base_link: centre ahead of base_link, length, width (m); what clearance
+    # and detection metrics draw around a robot of this kind (None: a point at base_link)
+    footprint_m: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)

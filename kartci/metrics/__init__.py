@@ -70,6 +70,12 @@ def metric_sets(scenario: Scenario, agent: str) -> list[core.MetricSet]:
     return [s for s in sets if not s.robots or kind in s.robots]
 
 
+def footprint_m(scenario: Scenario, agent: str) -> tuple[float, float, float] | None:
+    """An agent's outline (centre ahead of base_link, length, width; m) as its robot kind
+    declares it, so clearance and detection know no kind's constant; None: no outline."""
+    return core.ROBOTS.get(scenario.agents[agent].model.kind).footprint_m
+
+
 def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
     """The scenario a run log recorded on /kartci/scenario: the one its metrics are scored with."""
     table = log_tables.get("/kartci/scenario")
@@ -108,4 +114,4 @@ def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
 
 
 __all__ = ["Direction", "Metric", "MetricDef", "ScoreContext", "compute", "definition",
-           "definitions", "metric_sets", "recorded_scenario", "recorded_track"]
+           "definitions", "footprint_m", "metric_sets", "recorded_scenario", "recorded_track"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from kartci.core import Metric, MetricSet
-from kartci.metrics import ScoreContext, recorded_track
+from kartci.metrics import ScoreContext, footprint_m, recorded_track
 from kartci.metrics.defs import DEFS
 from kartci.metrics.detection import DEFS as DETECTION_DEFS
 from kartci.metrics.detection import DetectionMetricsParams, detection_metrics
@@ -39,12 +39,19 @@ def _laps(ctx: ScoreContext, params: Any) -> list[Metric]:
                         ctx.table("collision"))
 
 
+def _rects(ctx: ScoreContext) -> dict[str, Any]:
+    """Every robot's footprint along its path, once per log (robots without one are left out)."""
+    out = {}
+    for a in ctx.scenario.agents:
+        outline = footprint_m(ctx.scenario, a)
+        if outline is not None:
+            out[a] = kart_rects(ScoreContext(ctx.scenario, ctx.tables, ctx.path, a).odom, outline)
+    return out
+
+
 def _race(ctx: ScoreContext, params: Any) -> list[Metric]:
-    paths = _paths(ctx)
-    rects = ctx.shared("kart_rects", lambda: {
-        a: kart_rects(ScoreContext(ctx.scenario, ctx.tables, ctx.path, a).odom)
-        for a in ctx.scenario.agents})
-    return race_metrics(ctx.scenario, ctx.agent, paths, rects, ctx.table("mpcc/stats"))
+    rects = ctx.shared("kart_rects", lambda: _rects(ctx))
+    return race_metrics(ctx.scenario, ctx.agent, _paths(ctx), rects, ctx.table("mpcc/stats"))
 
 
 LINE_TRACKING = MetricSet(

@@ -18,7 +18,7 @@ from kartci.robots.gokart.steering import (
 ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRobot"),
                   ("laps", "race"), lazy("kartci.robots.gokart.plots:kart_plots"),
                   "the ETH go-kart (seed 000): steering map, two rear motors, lidar, IMU",
-                  KartSensors)
+                  KartSensors, FOOTPRINT_M)
 
 __all__ = ["FOOTPRINT_M", "ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",
            "axle_distance_m", "column_for_wheel_angle", "speed_to_pedals", "steer_for_turn_rate",
