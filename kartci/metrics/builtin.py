@@ -10,19 +10,13 @@ from kartci.metrics.defs import DEFS
 from kartci.metrics.detection import DEFS as DETECTION_DEFS
 from kartci.metrics.detection import DetectionMetricsParams, detection_metrics
 from kartci.metrics.kart import kart_metrics, kart_track
-from kartci.metrics.line import line_metrics
 from kartci.metrics.localization import DEFS as LOCALIZATION_DEFS
 from kartci.metrics.localization import LocalizationMetricsParams, localization_metrics
 from kartci.metrics.race import kart_rects, race_metrics
-from kartci.spec.models import LineMetricsParams
 
 
 def _defs(*names: str) -> dict[str, Any]:
     return {n: DEFS[n] for n in names}
-
-
-def _line(ctx: ScoreContext, params: LineMetricsParams) -> list[Metric]:
-    return line_metrics(ctx.scenario, ctx.agent, ctx.odom, params)
 
 
 def _paths(ctx: ScoreContext) -> dict[str, Any]:
@@ -54,12 +48,6 @@ def _race(ctx: ScoreContext, params: Any) -> list[Metric]:
     return race_metrics(ctx.scenario, ctx.agent, _paths(ctx), rects, ctx.table("mpcc/stats"))
 
 
-LINE_TRACKING = MetricSet(
-    "line_tracking",
-    _defs("cross_track_rms_m", "cross_track_max_m", "line_lost", "completion", "mean_speed_mps",
-          "settle_time_s"),
-    _line, LineMetricsParams, ("line_tracker",),
-    "distance of the line sensor from the line, line lost, completion, settling")
 LAPS = MetricSet(
     "laps",
     _defs("laps_completed", "lap_times_s", "best_lap_s", "collisions", "off_track_s",

@@ -43,3 +43,8 @@ DEFS: dict[str, MetricDef] = {
                               timing=True),
     "solve_ms_max": MetricDef("ms", Direction.LOWER, 20.0, 2.0, "slowest solve", timing=True),
 }
+
+
+def defs_of(*names: str) -> dict[str, MetricDef]:
+    """The definitions of these metrics, for a metric set that computes them."""
+    return {n: DEFS[n] for n in names}

@@ -7,7 +7,7 @@ import numpy as np
 
 from kartci import geometry
 from kartci.figures import PlotContext, Plots, wheel_series
-from kartci.metrics.line import sensor_track
+from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import LineMetricsParams
 

@@ -12,7 +12,7 @@ from pydantic import Field
 from kartci import geometry
 from kartci.core import Direction, Metric, MetricDef, MetricParams, MetricSet
 from kartci.metrics import ScoreContext
-from kartci.metrics.line import sensor_track
+from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import StraightCourse
 
