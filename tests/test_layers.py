@@ -10,17 +10,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 from layers import cycles, edges
 
-# The knot the restructuring (issue 25) unties, package by package. It may only shrink: a package
-# that joins it, or a new cycle elsewhere, fails here. Remove names as they leave it.
-KNOWN_KNOT = {"kartci.metrics", "kartci.robots"}
+
+def test_no_cycle() -> None:
+    """No two packages import each other, directly or around a loop (issue 25 untied the last)."""
+    assert cycles(edges()) == []
 
 
-def test_no_cycle_outside_the_known_knot() -> None:
-    found = cycles(edges())
-    assert [c for c in found if not set(c) <= KNOWN_KNOT] == []
-
-
-def test_the_knot_holds_no_package_it_has_lost() -> None:
-    """When a package leaves the knot, KNOWN_KNOT must say so (so it cannot come back)."""
-    knotted = {p for c in cycles(edges()) for p in c}
-    assert knotted == KNOWN_KNOT
+def test_the_metric_engine_imports_no_robot_kind() -> None:
+    """A kind's metrics live with the kind (`kartci.robots.<kind>.metrics`) and import the
+    engine; the engine learns a robot's outline from its registered kind, never from its code."""
+    assert [e.where for e in edges() if (e.source, e.target) == ("kartci.metrics",
+                                                                 "kartci.robots")] == []
