@@ -17,7 +17,7 @@ from pathlib import Path
 from kartci.bench import Better, Record
 from kartci.realdata.score import score_log, simreal_log
 from kartci.realdata.synthetic import synthetic_log
-from kartci.results import ScenarioResult
+from kartci.verdict.result import ScenarioResult
 
 PROFILE = ("name: bench_kart\npose: {topic: /kart0/odom}\n"
            "commands: {topic: /kart0/ackermann_cmd}\nrobot: {kind: gokart}\n")

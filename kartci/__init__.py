@@ -27,19 +27,18 @@ if TYPE_CHECKING:
     from typing import Any
 
     from kartci import plugins
-    from kartci.agents.base import Agent
     from kartci.api import RunResult, load_scenario, run
-    from kartci.metrics.base import Direction, Metric
+    from kartci.core import Agent, Direction, Metric
     from kartci.sim.session import RunInfo, Session, StepResult
     from kartci.spec.models import Scenario
     from kartci.verdict import CriterionResult, MetricVerdict, Status
 
 # public name -> the module it lives in, imported on first access
 _LAZY = {
-    "Agent": "kartci.agents.base",
+    "Agent": "kartci.core",
     "CriterionResult": "kartci.verdict",
-    "Direction": "kartci.metrics.base",
-    "Metric": "kartci.metrics.base",
+    "Direction": "kartci.core",
+    "Metric": "kartci.core",
     "MetricVerdict": "kartci.verdict",
     "RunInfo": "kartci.sim.session",
     "RunResult": "kartci.api",

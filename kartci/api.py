@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from kartci.metrics.base import Metric
+    from kartci.core import Metric
     from kartci.spec.models import Scenario
     from kartci.verdict import CriterionResult, MetricVerdict, Status
 
@@ -247,7 +247,7 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
 
 
 def _metric(name: str, entry: dict[str, Any]) -> Metric:
-    from kartci.metrics.base import Metric
+    from kartci.core import Metric
 
     value = entry.get("value")
     extra = {k: v for k, v in entry.items() if k not in ("value", "unit")}

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from kartci.results import ScenarioResult
+from kartci.verdict.result import ScenarioResult
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout
 # Two short line-tracker runs, for tests of running many scenarios rather than one

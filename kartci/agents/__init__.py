@@ -3,6 +3,6 @@ Which class runs for `controller: {type: NAME}` is the controller registry's ans
 
 from __future__ import annotations
 
-from kartci.agents.base import Agent, Outbox
+from kartci.core import Agent, Outbox
 
 __all__ = ["Agent", "Outbox"]

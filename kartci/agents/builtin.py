@@ -11,10 +11,10 @@ from kartci.agents.params import (
                       ScriptController,
 )
 from kartci.bridge.params import ExternalController
+from kartci.core import Controller, Node, lazy
 from kartci.localization.params import LocalizationParams
 from kartci.mpcc.params import MpccController
 from kartci.perception.params import DetectorParams
-from kartci.plugins import Controller, Node, lazy
 
 KART = ("gokart",)
 

@@ -1,158 +1,20 @@
-"""Joystick mappings (seed Sec. 5.1.2): which Joy axes and buttons mean throttle, brake,
-steering, reverse and emergency stop. One YAML file per controller in models/gokart/joy/."""
+"""Deprecated: import from `kartci.robots.gokart.joy` (joystick mappings are the kart's).
+Kept so that code written against `kartci.agents.joy` keeps working; nothing in kartci imports
+it."""
 
-from __future__ import annotations
+from kartci.robots.gokart.joy import (
+    Button,
+    JoyMapping,
+    PedalAxis,
+    SteeringAxis,
+    check_counts,
+    check_pad,
+    kart_command,
+    known_mappings,
+    load_mapping,
+    to_command,
+    to_joy,
+)
 
-import os
-from functools import cache
-from pathlib import Path
-from typing import Any
-
-import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
-
-from kartci import project
-from kartci.errors import SpecError
-from kartci.logs.types import header, msg
-from kartci.project import did_you_mean
-from kartci.robots.gokart.params import GokartModel
-from kartci.spec.yamlio import read_yaml
-from kartci.vehicle import KartInput
-
-
-class _M(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class SteeringAxis(_M):
-    """The Joy axis that steers; the steering-column angle is linear in it (+1: full left)."""
-
-    axis: int = Field(ge=0)
-    scale_rad: float = Field(description="steering-column angle at axis value +1 (full left)")
-
-
-class PedalAxis(_M):
-    """A pedal on a Joy axis: its value released (`rest`) and fully pressed (`full`); in between it
-    maps linearly to 0..1."""
-
-    axis: int = Field(ge=0)
-    rest: float = 1.0
-    full: float = -1.0
-
-
-class Button(_M):
-    """A Joy button by index; pressed while its value is non-zero."""
-
-    button: int = Field(ge=0)
-
-
-class JoyMapping(_M):
-    """How one make of controller's Joy messages map to kart inputs, and the axis and button counts
-    its messages have (a pad of another make is refused)."""
-
-    name: str
-    steering: SteeringAxis
-    throttle: PedalAxis
-    brake: PedalAxis
-    reverse: Button
-    emergency_stop: Button
-    axes: int = Field(ge=1, description="axes in a Joy message of this controller")
-    buttons: int = Field(ge=1)
-
-
-def known_mappings() -> dict[str, Path]:
-    """Mapping name -> file, from `gokart/joy/` on the project's model path (its own folders
-    first, then the built-in ones); `.yaml` and `.yml` alike."""
-    found: dict[str, Path] = {}
-    for folder in project.current().model_path:
-        for p in sorted((folder / "gokart" / "joy").glob("*.y*ml")):
-            if p.suffix in (".yaml", ".yml"):
-                found.setdefault(p.stem, p)
-    return dict(sorted(found.items()))
-
-
-@cache
-def load_mapping(name: str) -> JoyMapping:
-    """A mapping by name (`gokart/joy/<name>.yaml` or `.yml` on the project's model path) or by
-    path to a YAML file (anything ending in .yaml / .yml or holding a path separator)."""
-    if name.endswith((".yaml", ".yml")) or "/" in name or os.sep in name:
-        path = Path(name).expanduser()
-        return _parse(path)  # read_yaml names a missing file, a FIFO, a device
-    known = known_mappings()
-    if name not in known:
-        raise SpecError(f"unknown joystick mapping '{name}'{did_you_mean(name, known)}; "
-                        "or give the path of a mapping YAML file")
-    return _parse(known[name])
-
-
-def _parse(path: Path) -> JoyMapping:
-    """The mapping in a file; a problem is named by its place (key, or line and column), never
-    by quoting the file, which may be anything a user pointed at. Read as scenario files are
-    (yamlio: a small regular file, no duplicate keys)."""
-    data = read_yaml(path)
-    try:
-        return JoyMapping.model_validate(data)
-    except ValidationError as err:
-        first = err.errors()[0]
-        key = ".".join(str(x) for x in first["loc"]) or "(top level)"
-        raise SpecError(f"{path}: invalid joystick mapping ({key}: {first['msg']})") from err
-
-
-def check_pad(m: JoyMapping, name: str, log: Path, topic: str) -> None:
-    """The recorded pad must have the mapping's axis and button counts: a pad of another make
-    would otherwise be read with the wrong axes, silently."""
-    from kartci.logs import messages
-
-    for _, _, joy in messages(log, [topic]):
-        check_counts(m, name, joy, f"{log} {topic}")
-        return
-
-
-def check_counts(m: JoyMapping, name: str, joy: Any, where: str) -> None:
-    """One Joy message against the mapping's counts (SpecError, one line, when they differ)."""
-    axes, buttons = len(joy.axes), len(joy.buttons)
-    if (axes, buttons) != (m.axes, m.buttons):
-        raise SpecError(f"{where}: the pad has {axes} axes and {buttons} buttons, but mapping "
-                        f"'{name}' ({m.name}) expects {m.axes} axes and {m.buttons} buttons; "
-                        f"choose a matching mapping (known: {', '.join(known_mappings())}) or "
-                        "give the path of your own mapping file")
-
-
-def _pedal(p: PedalAxis, axes: Any) -> float:
-    v = float(axes[p.axis]) if p.axis < len(axes) else p.rest
-    return float(np.clip((v - p.rest) / (p.full - p.rest), 0.0, 1.0))
-
-
-def to_command(m: JoyMapping, model: GokartModel, joy: Any) -> KartInput:
-    """A Joy message as a kart command, scaled to the kart's limits."""
-    axes, buttons = joy.axes, joy.buttons
-    steer = float(axes[m.steering.axis]) if m.steering.axis < len(axes) else 0.0
-
-    def pressed(b: Button) -> bool:
-        return b.button < len(buttons) and bool(buttons[b.button])
-
-    return KartInput(steering_rad=steer * m.steering.scale_rad,
-                     accel_mps2=_pedal(m.throttle, axes) * model.max_accel_mps2,
-                     brake_mps2=_pedal(m.brake, axes) * model.max_brake_mps2,
-                     reverse=pressed(m.reverse), estop=pressed(m.emergency_stop))
-
-
-def to_joy(m: JoyMapping, model: GokartModel, cmd: KartInput, t_ns: int, frame: str) -> Any:
-    """The Joy message a person would produce for a command (the inverse of to_command)."""
-    axes = np.zeros(m.axes, dtype=np.float32)
-    buttons = np.zeros(m.buttons, dtype=np.int32)
-    axes[m.steering.axis] = np.clip(cmd.steering_rad / m.steering.scale_rad, -1, 1)
-    for pedal, value, limit in ((m.throttle, cmd.accel_mps2, model.max_accel_mps2),
-                                (m.brake, cmd.brake_mps2, model.max_brake_mps2)):
-        frac = float(np.clip(value / limit, 0.0, 1.0))
-        axes[pedal.axis] = pedal.rest + frac * (pedal.full - pedal.rest)
-    buttons[m.reverse.button] = int(cmd.reverse)
-    buttons[m.emergency_stop.button] = int(cmd.estop)
-    return msg("sensor_msgs/msg/Joy", header=header(t_ns, frame), axes=axes, buttons=buttons)
-
-
-def kart_command(cmd: KartInput, t_ns: int, frame: str) -> Any:
-    """A command as the seed's kartci_msgs/KartCommand, stamped `t_ns` in `frame`."""
-    return msg("kartci_msgs/msg/KartCommand", header=header(t_ns, frame),
-               steering_wheel_angle_rad=cmd.steering_rad, acceleration_mps2=cmd.accel_mps2,
-               brake_mps2=cmd.brake_mps2, reverse=cmd.reverse, emergency_stop=cmd.estop)
+__all__ = ["Button", "JoyMapping", "PedalAxis", "SteeringAxis", "check_counts", "check_pad",
+           "kart_command", "known_mappings", "load_mapping", "to_command", "to_joy"]

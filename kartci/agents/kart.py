@@ -9,8 +9,6 @@ from typing import Any
 
 import numpy as np
 
-from kartci.agents.base import Outbox
-from kartci.agents.joy import check_counts, kart_command, load_mapping, to_command, to_joy
 from kartci.agents.params import (
     CommandsController,
     JoyDriverController,
@@ -18,11 +16,12 @@ from kartci.agents.params import (
     ScriptController,
 )
 from kartci.agents.source import Recorded
+from kartci.core import AgentContext, Outbox
 from kartci.logs.types import base_link, header, msg, yaw_of
-from kartci.plugins import AgentContext
+from kartci.robots.gokart import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
+from kartci.robots.gokart.joy import check_counts, kart_command, load_mapping, to_command, to_joy
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, Track, track_from_text
-from kartci.vehicle import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
 
 JOY = ("sensor_msgs/msg/Joy",)
 COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",

@@ -7,10 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from kartci.agents.base import Outbox
 from kartci.agents.params import LinePidController
+from kartci.core import AgentContext, Outbox
 from kartci.logs.types import base_link, header, msg
-from kartci.plugins import AgentContext
 from kartci.robots.line_tracker.params import LineTrackerModel
 
 

@@ -7,7 +7,8 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.spec.models import ControllerParams, Frozen, LogSource
+from kartci.core import ControllerParams, Frozen
+from kartci.spec.models import LogSource
 
 
 class LinePidController(ControllerParams):

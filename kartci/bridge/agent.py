@@ -19,15 +19,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from kartci.agents.base import Outbox
-from kartci.agents.joy import kart_command, load_mapping, to_command
 from kartci.bridge import ros2
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening
 from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
+from kartci.core import AgentContext, Outbox
 from kartci.errors import RunError
 from kartci.logs.types import base_link, msg, stamp_ns, typestore
-from kartci.plugins import AgentContext
+from kartci.robots.gokart.joy import kart_command, load_mapping, to_command
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 LATE_TOPIC = "bridge/late_commands"  # std_msgs/UInt32: the count so far, at each late tick

@@ -5,9 +5,8 @@ metrics); any late tick also means the run may not repeat byte for byte."""
 from __future__ import annotations
 
 from kartci.bridge.agent import LATE_TOPIC
+from kartci.core import Direction, Metric, MetricDef, MetricSet
 from kartci.metrics import ScoreContext
-from kartci.metrics.base import Direction, Metric, MetricDef
-from kartci.plugins import MetricSet
 
 
 def _late(ctx: ScoreContext, params: object) -> list[Metric]:

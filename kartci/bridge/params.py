@@ -7,7 +7,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.spec.models import ControllerParams, Frozen
+from kartci.core import ControllerParams, Frozen
 
 COMMAND_TYPES = {  # what the bridge takes back, and the robot topic each is applied on
     "ackermann_msgs/msg/AckermannDriveStamped": "ackermann_cmd",

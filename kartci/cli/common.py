@@ -14,7 +14,7 @@ from rich.text import Text
 
 from kartci.errors import KartciError, RunError, SpecError
 from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
-from kartci.results import ScenarioResult, exit_code, one_line
+from kartci.verdict.result import ScenarioResult, exit_code, one_line
 
 # Help text is shown as written (rich_markup_mode=None): rich markup would eat `kartci[ray]`
 # and `[default: ...]`.

@@ -65,9 +65,10 @@ def replay(
     if open_loop:
         _open_loop(log, agent, ns, reference, tolerance or [], out_dir(out, "openloop"))
         return
-    from kartci.agents.joy import check_pad, load_mapping
     from kartci.agents.kart import JOY
     from kartci.agents.params import CommandsController, ManualController
+    from kartci.report.static import scenario_svgs
+    from kartci.robots.gokart.joy import check_pad, load_mapping
     from kartci.runner import Job, run_jobs
     from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
     from kartci.spec import load_scenario
@@ -97,7 +98,7 @@ def replay(
         clear_reports(out)
         write_manifest(out, "replay", [spec.name])
         finish(run_jobs([Job(spec, spec.name)], out, baselines_dir(baselines),
-                        strict=strict_mode(strict)), out)
+                        strict=strict_mode(strict), draw=scenario_svgs), out)
 
 
 def _input_topic(log: Path, topic: str | None) -> TopicInfo:

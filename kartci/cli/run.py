@@ -111,6 +111,7 @@ def run(
     """
     from kartci import project
     from kartci.report.progress import ProgressView
+    from kartci.report.static import scenario_svgs
     from kartci.runner import expand, parse_shard, run_jobs
     from kartci.runner import shard as share
     from kartci.runner.jobs import Vary, default_suite
@@ -156,5 +157,5 @@ def run(
                 ProgressView(todo, err_console, live) as view:
             results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
                                executor=executor, ray_address=ray_address, timeout_s=timeout_s,
-                               strict=strict_mode(strict), on_event=view)
+                               strict=strict_mode(strict), on_event=view, draw=scenario_svgs)
         finish(results, out, ci=part is None)

@@ -71,7 +71,7 @@ def plugins() -> None:
 
     Controllers, nodes, robot kinds, world kinds and metric sets (what a scenario can name), each
     with its one-line description and the module it comes from."""
-    from kartci.plugins import catalogue
+    from kartci.core import catalogue
 
     table = Table("kind", "name", "description", "from", box=None)
     for info in catalogue():

@@ -16,13 +16,12 @@ from typing import Any
 import numpy as np
 
 from kartci import project
-from kartci.agents.base import Outbox
+from kartci.core import AgentContext, Outbox
 from kartci.localization.deskew import deskew
 from kartci.localization.ekf import BIAS, VY, Noise, PlanarEkf, wrap
 from kartci.localization.params import LocalizationParams
 from kartci.localization.registration import MapMatcher, Match, pose_matrix
 from kartci.logs.types import WORLD_FRAME, header, msg, stamp_ns
-from kartci.plugins import AgentContext
 from kartci.pointcloud import cloud_xyz
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, track_from_text

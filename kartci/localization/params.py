@@ -7,7 +7,8 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.spec.models import Frozen, Length_m, NodeParams
+from kartci.core import Frozen, NodeParams
+from kartci.spec.models import Length_m
 
 
 class InitialGuess(Frozen):

@@ -1,7 +1,7 @@
 """Metrics: functions from a run log to named numbers with units. Never touches the simulator.
 
 Which metric sets run for an agent: its robot kind's own sets, then those the scenario names
-under `metrics:`; each set is a registered `MetricSet` (see `kartci.plugins`)."""
+under `metrics:`; each set is a registered `MetricSet` (see `kartci.core`)."""
 
 from __future__ import annotations
 
@@ -10,11 +10,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from kartci import plugins
+from kartci import core
+from kartci.core import Direction, Metric, MetricDef, MetricParams, definition, definitions
 from kartci.errors import LogError
-from kartci.metrics.base import Direction, Metric, MetricDef
 from kartci.spec import Scenario, scenario_from_json
-from kartci.spec.models import MetricParams
 
 if TYPE_CHECKING:  # pandas, the log readers and scipy load when a log is scored, not before
     import pandas as pd
@@ -55,7 +54,7 @@ class ScoreContext:
         value: T = self.cache[key]
         return value
 
-    def params(self, mset: plugins.MetricSet) -> Any:
+    def params(self, mset: core.MetricSet) -> Any:
         """The set's parameters from the scenario, else its defaults."""
         given = self.scenario.metrics.get(mset.name)
         if given is not None:
@@ -63,26 +62,18 @@ class ScoreContext:
         return mset.params() if mset.params is not None else MetricParams()
 
 
-def definitions() -> dict[str, MetricDef]:
-    """Every registered metric's definition by name."""
-    out: dict[str, MetricDef] = {}
-    for mset in plugins.METRICS.all():
-        for name, d in mset.defs.items():
-            out.setdefault(name, d)
-    return out
-
-
-def definition(name: str) -> MetricDef | None:
-    """The definition of a metric (`name` or `agent.name`), or None for an unknown one."""
-    return definitions().get(name.rsplit(".", 1)[-1])
-
-
-def metric_sets(scenario: Scenario, agent: str) -> list[plugins.MetricSet]:
+def metric_sets(scenario: Scenario, agent: str) -> list[core.MetricSet]:
     """The sets computed for one agent: its robot kind's, then the scenario's, once each."""
     kind = scenario.agents[agent].model.kind
-    names = [*plugins.ROBOTS.get(kind).metrics, *scenario.metrics]
-    sets = [plugins.METRICS.get(n) for n in dict.fromkeys(names)]
+    names = [*core.ROBOTS.get(kind).metrics, *scenario.metrics]
+    sets = [core.METRICS.get(n) for n in dict.fromkeys(names)]
     return [s for s in sets if not s.robots or kind in s.robots]
+
+
+def footprint_m(scenario: Scenario, agent: str) -> tuple[float, float, float] | None:
+    """An agent's outline (centre ahead of base_link, length, width; m) as its robot kind
+    declares it, so clearance and detection know no kind's constant; None: no outline."""
+    return core.ROBOTS.get(scenario.agents[agent].model.kind).footprint_m
 
 
 def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
@@ -123,4 +114,4 @@ def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
 
 
 __all__ = ["Direction", "Metric", "MetricDef", "ScoreContext", "compute", "definition",
-           "definitions", "metric_sets", "recorded_scenario", "recorded_track"]
+           "definitions", "footprint_m", "metric_sets", "recorded_scenario", "recorded_track"]

@@ -1,6 +1,7 @@
 """Obstacle detection scored from the log: each `obstacle_detector/detections` message (a frame)
 against the ground-truth boxes of that moment: the world's static boxes (/kartci/obstacles) and
-every other kart (its odometry and footprint; dynamic while faster than `dynamic_mps`).
+every other robot (its odometry and its kind's footprint; dynamic while faster than
+`dynamic_mps`).
 
 A detection matches a truth box when their centres are within `match_m` (centre distance, not
 IoU: a lidar sees one or two faces of a box, so its box is smaller than the truth and IoU would
@@ -16,13 +17,11 @@ from typing import Any
 import numpy as np
 from pydantic import Field
 
+from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.logs.reader import messages
 from kartci.logs.types import stamp_ns
-from kartci.metrics import ScoreContext
-from kartci.metrics.base import Direction, Metric, MetricDef
-from kartci.spec.models import MetricParams
+from kartci.metrics import ScoreContext, footprint_m
 from kartci.track import OBSTACLES_TOPIC
-from kartci.vehicle import FOOTPRINT_M
 
 
 class DetectionMetricsParams(MetricParams):
@@ -64,7 +63,8 @@ def _truth(ctx: ScoreContext, t: float, statics: list[tuple[float, float]],
             continue
         i = min(int(np.searchsorted(odom["t"].to_numpy(), t)), len(odom) - 1)
         row = odom.iloc[i]
-        ahead = FOOTPRINT_M[0]
+        outline = footprint_m(ctx.scenario, other)
+        ahead = outline[0] if outline else 0.0
         out.append((float(row["x"]) + ahead * math.cos(row["yaw"]),
                     float(row["y"]) + ahead * math.sin(row["yaw"]),
                     abs(float(row["vx"])) > params.dynamic_mps))

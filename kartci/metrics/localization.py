@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 from pydantic import Field
 
+from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.errors import LogError
 from kartci.metrics import ScoreContext
-from kartci.metrics.base import Direction, Metric, MetricDef
 from kartci.metrics.trajectory import (
     DeltaUnit,
     Relation,
@@ -22,7 +22,6 @@ from kartci.metrics.trajectory import (
     associate,
     rpe,
 )
-from kartci.spec.models import MetricParams
 
 
 class LocalizationMetricsParams(MetricParams):

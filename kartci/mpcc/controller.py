@@ -17,9 +17,9 @@ from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
 from kartci.mpcc.params import MpccController
 from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
 from kartci.mpcc.rti import Rti
+from kartci.robots.gokart import STEERING_RATIO, wheel_angles
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import Track
-from kartci.vehicle import STEERING_RATIO, wheel_angles
 
 SUCCESS = {"Solve_Succeeded", "Solved_To_Acceptable_Level", "Success"}
 FEASIBLE = 1e-4  # largest constraint violation of a usable iterate (m, m/s, ...)

@@ -7,7 +7,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.spec.models import ControllerParams, Frozen
+from kartci.core import ControllerParams, Frozen
 
 
 class MpccMethod(StrEnum):

@@ -13,14 +13,13 @@ from typing import Any
 
 import numpy as np
 
-from kartci.agents.base import Outbox
+from kartci.core import AgentContext, Outbox
 from kartci.localization.deskew import deskew
 from kartci.localization.node import map_path
 from kartci.logs.types import WORLD_FRAME, header, msg, stamp_ns, yaw_of
 from kartci.perception.clusters import MapMask, clusters, obstacle_points
 from kartci.perception.params import DetectorParams
 from kartci.perception.tracker import Track, Tracker
-from kartci.plugins import AgentContext
 from kartci.pointcloud import cloud_xyz, read_ply
 
 SCAN_RATE_HZ = 10.0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from kartci.spec.models import NodeParams
+from kartci.core import NodeParams
 
 
 class DetectorParams(NodeParams):

@@ -9,8 +9,17 @@ from typing import Any, Literal
 
 from pydantic import Field
 
+from kartci.core import (
+    Controller,
+    ControllerParams,
+    MetricSet,
+    RobotKind,
+    RobotParams,
+    WorldKind,
+    WorldParams,
+    lazy,
+)
 from kartci.errors import SpecError
-from kartci.plugins import Controller, MetricSet, RobotKind, WorldKind, lazy
 from kartci.realdata.divergence import DEFS as SIMREAL_DEFS
 from kartci.realdata.divergence import SimrealParams, simreal_metrics
 from kartci.realdata.motion import (
@@ -18,7 +27,6 @@ from kartci.realdata.motion import (
     TRACK_DEFS,
     motion_metrics,
 )
-from kartci.spec.models import ControllerParams, RobotParams, WorldParams
 
 
 class RecordedWorld(WorldParams):

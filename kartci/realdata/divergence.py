@@ -10,12 +10,11 @@ from typing import Any
 import numpy as np
 from pydantic import Field
 
+from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.errors import LogError
 from kartci.metrics import ScoreContext
-from kartci.metrics.base import Direction, Metric, MetricDef
 from kartci.realdata.drive import Drive
 from kartci.realdata.plant import Plant
-from kartci.spec.models import MetricParams
 
 SIGNALS = (("x", "m"), ("y", "m"), ("yaw", "rad"), ("speed", "mps"), ("yaw_rate", "radps"))
 SIM_WINDOWS, SIM_WHOLE = "sim/odom_windows", "sim/odom_whole"

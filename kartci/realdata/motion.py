@@ -10,9 +10,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from kartci.core import Direction, Metric, MetricDef
 from kartci.metrics import ScoreContext
-from kartci.metrics.base import DEFS, Direction, Metric, MetricDef
-from kartci.metrics.kart import kart_track, lap_crossings
+from kartci.metrics.defs import DEFS
+from kartci.metrics.progress import kart_track, lap_crossings
 from kartci.track import TRACK_TOPIC, track_from_text
 
 MOTION_DEFS = {

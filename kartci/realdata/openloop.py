@@ -13,21 +13,20 @@ from typing import Any
 
 import numpy as np
 
-from kartci import plugins
+from kartci import core
+from kartci.core import AgentContext, RobotParams
 from kartci.errors import LogError, SpecError
 from kartci.logs import McapLogWriter, messages, open_log, tables
 from kartci.logs.types import for_writing
 from kartci.metrics import recorded_scenario
-from kartci.plugins import AgentContext
 from kartci.realdata.builtin import RecordedRobot
-from kartci.spec.models import RobotParams
 
 
-def lookup(name: str) -> plugins.Node | plugins.Controller:
+def lookup(name: str) -> core.Node | core.Controller:
     """A registered node (localization, detector, a team's own) or controller, by name."""
-    if name in plugins.NODES.names():
-        return plugins.NODES.get(name)
-    return plugins.CONTROLLERS.get(name)
+    if name in core.NODES.names():
+        return core.NODES.get(name)
+    return core.CONTROLLERS.get(name)
 
 
 def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
@@ -51,7 +50,7 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
     if namespace is None:
         raise SpecError(f"{log}: not a kartci run log; name the robot's namespace (--ns)")
     if params is None:
-        params = kind.params(type=name) if isinstance(kind, plugins.Controller) else kind.params()
+        params = kind.params(type=name) if isinstance(kind, core.Controller) else kind.params()
     ctx = AgentContext(namespace, model, ())
     return kind.factory(params, ctx), namespace
 

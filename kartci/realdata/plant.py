@@ -10,7 +10,7 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -22,15 +22,6 @@ from kartci.sim.session import build_world
 from kartci.spec import Scenario
 
 Converter = Callable[[str, Any, int], list[tuple[str, Any]]]
-
-
-class Reinitialisable(Protocol):
-    """A simulated robot that can continue from a recorded state."""
-
-    def reinitialise(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
-                     yaw_rate_radps: float) -> None:
-        """Place and set moving; internal states follow."""
-        ...
 
 
 def diff_drive(role: CommandRole) -> Converter:

@@ -6,10 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from kartci.metrics.kart import kart_track
+from kartci.figures import PlotContext, Plots
+from kartci.metrics.progress import kart_track
 from kartci.realdata.divergence import SIM_WHOLE, SIM_WINDOWS
-from kartci.report.data import PlotContext
-from kartci.results import Plots
 from kartci.track import TRACK_TOPIC, track_from_text
 
 

@@ -13,9 +13,10 @@ from typing import Any
 from pydantic import Field, ValidationError
 
 from kartci import project
+from kartci.core import Frozen
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
-from kartci.spec.models import Criterion, Frozen
+from kartci.spec.models import Criterion
 from kartci.spec.yamlio import read_yaml
 
 POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",

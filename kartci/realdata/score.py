@@ -11,8 +11,8 @@ from pathlib import Path
 from kartci.realdata.importer import import_log
 from kartci.realdata.profile import resolve_profile
 from kartci.realdata.runlog import write_result
-from kartci.results import ScenarioResult
 from kartci.runner.run import evaluate
+from kartci.verdict.result import ScenarioResult
 
 
 def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,

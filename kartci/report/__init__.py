@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 from kartci.atomic import write_json_atomic, write_text_atomic
 from kartci.report.tables import COMPARE, RUN, Wording
-from kartci.results import ScenarioResult, exit_code
+from kartci.runner.outdir import FILES
+from kartci.verdict.result import ScenarioResult, exit_code
 
 if TYPE_CHECKING:
     from kartci.report.html import report_html
@@ -28,11 +29,6 @@ def __getattr__(name: str) -> Any:
         from kartci.report.markdown import summary_md
         return summary_md
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-# every file write_all puts in OUT, by key; the one list (OUT clears these at a command's start)
-FILES = {"html": "report.html", "static": "report-static.html", "markdown": "summary.md",
-         "json": "summary.json", "junit": "junit.xml"}
 
 
 def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:

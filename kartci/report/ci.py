@@ -9,9 +9,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from kartci import project
+from kartci.errors import KartciError
 from kartci.report.tables import delta, num, regression_size
-from kartci.results import ScenarioResult
 from kartci.verdict import Status
+from kartci.verdict.result import ScenarioResult
 
 SUMMARY_LIMIT_BYTES = 1_000_000  # under GitHub's 1 MiB per step, with room for the note
 MAX_ANNOTATIONS = 10
@@ -53,9 +55,6 @@ def scenario_files(results: list[ScenarioResult], root: Path | None = None) -> d
     """Each scenario's YAML file relative to `root` (the repository: $GITHUB_WORKSPACE, else the
     working directory), for annotations anchored to it; a scenario found elsewhere (installed
     with kartci) or not at all gets none."""
-    from kartci import project
-    from kartci.errors import KartciError
-
     base = (root or Path(os.environ.get("GITHUB_WORKSPACE") or Path.cwd())).resolve()
     out = {}
     for r in results:

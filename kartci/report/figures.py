@@ -11,7 +11,7 @@ from enum import StrEnum
 import numpy as np
 import pandas as pd
 
-from kartci.results import Plots
+from kartci.figures import Plots
 
 MAX_POINTS = 2000  # per series in a report: a 50 Hz, 60 s run is 3000 samples
 
@@ -282,9 +282,3 @@ def solve_times(p: Plots, ev: list[Event]) -> Figure:
     s = [_time(a, st, "solve_ms") for a, st in p.solves.items()]
     return Figure("solves", "MPCC solve time (wall clock)", "sim time [s]", "solve time [ms]",
                   Axis.TIME, s, ev, log_y=True)
-
-
-def best_marks(laps: pd.DataFrame) -> dict[str, int]:
-    """Row index of the best (lowest) value in each time column of a lap table."""
-    return {c: int(laps[c].to_numpy().argmin()) for c in laps.columns if c != "lap"
-            and len(laps)}

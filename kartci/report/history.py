@@ -15,8 +15,8 @@ from kartci.atomic import write_text_atomic
 from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
 from kartci.errors import SpecError
 from kartci.report.figures import Axis, Figure, Series
-from kartci.report.html import CSS
 from kartci.report.interactive import body_assets, figures_block, head_assets
+from kartci.report.tables import CSS
 from kartci.spec.yamlio import clip
 
 History = dict[str, dict[str, list[float | None]]]  # scenario -> metric -> value per commit

@@ -7,26 +7,13 @@ from datetime import UTC, datetime
 from typing import Any
 
 from kartci.report.figures import scenario_figures
+from kartci.report.history import history_sections
 from kartci.report.interactive import body_assets, figures_block, head_assets
 from kartci.report.laps import lap_tables
 from kartci.report.markdown import VERDICT_WORD
 from kartci.report.static import scenario_svgs
-from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
-from kartci.results import ScenarioResult, exit_code
-
-CSS = """
-body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}
-table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;
-text-align:right}th{background:#f3f3f3}td:first-child{text-align:left;font-family:monospace}
-.pass,.improved{color:#176f2c}.regressed,.failed,.error,.missing{color:#b00020;font-weight:bold}
-.new{color:#555}.cond-ill{color:#b00020;font-weight:bold}.cond-marginal{color:#8a5a00}
-.figs{display:flex;flex-wrap:wrap;gap:1em}.figs svg{max-width:560px;height:auto}
-.kfigs{display:flex;flex-wrap:wrap;gap:1em}.kfig{width:570px}.ktitle{font-weight:bold;
-text-align:center;font-size:14px}.kinfo{font-size:12px}table.laps td.best{font-weight:bold;
-color:#176f2c}table.laps tr.ideal td{color:#555;font-style:italic}caption{text-align:left}
-section{border-top:2px solid #ddd;margin-top:1.5em}code{background:#f6f6f6;padding:0 3px}
-"""
-
+from kartci.report.tables import CSS, MARK, RUN, Wording, conditioning, delta, num, tolerance
+from kartci.verdict.result import ScenarioResult, exit_code
 
 HELP = ("<p>Figures: hover to read values (the time cursor is shared by a scenario's plots and "
         "shown as a dot on the view from above), wheel to zoom, drag to zoom to a range, "
@@ -80,8 +67,6 @@ def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
 
 def _history(results: list[ScenarioResult], history: tuple[list[str], Any]) -> str:
     """The metric history of this run's scenarios, the run itself as the newest point."""
-    from kartci.report.history import history_sections
-
     labels, values = history
     return (f'<section id="metric-history"><h2>Metric history</h2><p>{len(labels) - 1} earlier '
             "commits of main, then this run (hover a point for its commit).</p>"

@@ -6,7 +6,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 
 from kartci.report.tables import RUN, Wording, num
-from kartci.results import ScenarioResult
+from kartci.verdict.result import ScenarioResult
 
 
 def xml_text(text: str) -> str:

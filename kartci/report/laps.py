@@ -7,7 +7,7 @@ import html
 
 import pandas as pd
 
-from kartci.results import Plots
+from kartci.figures import Plots
 
 
 def _s(x: float) -> str:

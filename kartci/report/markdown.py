@@ -12,8 +12,8 @@ from kartci.report.tables import (
     regression_size,
     tolerance,
 )
-from kartci.results import ScenarioResult, exit_code
 from kartci.verdict import SEVERITY, MetricVerdict, Status
+from kartci.verdict.result import ScenarioResult, exit_code
 
 VERDICT_WORD = {0: "all scenarios pass", 1: "regressions or failed criteria", 2: "run errors"}
 

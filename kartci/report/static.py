@@ -12,9 +12,9 @@ from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 
+from kartci.figures import Plots
 from kartci.report.figures import Axis, Figure, Role, Series, scenario_figures, thin
 from kartci.report.plots import _svg  # also sets Agg, the SVG settings and the mathtext guard
-from kartci.results import Plots
 
 STYLE: dict[Role, dict[str, Any]] = {Role.REFERENCE: {"color": "grey", "ls": "--", "lw": 1.0},
          Role.COMMAND: {"ls": ":", "lw": 0.8}, Role.OUTLINE: {"color": "black", "lw": 0.8},

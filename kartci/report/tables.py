@@ -1,4 +1,5 @@
-"""Formatting shared by every report: numbers with units, deltas, statuses."""
+"""Formatting shared by every report: numbers with units, deltas, statuses; the HTML pages'
+style (here, below both the report and the history page that use it)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,21 @@ from kartci.verdict import Conditioning, MetricVerdict, Policy, Status
 
 MARK = {Status.PASS: "✅", Status.IMPROVED: "🟢", Status.REGRESSED: "❌", Status.FAILED: "❌",
         Status.NEW: "🆕", Status.MISSING: "⚠️", Status.ERROR: "💥"}
+
+
+# the style of every HTML page (report.html, report-static.html, history.html)
+CSS = """
+body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}
+table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;
+text-align:right}th{background:#f3f3f3}td:first-child{text-align:left;font-family:monospace}
+.pass,.improved{color:#176f2c}.regressed,.failed,.error,.missing{color:#b00020;font-weight:bold}
+.new{color:#555}.cond-ill{color:#b00020;font-weight:bold}.cond-marginal{color:#8a5a00}
+.figs{display:flex;flex-wrap:wrap;gap:1em}.figs svg{max-width:560px;height:auto}
+.kfigs{display:flex;flex-wrap:wrap;gap:1em}.kfig{width:570px}.ktitle{font-weight:bold;
+text-align:center;font-size:14px}.kinfo{font-size:12px}table.laps td.best{font-weight:bold;
+color:#176f2c}table.laps tr.ideal td{color:#555;font-style:italic}caption{text-align:left}
+section{border-top:2px solid #ddd;margin-top:1.5em}code{background:#f6f6f6;padding:0 3px}
+"""
 
 
 def num(x: float | None, unit: str = "") -> str:

@@ -9,7 +9,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from kartci.runner.executors import Event, EventKind
+    from kartci.runner.events import Event, EventKind
     from kartci.runner.jobs import Job, Outcome, expand, parse_shard, shard
     from kartci.runner.kinds import ExecutorKind
     from kartci.runner.run import (
@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     )
     from kartci.runner.suite import run_jobs
 
-_WHERE = {"Event": "executors", "EventKind": "executors", "ExecutorKind": "kinds",
+_WHERE = {"Event": "events", "EventKind": "events", "ExecutorKind": "kinds",
           "Job": "jobs", "Outcome": "jobs", "expand": "jobs", "parse_shard": "jobs",
           "shard": "jobs", "ERROR_NAME": "run", "LOG_NAME": "run", "default_baselines": "run",
           "evaluate": "run", "rescore": "run", "run_one": "run", "scenario_folders": "run",

@@ -8,11 +8,12 @@ from dataclasses import replace
 from pathlib import Path
 
 from kartci.errors import SpecError
-from kartci.results import ScenarioResult, overlay
+from kartci.figures import overlay
 from kartci.runner.jobs import REPEAT_PREFIX
 from kartci.runner.outdir import check_inside
 from kartci.runner.run import evaluate, failed_reason, scenario_folders
 from kartci.verdict import load, read_metrics
+from kartci.verdict.result import ScenarioResult
 from kartci.verdict.runs import ALPHA, Samples, compare_runs
 
 

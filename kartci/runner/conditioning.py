@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Any
 
 from kartci.errors import BaselineError
-from kartci.results import ScenarioResult
 from kartci.runner.jobs import REPEAT_PREFIX, START_STEP_M, Job, Vary, replica
 from kartci.verdict import (
     SPREAD_MULTIPLE,
@@ -26,6 +25,7 @@ from kartci.verdict import (
     spread,
 )
 from kartci.verdict.baseline import conditioning, definition, read_json
+from kartci.verdict.result import ScenarioResult
 
 DEFAULT_REPLICAS = 4  # the run itself and 3 nudged: enough to see a bifurcation, 4x the cost
 

@@ -11,7 +11,6 @@ import ctypes
 import multiprocessing as mp
 import os
 import queue as queue_mod
-import shutil
 import signal
 import sys
 import threading
@@ -20,38 +19,16 @@ from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
-from enum import StrEnum
 from typing import Any
 
 from kartci import portable
 from kartci.portable import Pin
+from kartci.runner.events import Event, EventKind, Listener, lost
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 from kartci.runner.kinds import ExecutorKind
-from kartci.runner.run import STAGE_PREFIX, mark_failed
+from kartci.runner.ray_executor import ray_tasks
 
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
-
-
-class EventKind(StrEnum):
-    """What an Event reports."""
-
-    STARTED = "started"
-    PROGRESS = "progress"
-    FINISHED = "finished"
-
-
-@dataclass(frozen=True)
-class Event:
-    """News of one job, for progress listeners."""
-
-    kind: EventKind
-    folder: str  # the job's folder, relative to OUT
-    sim_t: float = 0.0
-    outcome: Outcome | None = None  # FINISHED only
-
-
-Listener = Callable[[Event], None]
 
 
 def serial(jobs: Sequence[Job], ctx: Context, emit: Listener) -> Iterator[Outcome]:
@@ -226,24 +203,11 @@ def _outcome(fut: Future[Outcome], job: Job, ctx: Context) -> Outcome:
         return lost(job, ctx, f"worker process failed: {type(err).__name__}: {err}")
 
 
-def lost(job: Job, ctx: Context, error: str) -> Outcome:
-    """A job whose process died: its folder is marked failed here, since the dead process
-    could not (its own unfinished mark says no more than that it did not finish)."""
-    folder = ctx.out / job.folder
-    if folder.is_dir():
-        mark_failed(folder, job.label, error)
-        for stage in folder.glob(f"{STAGE_PREFIX}*"):  # its half-written run: nobody owns it
-            shutil.rmtree(stage, ignore_errors=True)
-    return Outcome.failed(job, error)
-
-
 def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,
             kind: ExecutorKind = ExecutorKind.LOCAL,
             ray_address: str | None = None) -> Iterator[Outcome]:
     """Outcomes in the order jobs finish, each also announced as a FINISHED event."""
     if kind is ExecutorKind.RAY:
-        from kartci.runner.ray_executor import ray_tasks
-
         return ray_tasks(jobs, ctx, emit, workers, ray_address)
     if portable.state() is Pin.UNPINNED:  # this process's bits are not every CPU's
         return pool(jobs, ctx, emit, max(1, min(workers, len(jobs))), here=False)

@@ -9,8 +9,8 @@ import shlex
 from dataclasses import replace
 from pathlib import Path
 
-from kartci.results import ScenarioResult
 from kartci.verdict import Status
+from kartci.verdict.result import ScenarioResult
 
 
 def strict_default() -> bool:

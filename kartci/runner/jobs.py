@@ -25,7 +25,7 @@ from typing import Any
 
 from kartci import project
 from kartci.errors import RunError, SpecError
-from kartci.results import ScenarioResult, one_line
+from kartci.figures import Plots
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
     check_criteria_names,
@@ -36,11 +36,15 @@ from kartci.runner.run import (
 from kartci.spec import Scenario, load_scenario
 from kartci.spec.load import scenario_loader
 from kartci.spec.yamlio import clip
+from kartci.verdict.result import ScenarioResult, one_line
 
 REPEAT_PREFIX = "repeat_"
 START_STEP_M = 1e-9  # replica k starts k x 1 nm to the left: far below anything physical
 Report = Callable[[str, float], None]  # (job folder, sim time s), called from the worker
 Progress = Callable[[int, int], None]  # (sweep points validated, points in all)
+# a result's figures drawn as SVG for report-static.html (kartci.report.static.scenario_svgs,
+# passed in by the command, which sits above both runner and report)
+Draw = Callable[[Plots], tuple[str, ...]]
 Grid = list[tuple[str, list[str]]]  # a sweep: (dotted key, its values) per axis
 # A sweep's points each validate in a few ms and each become a run, a folder in OUT and a
 # baseline of their own: 10,000 is already hours of CI and a minute of validation; a larger
@@ -113,6 +117,9 @@ class Context:
     baselines: Path
     timeout_s: float | None = None
     strict: bool = False  # a missing baseline or baseline metric fails (see runner.gate)
+    # draws the judged run's figures where it was judged: in a worker with -j N, so drawing
+    # overlaps other runs instead of following the last one (None: the report draws them)
+    draw: Draw | None = None
 
 
 def parse_sweep(text: str) -> tuple[str, list[str]]:
@@ -285,10 +292,8 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
     if job.repeat != 0:
         return Outcome(job, None, None, run, time.perf_counter() - start)
     result = evaluate(ctx.out / job.folder, ctx.baselines)
-    if result.plots is not None:
-        from kartci.report.static import scenario_svgs
-
-        result = replace(result, static_figures=scenario_svgs(result.plots))
+    if result.plots is not None and ctx.draw is not None:
+        result = replace(result, static_figures=ctx.draw(result.plots))
     if ctx.strict:
         result = require_baselines(result, ctx.out, ctx.baselines)
     return Outcome(job, result.error, result, run, time.perf_counter() - start)

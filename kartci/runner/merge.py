@@ -12,11 +12,11 @@ import tempfile
 from pathlib import Path
 
 from kartci.errors import SpecError
-from kartci.results import ScenarioResult
 from kartci.runner.gate import require_baselines
 from kartci.runner.outdir import check_inside, valid_label
 from kartci.runner.run import STAGE_PREFIX, UNFINISHED, evaluate, mark_failed, scenario_folders
 from kartci.verdict import read_json, write_json_atomic
+from kartci.verdict.result import ScenarioResult
 
 SHARD_NAME = "shard.json"
 

@@ -23,12 +23,15 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from kartci.errors import RunError, SpecError
-from kartci.report import FILES
 from kartci.verdict import read_json, write_json_atomic
 
 LOCK_NAME = ".kartci.lock"
 MANIFEST_NAME = "manifest.json"
-REPORT_NAMES = tuple(FILES.values())  # what the report writers put in OUT
+# every file the report writers (kartci.report.write_all) put in OUT, by key: the one list, kept
+# with OUT's layout (OUT clears these at a command's start)
+FILES = {"html": "report.html", "static": "report-static.html", "markdown": "summary.md",
+         "json": "summary.json", "junit": "junit.xml"}
+REPORT_NAMES = tuple(FILES.values())
 _LABEL = re.compile(r"^[A-Za-z0-9_=@+,-][A-Za-z0-9_.=@+,-]*$")  # as jobs._safe makes them
 
 

@@ -14,7 +14,7 @@ from typing import Any
 
 from kartci.errors import RunError, SpecError
 from kartci.portable import child_vars
-from kartci.runner.executors import Event, EventKind, Listener, lost
+from kartci.runner.events import Event, EventKind, Listener, lost
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 
 

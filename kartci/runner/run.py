@@ -21,13 +21,14 @@ from typing import Any
 
 import pandas as pd
 
-from kartci import metrics, plugins, portable, project
+from kartci import core, metrics, portable, project
+from kartci.agents.kart import COMMANDS, JOY
+from kartci.agents.source import Recorded
 from kartci.atomic import write_text_atomic
 from kartci.errors import KartciError, LogError, SpecError
+from kartci.figures import PlotContext, Plots
 from kartci.logs import tables
 from kartci.project import did_you_mean
-from kartci.report.data import PlotContext
-from kartci.results import Plots, ScenarioResult, one_line
 from kartci.runner.outdir import check_inside, manifest_labels
 from kartci.sim import simulate
 from kartci.sim.session import describe
@@ -47,6 +48,7 @@ from kartci.verdict import (
     read_metrics,
     write_json_atomic,
 )
+from kartci.verdict.result import ScenarioResult, one_line
 from kartci.verdict.trace import load_trace, trace_path
 
 LOG_NAME = "run.mcap"
@@ -168,9 +170,6 @@ def keep_outputs(stage: Path, folder: Path) -> None:
 def input_warnings(scenario: Scenario) -> list[str]:
     """Recorded inputs longer than the scenario: the rest is not replayed, which a user must be
     told (not silently cut)."""
-    from kartci.agents.kart import COMMANDS, JOY
-    from kartci.agents.source import Recorded
-
     out = []
     for name, agent in scenario.agents.items():
         source = getattr(agent.controller, "source", None)
@@ -207,7 +206,7 @@ def score(folder: Path) -> dict[str, Any]:
 def plots(folder: Path, scenario: Scenario) -> Plots | None:
     """The report's time series and geometry, from the log, drawn as the first agent's robot
     kind says (None when the kind draws nothing)."""
-    kind = plugins.ROBOTS.get(next(iter(scenario.agents.values())).model.kind)
+    kind = core.ROBOTS.get(next(iter(scenario.agents.values())).model.kind)
     if kind.plots is None:
         return None
     result: Plots = kind.plots(PlotContext(scenario, tables(folder / LOG_NAME),

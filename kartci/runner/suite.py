@@ -5,12 +5,13 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from kartci.results import ScenarioResult
 from kartci.runner import conditioning, costs
-from kartci.runner.executors import Event, Listener, execute
-from kartci.runner.jobs import REPEAT_PREFIX, Context, Job, Outcome, Vary
+from kartci.runner.events import Event, Listener
+from kartci.runner.executors import execute
+from kartci.runner.jobs import REPEAT_PREFIX, Context, Draw, Job, Outcome, Vary
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.run import UNFINISHED, mark_failed
+from kartci.verdict.result import ScenarioResult
 
 
 def _ignore(_: Event) -> None:
@@ -20,10 +21,11 @@ def _ignore(_: Event) -> None:
 def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
              executor: ExecutorKind = ExecutorKind.LOCAL, ray_address: str | None = None,
              timeout_s: float | None = None, strict: bool = False,
-             on_event: Listener | None = None) -> list[ScenarioResult]:
+             on_event: Listener | None = None, draw: Draw | None = None) -> list[ScenarioResult]:
     """A run that fails is an ERROR result for its label only (a failed repeat included);
     earlier outputs of a failed run stay in place, marked failed. `strict`: a scenario without
-    a baseline, or with a metric its baseline lacks, fails (see runner.gate).
+    a baseline, or with a metric its baseline lacks, fails (see runner.gate). `draw`: the
+    judged runs' static figures are drawn as each is judged (see jobs.Context).
 
     Every job's folder is marked unfinished before the first run starts, and only that job's
     completed run clears the mark: if this command is interrupted, no older result in OUT can
@@ -32,7 +34,7 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
     for job in jobs:
         if (out / job.folder).is_dir():
             mark_failed(out / job.folder, job.spec.name, UNFINISHED)
-    ctx = Context(out, baselines, timeout_s, strict)
+    ctx = Context(out, baselines, timeout_s, strict, draw)
     outcomes: dict[str, Outcome] = {}
     for outcome in execute(costs.order(jobs), ctx, emit, workers, executor, ray_address):
         outcomes[outcome.job.folder] = outcome

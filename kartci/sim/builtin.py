@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from kartci.plugins import WorldKind, lazy
+from kartci.core import WorldKind, lazy
 from kartci.spec.models import CircuitWorld, HallWorld, LineLabWorld
 
 LINE_LAB = WorldKind("line_lab", LineLabWorld, lazy("kartci.sim.line_lab:LineLab"),

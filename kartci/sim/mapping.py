@@ -17,12 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-from kartci import plugins
+from kartci import core
+from kartci.core import WorldParams
 from kartci.errors import SpecError
 from kartci.pointcloud import voxel_downsample, write_ply
 from kartci.sim import lidar as lidar_mod
 from kartci.sim.track_world import TrackWorld
-from kartci.spec.models import WorldParams
 
 SENSOR_HEIGHT_M = 1.28  # bumblebee's velodyne_link above the floor (URDF 1.154 m + wheel)
 
@@ -44,7 +44,7 @@ def build_map(world: WorldParams, run: MapRun = MapRun()) -> np.ndarray:
         raise SpecError(f"lidar '{run.lidar}': expected one of {', '.join(lidar_mod.MODELS)}")
     if not 0.05 <= run.voxel_m <= 2.0 or not 0.1 <= run.step_m <= 20.0:
         raise SpecError("map: voxel must be in [0.05, 2] m and step in [0.1, 20] m")
-    sim = plugins.WORLDS.get(world.kind).factory(world, 0.01)
+    sim = core.WORLDS.get(world.kind).factory(world, 0.01)
     try:
         if not isinstance(sim, TrackWorld):
             raise SpecError(f"world kind {world.kind}: a map needs a world with a track")

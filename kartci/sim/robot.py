@@ -12,8 +12,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from kartci.agents.base import Agent
-from kartci.spec.models import AgentSpec, Pose2D, WorldParams
+from kartci.core import Agent, WorldParams
+from kartci.spec.models import AgentSpec, Pose2D
 
 
 class Put(Protocol):

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from kartci.agents import Agent
+from kartci.core import Agent
 from kartci.errors import RunError
 from kartci.sim.body import BodyState
 from kartci.sim.messages import (

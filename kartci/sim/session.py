@@ -28,11 +28,10 @@ from typing import Any, cast
 
 import numpy as np
 
-from kartci import plugins, portable
-from kartci.agents.base import Agent
+from kartci import core, portable
+from kartci.core import Agent, AgentContext
 from kartci.errors import KartciError, SpecError
 from kartci.logs import McapLogWriter, msg
-from kartci.plugins import AgentContext
 from kartci.project import did_you_mean
 from kartci.sim.messages import tf_message
 from kartci.sim.robot import Put, Robot, RobotContext, SimWorld
@@ -140,7 +139,7 @@ def check_agents(scenario: Scenario, agents: Mapping[str, object] | None) -> dic
 
 def make_world(scenario: Scenario) -> SimWorld:
     """The scenario's world alone, from the world registry (the caller closes it)."""
-    world: SimWorld = plugins.WORLDS.get(scenario.world.kind).factory(scenario.world,
+    world: SimWorld = core.WORLDS.get(scenario.world.kind).factory(scenario.world,
                                                                      scenario.physics.dt_s)
     return world
 
@@ -164,7 +163,7 @@ def build_nodes(scenario: Scenario) -> dict[str, list[NodeRun]]:
         runs = []
         for node, params in spec.nodes.items():
             agent = check_agent(f"{name}.nodes.{node}",
-                                plugins.NODES.get(node).build(params, ctx), dt)
+                                core.NODES.get(node).build(params, ctx), dt)
             runs.append(NodeRun(node, agent, max(1, round(agent.period_s / dt))))
         out[name] = runs
     return out
@@ -186,9 +185,9 @@ def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None,
             if agent is None:
                 ctx = AgentContext(name, spec.model,
                                    tuple(n for n in scenario.agents if n != name), run_dir)
-                agent = plugins.CONTROLLERS.get(spec.controller.type).build(spec.controller, ctx)
+                agent = core.CONTROLLERS.get(spec.controller.type).build(spec.controller, ctx)
             try:
-                robot_kind = plugins.ROBOTS.get(spec.model.kind)
+                robot_kind = core.ROBOTS.get(spec.model.kind)
                 world.robots.append(robot_kind.factory(
                     RobotContext(name, spec, world, agent, dt, odom_every, rng)))
             except BaseException:

@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from kartci._bullet import pb
-from kartci.spec.models import Pose2D, WorldParams
+from kartci.core import WorldParams
+from kartci.spec.models import Pose2D
 
 if TYPE_CHECKING:
     from kartci.sim.robot import Robot

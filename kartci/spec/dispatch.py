@@ -8,6 +8,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
+from kartci import core
 from kartci.errors import SpecError
 
 
@@ -72,15 +73,13 @@ def _named(registry: Any, tag: str, loc: tuple[str | int, ...]) -> Any:
 def dispatch(data: Any) -> Any:
     """A copy of raw scenario data with plugin-typed parts replaced by their parameter models
     (already-built parts are kept as they are)."""
-    from kartci import plugins
-
     if not isinstance(data, dict):
         return data
     data = dict(data)
     world = data.get("world")
     tag = _tag(world, "kind", ("world",), "world kind") if "world" in data else None
     if tag is not None:
-        kind = _named(plugins.WORLDS, tag, ("world", "kind"))
+        kind = _named(core.WORLDS, tag, ("world", "kind"))
         data["world"] = _validate(kind.params, world, ("world",))
     agents = data.get("agents")
     if isinstance(agents, dict):
@@ -91,14 +90,12 @@ def dispatch(data: Any) -> Any:
         built = {}
         for name, params in metrics.items():
             loc = ("metrics", str(name))
-            mset = _named(plugins.METRICS, str(name), loc)
+            mset = _named(core.METRICS, str(name), loc)
             if mset.params is None:
                 if params not in (None, {}):
                     raise ParamsError(loc, [{"loc": (), "msg": f"metric set {name} takes no "
                                              "parameters", "type": "extra_forbidden"}])
-                from kartci.spec.models import MetricParams
-
-                built[name] = MetricParams()
+                built[name] = core.MetricParams()
             else:
                 built[name] = _validate(mset.params, params or {}, loc)
         data["metrics"] = built
@@ -106,8 +103,6 @@ def dispatch(data: Any) -> Any:
 
 
 def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
-    from kartci import plugins
-
     if not isinstance(agent, dict):
         return agent
     agent = dict(agent)
@@ -115,7 +110,7 @@ def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
     if "model" in agent:
         tag = _tag(model, "kind", (*loc, "model"), "robot kind")
         if tag is not None:
-            kind = _named(plugins.ROBOTS, tag, (*loc, "model", "kind"))
+            kind = _named(core.ROBOTS, tag, (*loc, "model", "kind"))
             agent["model"] = _validate(kind.params, model, (*loc, "model"))
             sensors = agent.get("sensors") or {}
             if kind.sensors is not None:
@@ -127,10 +122,10 @@ def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
     if "controller" in agent:
         tag = _tag(controller, "type", (*loc, "controller"), "controller")
         if tag is not None:
-            ctl = _named(plugins.CONTROLLERS, tag, (*loc, "controller", "type"))
+            ctl = _named(core.CONTROLLERS, tag, (*loc, "controller", "type"))
             agent["controller"] = _validate(ctl.params, controller, (*loc, "controller"))
     if isinstance(agent.get("nodes"), dict):
-        agent["nodes"] = {str(name): _validate(_named(plugins.NODES, str(name),
+        agent["nodes"] = {str(name): _validate(_named(core.NODES, str(name),
                                                       (*loc, "nodes", str(name))).params,
                                                params or {}, (*loc, "nodes", str(name)))
                           for name, params in agent["nodes"].items()}

@@ -16,8 +16,9 @@ from pydantic import ValidationError
 from kartci import project
 from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
-from kartci.spec.dispatch import ParamsError, with_allowed_keys
+from kartci.spec.dispatch import ParamsError, dispatch, with_allowed_keys
 from kartci.spec.models import Scenario, WorldParams, unit_of
+from kartci.spec.schema import scenario_schema
 from kartci.spec.yamlio import Mark, clip, parse_value, preview, read_yaml_marked
 
 Marks = dict[str, Mark]  # dotted key -> where it was written (yamlio.read_yaml_marked)
@@ -137,8 +138,6 @@ def _resolve_world(data: dict[str, Any], proj: project.Project, allow_outside: b
 def load_world(name: str) -> tuple[WorldParams, Path]:
     """A world file by name on the project's search path (`winti/hall`), validated by its
     world kind, and where the file is."""
-    from kartci.spec.dispatch import dispatch
-
     proj = project.current()
     path = proj.find_world(name)
     data: dict[str, Any] = {"world": name}
@@ -232,7 +231,7 @@ def _check_run_time_files(agent: dict[str, Any], where: str, allow_outside: bool
 
 
 def _mapping(value: str, what: str, proj: project.Project, allow_outside: bool) -> str:
-    """A joystick mapping given by path (kartci.agents.joy.load_mapping's rule: ending in
+    """A joystick mapping given by path (kartci.robots.gokart.joy.load_mapping's rule: ending in
     .yaml / .yml or holding a separator) as its absolute, checked path; a name stays a name
     (it reads better in `kartci show`), its file on the model path checked for a link out."""
     if value.endswith((".yaml", ".yml")) or "/" in value or os.sep in value:
@@ -400,6 +399,4 @@ def scenario_from_json(text: str) -> Scenario:
 
 def json_schema() -> dict[str, Any]:
     """JSON Schema of a scenario file; `world` and `model` may also name a file by string."""
-    from kartci.spec.schema import scenario_schema
-
     return scenario_schema()

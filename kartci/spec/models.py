@@ -7,22 +7,20 @@ import re
 from typing import Annotated, Any, Literal
 
 from pydantic import (
-    BaseModel,
-    ConfigDict,
     Field,
     SerializeAsAny,
     field_validator,
     model_validator,
 )
 
+from kartci.core.params import ControllerParams as ControllerParams
+from kartci.core.params import Frozen as Frozen
+from kartci.core.params import MetricParams as MetricParams
+from kartci.core.params import NodeParams as NodeParams
+from kartci.core.params import RobotParams as RobotParams
+from kartci.core.params import WorldParams as WorldParams
+from kartci.spec.dispatch import dispatch
 from kartci.spec.yamlio import preview
-
-
-class Frozen(BaseModel):
-    """Base for every spec: immutable, and unknown keys are errors, not silently ignored."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
-
 
 # --- physical bounds: every numeric key is bounded by what its unit (the key's suffix) can mean
 # for a kart or a line tracker, generously (every shipped scenario is far inside), so that no
@@ -48,46 +46,6 @@ def unit_of(key: str) -> str:
     if key.endswith("_per_sqrt_s"):
         return f"{unit_of(key.removesuffix('_per_sqrt_s'))}/sqrt(s)"
     return next((unit for suffix, unit in UNITS.items() if key.endswith(suffix)), "")
-
-
-# --- what plugins extend: each registered type validates its own parameters -----------------
-
-
-class ControllerParams(Frozen):
-    """Parameters of a controller type (`controller: {type: NAME, ...}`)."""
-
-    type: str = Field(description="a registered controller (`kartci plugins`)")
-    period_s: float = Field(0.02, gt=0.0, le=3600.0,
-                            description="control period, s: a whole multiple of "
-                            "physics.dt_s")
-
-
-class NodeParams(Frozen):
-    """Parameters of a node type (`agents.<name>.nodes: {NAME: {...}}`): localization, a
-    detector, anything that runs beside the controller in the robot's namespace."""
-
-    period_s: float = Field(0.02, gt=0.0, le=3600.0,
-                            description="node period, s: a whole multiple of "
-                            "physics.dt_s")
-
-
-class RobotParams(Frozen):
-    """Parameters of a robot kind (`model: {kind: NAME, ...}` or a model folder's params)."""
-
-    kind: str = Field(description="a registered robot kind")
-    urdf: str = Field(description="the robot's URDF: absolute, or relative to <kind>/ on the "
-                      "project's model path")
-
-
-class WorldParams(Frozen):
-    """Parameters of a world kind (`world: {kind: NAME, ...}` or a world file)."""
-
-    kind: str = Field(description="a registered world kind")
-    description: str = Field("", description="one line about the world, shown in reports")
-
-
-class MetricParams(Frozen):
-    """Parameters of a metric set (`metrics: {NAME: {...}}`)."""
 
 
 # --- worlds -----------------------------------------------------------------------------------
@@ -388,8 +346,6 @@ class Scenario(Frozen):
     @classmethod
     def _registered_types(cls, data: Any) -> Any:
         """Step one of validation: registered type names pick each part's parameter model."""
-        from kartci.spec.dispatch import dispatch
-
         return dispatch(data)
 
     @model_validator(mode="after")

@@ -24,7 +24,7 @@ from pydantic import BaseModel
 from pydantic.json_schema import models_json_schema
 
 import kartci
-from kartci import plugins
+from kartci import core
 from kartci.errors import SpecError
 from kartci.spec.models import Scenario
 
@@ -38,9 +38,9 @@ DEFS = "#/$defs/"
 
 def scenario_schema() -> dict[str, Any]:
     """The JSON Schema (draft 2020-12) of a scenario file with every registered plugin."""
-    worlds, robots = plugins.WORLDS.all(), plugins.ROBOTS.all()
-    controllers, metric_sets = plugins.CONTROLLERS.all(), plugins.METRICS.all()
-    nodes = plugins.NODES.all()
+    worlds, robots = core.WORLDS.all(), core.ROBOTS.all()
+    controllers, metric_sets = core.CONTROLLERS.all(), core.METRICS.all()
+    nodes = core.NODES.all()
     models: list[type[BaseModel]] = [Scenario]
     models += [w.params for w in worlds]
     models += [r.params for r in robots]
@@ -109,7 +109,7 @@ def _tagged(ref: str, tag: str, name: str, description: str) -> dict[str, Any]:
             "properties": {tag: {"const": name, "description": f"`{name}`"}}}
 
 
-def _world(description: str, worlds: list[plugins.WorldKind], ref: Any,
+def _world(description: str, worlds: list[core.WorldKind], ref: Any,
            defs: dict[str, Any]) -> dict[str, Any]:
     kinds = [_tagged(ref(w.params), "kind", w.name, f"world kind `{w.name}`: {w.description}")
              for w in worlds]
@@ -131,7 +131,7 @@ def _world(description: str, worlds: list[plugins.WorldKind], ref: Any,
     ]}
 
 
-def _robot_model(description: str, robots: list[plugins.RobotKind], ref: Any,
+def _robot_model(description: str, robots: list[core.RobotKind], ref: Any,
                  defs: dict[str, Any]) -> dict[str, Any]:
     kinds = [_tagged(ref(r.params), "kind", r.name, f"robot kind `{r.name}`: {r.description}")
              for r in robots]
@@ -151,9 +151,9 @@ def _robot_model(description: str, robots: list[plugins.RobotKind], ref: Any,
     ]}
 
 
-def _controller(description: str, controllers: list[plugins.Controller],
+def _controller(description: str, controllers: list[core.Controller],
                 ref: Any) -> dict[str, Any]:
-    def says(c: plugins.Controller) -> str:
+    def says(c: core.Controller) -> str:
         robots = f" (drives {', '.join(c.robots)})" if c.robots else ""
         return f"controller `{c.name}`: {c.description}{robots}"
 
@@ -161,7 +161,7 @@ def _controller(description: str, controllers: list[plugins.Controller],
             "oneOf": [_tagged(ref(c.params), "type", c.name, says(c)) for c in controllers]}
 
 
-def _sensors(description: str, robots: list[plugins.RobotKind], ref: Any) -> dict[str, Any]:
+def _sensors(description: str, robots: list[core.RobotKind], ref: Any) -> dict[str, Any]:
     """Each robot kind's sensor model; which one applies depends on the robot's kind, which a
     model folder only names when loaded, so any of them (or none) is accepted here."""
     options: list[dict[str, Any]] = [
@@ -174,7 +174,7 @@ def _sensors(description: str, robots: list[plugins.RobotKind], ref: Any) -> dic
     return {"description": description, "anyOf": options}
 
 
-def _metrics(description: str, metric_sets: list[plugins.MetricSet],
+def _metrics(description: str, metric_sets: list[core.MetricSet],
              ref: Any) -> dict[str, Any]:
     props: dict[str, Any] = {}
     for m in metric_sets:
@@ -192,7 +192,7 @@ def _metrics(description: str, metric_sets: list[plugins.MetricSet],
             "additionalProperties": False}
 
 
-def _nodes(description: str, nodes: list[plugins.Node], ref: Any) -> dict[str, Any]:
+def _nodes(description: str, nodes: list[core.Node], ref: Any) -> dict[str, Any]:
     props = {n.name: {"description": f"node `{n.name}`: {n.description}", "anyOf": [
         {"$ref": ref(n.params), "description": f"parameters of `{n.name}`"},
         {"type": "null", "description": "the node with its default parameters"}]}
@@ -204,10 +204,8 @@ def _nodes(description: str, nodes: list[plugins.Node], ref: Any) -> dict[str, A
 def _criteria(description: str, criterion: str) -> dict[str, Any]:
     """Known metric names as keys, each described with its unit and meaning; `agent.metric`
     for one agent of several."""
-    from kartci.metrics import definitions
-
     props: dict[str, Any] = {}
-    for name, d in sorted(definitions().items()):
+    for name, d in sorted(core.definitions().items()):
         better = {"lower": "lower is better", "higher": "higher is better",
                   "equal": "must equal its baseline"}[d.direction.value]
         timing = "; wall-clock, machine-dependent" if d.timing else ""

@@ -15,8 +15,9 @@ from typing import Any
 
 from kartci.atomic import write_json_atomic as write_json_atomic  # re-exported
 from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
+from kartci.core import Direction, MetricDef
+from kartci.core import definition as registered
 from kartci.errors import BaselineError
-from kartci.metrics.base import Direction, MetricDef
 from kartci.spec.models import Criterion
 from kartci.verdict.fingerprint import digest
 
@@ -192,8 +193,6 @@ def _num(x: Any) -> float | None:
 
 def definition(name: str) -> MetricDef | None:
     """A registered metric's definition, or None."""
-    from kartci.metrics import definition as registered
-
     return registered(name)
 
 

@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 from kartci.logs import tables
-from kartci.metrics import Metric, compute, race
-from kartci.metrics.kart import kart_track
+from kartci.metrics import Metric, compute
+from kartci.metrics.progress import kart_track
 from kartci.mpcc.cache import get_solver, solver_key
 from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.params import MpccController, MpccMethod, MpccWeights
 from kartci.project import BUILTIN
+from kartci.robots.gokart import race
 from kartci.robots.gokart.params import GokartModel
 from kartci.sim import simulate
 from kartci.spec import load_scenario

@@ -13,8 +13,8 @@ from helpers import kartci
 
 from kartci.metrics.base import Direction
 from kartci.report import summary_json, write_all
-from kartci.results import ScenarioResult
 from kartci.verdict import MetricVerdict, Status
+from kartci.verdict.result import ScenarioResult
 
 
 def _summary(path: Path, values: dict[str, float]) -> Path:

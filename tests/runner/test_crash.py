@@ -13,9 +13,9 @@ from kartci.agents.base import Outbox
 from kartci.agents.line_pid import LinePid
 from kartci.project import BUILTIN
 from kartci.report import write_all
-from kartci.results import exit_code
 from kartci.runner import expand, run_jobs
 from kartci.verdict import Status
+from kartci.verdict.result import exit_code
 
 SCENARIOS = BUILTIN / "scenarios"
 

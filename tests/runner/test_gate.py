@@ -27,12 +27,13 @@ from kartci.agents.base import Outbox
 from kartci.agents.line_pid import LinePid
 from kartci.cli.common import finish
 from kartci.errors import BaselineError, RunError
+from kartci.figures import Plots
 from kartci.logs import McapLogWriter, messages, msg
 from kartci.project import BUILTIN
 from kartci.report import write_all
-from kartci.results import Plots, ScenarioResult
 from kartci.runner import expand, run_jobs
 from kartci.verdict import Status, load
+from kartci.verdict.result import ScenarioResult
 
 QUICK = ["--set", "duration_s=2", "--set", "criteria={}",
          "--set", "metrics.line_tracking.transient_s=0.5"]

@@ -12,8 +12,8 @@ from junitparser import JUnitXml
 from kartci.metrics.base import Direction
 from kartci.report.ci import annotation_lines, scenario_files, truncate
 from kartci.report.markdown import summary_md
-from kartci.results import ScenarioResult
 from kartci.verdict import MetricVerdict, Status
+from kartci.verdict.result import ScenarioResult
 from kartci.verdict.runs import compare_runs, significant
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from kartci.metrics.line import line_metrics
+from kartci.robots.line_tracker.metrics import line_metrics
 from kartci.spec import Criterion, load_scenario
 from kartci.spec.models import LineMetricsParams
 from kartci.verdict import Status, check_criteria, compare, update

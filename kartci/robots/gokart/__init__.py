@@ -1,9 +1,25 @@
-"""The ETH go-kart (seed 000) as a robot kind: registered as `gokart` (entry point)."""
+"""The ETH go-kart (seed 000) as a robot kind: registered as `gokart` (entry point).
 
-from kartci.plugins import RobotKind, lazy
-from kartci.robots.gokart.params import GokartModel, KartSensors
+Public for a team's own kart controller: the command (`KartInput`), the steering map
+(`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`) and the outline (`FOOTPRINT_M`).
+"""
+
+from kartci.core import RobotKind, lazy
+from kartci.robots.gokart.params import FOOTPRINT_M, GokartModel, KartSensors, axle_distance_m
+from kartci.robots.gokart.steering import (
+    STEERING_RATIO,
+    KartInput,
+    column_for_wheel_angle,
+    speed_to_pedals,
+    steer_for_turn_rate,
+    wheel_angles,
+)
 
 ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRobot"),
                   ("laps", "race"), lazy("kartci.robots.gokart.plots:kart_plots"),
                   "the ETH go-kart (seed 000): steering map, two rear motors, lidar, IMU",
-                  KartSensors)
+                  KartSensors, FOOTPRINT_M)
+
+__all__ = ["FOOTPRINT_M", "ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",
+           "axle_distance_m", "column_for_wheel_angle", "speed_to_pedals", "steer_for_turn_rate",
+           "wheel_angles"]

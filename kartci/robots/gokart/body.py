@@ -12,10 +12,10 @@ import numpy as np
 
 from kartci._bullet import pb, quiet_c_output
 from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.steering import KartInput, wheel_angles
 from kartci.robots.gokart.tyres import air_drag_n, drive_demand, wheel_force, wheels
 from kartci.sim.body import Base, BodyState
 from kartci.sim.urdf import fixed_frames, physics_urdf
-from kartci.vehicle import KartInput, wheel_angles
 
 WHEEL_SPIN_TORQUE_NM = 20.0  # spins the (frictionless) wheels at their rolling speed
 

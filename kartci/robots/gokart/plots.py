@@ -7,15 +7,14 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from kartci.figures import PlotContext, Plots, wheel_series
 from kartci.logs.reader import messages
 from kartci.logs.types import yaw_of
 from kartci.metrics import recorded_track
-from kartci.metrics.kart import crossing_time, kart_track, wheel_margins_m
-from kartci.metrics.race import rect
+from kartci.metrics.progress import crossing_time, kart_track, wheel_margins_m
 from kartci.metrics.trajectory import Trajectory, TrajectoryError, ape_errors, associate
-from kartci.report.data import PlotContext, wheel_series
-from kartci.results import Plots
 from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.race import rect
 from kartci.track import Track
 
 SECTORS = 3

@@ -12,7 +12,13 @@ from kartci.errors import SpecError
 from kartci.logs import header, msg
 from kartci.robots.gokart import noise
 from kartci.robots.gokart.body import Gokart
-from kartci.robots.gokart.params import GokartModel, KartSensors
+from kartci.robots.gokart.params import FOOTPRINT_M, GokartModel, KartSensors
+from kartci.robots.gokart.steering import (
+    KartInput,
+    column_for_wheel_angle,
+    speed_to_pedals,
+    steer_for_turn_rate,
+)
 from kartci.sim import lidar as lidar_mod
 from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
@@ -22,13 +28,6 @@ from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.track_world import TrackWorld
 from kartci.sim.urdf import urdf_path
-from kartci.vehicle import (
-    FOOTPRINT_M,
-    KartInput,
-    column_for_wheel_angle,
-    speed_to_pedals,
-    steer_for_turn_rate,
-)
 
 
 @dataclass

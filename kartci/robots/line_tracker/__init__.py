@@ -1,6 +1,6 @@
 """The line tracker (seed 001) as a robot kind: registered as `line_tracker` (entry point)."""
 
-from kartci.plugins import RobotKind, lazy
+from kartci.core import RobotKind, lazy
 from kartci.robots.line_tracker.params import LineTrackerModel, LineTrackerSensors
 
 ROBOT = RobotKind("line_tracker", LineTrackerModel,

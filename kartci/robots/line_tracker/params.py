@@ -6,8 +6,9 @@ from typing import Literal
 
 from pydantic import Field
 
+from kartci.core import Frozen, RobotParams
 from kartci.errors import SpecError
-from kartci.spec.models import Frozen, LineLabWorld, RobotParams, Scenario
+from kartci.spec.models import LineLabWorld, Scenario
 
 
 class LineTrackerModel(RobotParams):

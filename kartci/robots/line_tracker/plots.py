@@ -6,9 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from kartci import geometry
-from kartci.metrics.line import sensor_track
-from kartci.report.data import PlotContext, wheel_series
-from kartci.results import Plots
+from kartci.figures import PlotContext, Plots, wheel_series
+from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import LineMetricsParams
 

@@ -11,7 +11,7 @@ import numpy as np
 from kartci.errors import LogError
 from kartci.logs import tables
 from kartci.metrics import recorded_scenario
-from kartci.metrics.line import sensor_track
+from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import CircleCourse
 

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from kartci.metrics import ScoreContext
-from kartci.metrics.line_response import LineResponseParams, response_metrics
+from kartci.robots.line_tracker.response import LineResponseParams, response_metrics
 from kartci.spec import load_scenario
 
 ZETA, WN, D0 = 0.3, 3.0, 0.005

@@ -10,12 +10,11 @@ import numpy as np
 from pydantic import Field
 
 from kartci import geometry
+from kartci.core import Direction, Metric, MetricDef, MetricParams, MetricSet
 from kartci.metrics import ScoreContext
-from kartci.metrics.base import Direction, Metric, MetricDef
-from kartci.metrics.line import sensor_track
-from kartci.plugins import MetricSet
+from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
-from kartci.spec.models import MetricParams, StraightCourse
+from kartci.spec.models import StraightCourse
 
 DEFS: dict[str, MetricDef] = {
     "overshoot_ratio": MetricDef("1", Direction.LOWER, 0.02, 0.10,

@@ -1,20 +1,13 @@
-"""Go-kart metrics from a run log: laps, collisions, time off track, speed, progress."""
+"""A robot's path along a track, read from its odometry: progress, offset from the centreline,
+lap and sector line crossings, wheel margins to the track's edges: what lap metrics and
+plots of any robot kind read, and the metrics of an imported log that holds a track."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import pandas as pd
 
-from kartci.metrics.base import DEFS, Metric
-from kartci.robots.gokart.params import GokartModel
-from kartci.spec.models import Scenario
 from kartci.track import Track
-
-
-def _m(name: str, value: float, **extra: object) -> Metric:
-    return Metric(name, float(value), DEFS[name].unit, dict(extra))
 
 
 def kart_track(track: Track, odom: pd.DataFrame) -> pd.DataFrame:
@@ -56,39 +49,3 @@ def lap_crossings(t: np.ndarray, total: np.ndarray, length_m: float) -> list[flo
     """Times (s) at which the unwrapped progress `total` (m) passes each whole lap."""
     return [crossing_time(t, total, lap * length_m)
             for lap in range(1, int(max(total.max(), 0) // length_m) + 1)]
-
-
-def kart_metrics(scenario: Scenario, agent: str, track: Track, tr: pd.DataFrame,
-                 collisions: pd.DataFrame | None) -> list[Metric]:
-    """Lap, collision and track metrics from the agent's `kart_track` path."""
-    model = scenario.agents[agent].model
-    assert isinstance(model, GokartModel)
-    t, total = tr["t"].to_numpy(), tr["s_total"].to_numpy()
-    laps = np.diff([0.0, *lap_crossings(t, total, track.length_m)])
-    lap_list = [round(float(x), 4) for x in laps]
-
-    wheels = np.asarray(model.wheel_xy_m)
-    yaw = tr["yaw"].to_numpy()
-    out_any = np.zeros(len(tr), bool)
-    for wx, wy in wheels:
-        px = tr["x"].to_numpy() + wx * np.cos(yaw) - wy * np.sin(yaw)
-        py = tr["y"].to_numpy() + wx * np.sin(yaw) + wy * np.cos(yaw)
-        _, lat, w_right, w_left = track.project(np.column_stack([px, py]))
-        out_any |= (lat > w_left) | (lat < -w_right)
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-
-    events = [] if collisions is None else [
-        {"time_s": round(float(t_c), 4), "other": str(other), "impulse_ns": round(float(imp), 3)}
-        for t_c, other, imp in zip(collisions["t"].to_numpy(), collisions["other"].tolist(),
-                                   collisions["impulse_ns"].to_numpy(), strict=True)]
-    return [
-        _m("laps_completed", len(lap_list)),
-        _m("lap_times_s", float(np.mean(laps)) if len(laps) else math.nan, laps=lap_list),
-        _m("best_lap_s", float(np.min(laps)) if len(laps) else math.nan),
-        _m("collisions", len(events), events=events),
-        _m("off_track_s", float(out_any.sum()) * dt),
-        _m("max_speed_mps", float(tr["speed"].max())),
-        _m("mean_speed_mps", float(tr["speed"].mean())),
-        _m("progress_m", float(total[-1] - total[0])),
-        _m("cross_track_rms_m", math.sqrt(float(np.mean(tr["offset"] ** 2)))),
-    ]

@@ -10,9 +10,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from kartci.metrics.base import Metric
+from kartci.core import Metric
 from kartci.spec.models import Box
-from kartci.vehicle import FOOTPRINT_M
 
 Rect = np.ndarray  # (4, 2) corners, counter-clockwise
 
@@ -25,9 +24,9 @@ def rect(cx: float, cy: float, length: float, width: float, yaw: float) -> Rect:
     return out
 
 
-def kart_rects(odom: pd.DataFrame) -> list[Rect]:
-    """The kart's footprint at each odometry row (centred ahead of base_link: FOOTPRINT_M)."""
-    ahead, length, width = FOOTPRINT_M
+def kart_rects(odom: pd.DataFrame, footprint_m: tuple[float, float, float]) -> list[Rect]:
+    """A robot's footprint (centre ahead of base_link, length, width; m) at each odometry row."""
+    ahead, length, width = footprint_m
     return [rect(x + ahead * math.cos(yaw), y + ahead * math.sin(yaw), length, width, yaw)
             for x, y, yaw in odom[["x", "y", "yaw"]].to_numpy()]
 
@@ -104,12 +103,13 @@ def solver_values(stats: pd.DataFrame) -> tuple[int, dict[str, float]]:
 
 def race_metrics(scenario: Any, agent: str, paths: Mapping[str, pd.DataFrame],
                  rects: Mapping[str, list[Rect]], stats: pd.DataFrame | None) -> list[Metric]:
-    """Clearance, overtakes and solver statistics, where the run has what they need."""
+    """Clearance, overtakes and solver statistics, where the run has what they need. `rects`
+    holds the robots that have a footprint: the others are not kept clear of."""
     obstacles = getattr(scenario.world, "obstacles", ())
     others = [n for n in paths if n != agent]
     out = []
     if obstacles or others:
-        gap = min_clearance_m(rects[agent], obstacles, [rects[n] for n in others])
+        gap = min_clearance_m(rects[agent], obstacles, [rects[n] for n in others if n in rects])
         out.append(Metric("min_clearance_m", gap, "m"))
     if others:
         theirs = [paths[n]["s_total"].to_numpy() for n in others]

@@ -1,4 +1,5 @@
-"""Line-tracker metrics, computed from a run log's tables and the scenario recorded in it."""
+"""The line tracker's metrics (`line_tracking`), computed from a run log's tables and the
+scenario recorded in it; `sensor_track` is also what its plots and study draw."""
 
 from __future__ import annotations
 
@@ -8,8 +9,10 @@ import numpy as np
 import pandas as pd
 
 from kartci import geometry
+from kartci.core import Metric, MetricSet
 from kartci.errors import SpecError
-from kartci.metrics.base import DEFS, Metric
+from kartci.metrics import ScoreContext
+from kartci.metrics.defs import DEFS, defs_of
 from kartci.robots.line_tracker.params import line_parts
 from kartci.spec.models import LineMetricsParams, Scenario, StraightCourse
 
@@ -82,3 +85,15 @@ def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame,
         _m("mean_speed_mps", float(np.mean(tr["vx"]))),
         _m("settle_time_s", settle),
     ]
+
+
+def _line(ctx: ScoreContext, params: LineMetricsParams) -> list[Metric]:
+    return line_metrics(ctx.scenario, ctx.agent, ctx.odom, params)
+
+
+LINE_TRACKING = MetricSet(
+    "line_tracking",
+    defs_of("cross_track_rms_m", "cross_track_max_m", "line_lost", "completion",
+            "mean_speed_mps", "settle_time_s"),
+    _line, LineMetricsParams, ("line_tracker",),
+    "distance of the line sensor from the line, line lost, completion, settling")

@@ -1,0 +1,281 @@
+"""Registries: every controller, node, robot kind, world kind and metric set, by name.
+
+A team adds its own the same way kartci's built-ins are added: an entry point in the groups
+`kartci.controllers`, `kartci.nodes`, `kartci.robots`, `kartci.worlds` and `kartci.metrics` whose
+object is a `Controller`, `Node`, `RobotKind`, `WorldKind` or `MetricSet`, or a module named in
+the project's `plugins` list that calls `register(...)`. Scenarios name them
+(`controller: {type: NAME}`, `nodes: {NAME: {...}}`, `model: {kind: NAME}`,
+`world: {kind: NAME}`, `metrics: {NAME: {...}}`); each validates its own parameters with its own
+pydantic model. The registry knows only the contracts (`kartci.core`), never an implementation:
+built-ins are named by module strings (`lazy`) or entry points, so nothing here imports them.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from pathlib import Path
+from typing import Any, ClassVar, Generic, TypeVar
+
+from kartci import project as project_mod
+from kartci.core.agent import Agent
+from kartci.core.metric import Metric, MetricDef
+from kartci.core.params import (
+    ControllerParams,
+    Frozen,
+    MetricParams,
+    NodeParams,
+    RobotParams,
+    WorldParams,
+)
+from kartci.errors import SpecError
+from kartci.project import Project, did_you_mean
+
+
+@dataclass(frozen=True)
+class AgentContext:
+    """What a controller is told when it is built: who it is and which robot it drives.
+    Everything else it learns from messages."""
+
+    name: str
+    model: RobotParams
+    others: tuple[str, ...] = ()  # the other agents of the scenario (their topics: /<name>/...)
+    run_dir: Path | None = None  # where the run's files go (a controller's own output files)
+
+
+P = TypeVar("P", ControllerParams, NodeParams)
+
+
+@dataclass(frozen=True)
+class _AgentType(Generic[P]):
+    """What controllers and nodes share: a parameter model, a factory
+    `(params, context) -> Agent` and the robot kinds it works with (empty: any)."""
+
+    name: str
+    params: type[P]
+    factory: Callable[[Any, AgentContext], Agent]
+    robots: tuple[str, ...] = ()
+    description: str = ""
+    works_on: ClassVar[str] = "works with"  # the verb of the wrong-robot error
+
+    def build(self, params: P, ctx: AgentContext) -> Agent:
+        """The agent for one robot; a SpecError when it cannot work with that robot's kind."""
+        if self.robots and ctx.model.kind not in self.robots:
+            raise SpecError(f"agent {ctx.name}: {type(self).__name__.lower()} {self.name} "
+                            f"{self.works_on} {' or '.join(self.robots)} robots, not "
+                            f"{ctx.model.kind}")
+        return self.factory(params, ctx)
+
+
+@dataclass(frozen=True)
+class Controller(_AgentType[ControllerParams]):
+    """A controller type: what drives a robot (`agents.<name>.controller: {type: NAME}`)."""
+
+    works_on: ClassVar[str] = "drives"
+
+
+@dataclass(frozen=True)
+class Node(_AgentType[NodeParams]):
+    """A node type: a helper that runs beside a robot's controller (localization, a detector),
+    as an `Agent` in the robot's namespace, stepped before the controller at the same tick so
+    the controller reads its output. A scenario lists them: `agents.<name>.nodes: {NAME: {...}}`."""
+
+    works_on: ClassVar[str] = "runs on"
+
+
+@dataclass(frozen=True)
+class RobotKind:
+    """A robot kind: its parameter model, the simulated robot, its metric sets and plots."""
+
+    name: str
+    params: type[RobotParams]
+    factory: Callable[..., Any]  # (RobotContext) -> sim Robot; see kartci.sim.robot
+    metrics: tuple[str, ...] = ()  # metric sets computed for every agent of this kind
+    plots: Callable[..., Any] | None = None  # (PlotContext) -> results.Plots
+    description: str = ""
+    sensors: type[Frozen] | None = None  # the robot's sensor specs (agents.<name>.sensors)
+    # its outline in base_link: centre ahead of base_link, length, width (m); what clearance
+    # and detection metrics draw around a robot of this kind (None: a point at base_link)
+    footprint_m: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class WorldKind:
+    """A world kind: its parameter model and the simulated world built from it."""
+
+    name: str
+    params: type[WorldParams]
+    factory: Callable[..., Any]  # (params, dt_s) -> sim World; see kartci.sim.world
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class MetricSet:
+    """Named metrics computed from a run log for one agent: `compute(context, params)`."""
+
+    name: str
+    defs: Mapping[str, MetricDef]
+    compute: Callable[..., list[Metric]]  # (ScoreContext, params) -> metrics
+    params: type[MetricParams] | None = None  # None: the set takes no parameters
+    robots: tuple[str, ...] = ()  # robot kinds it applies to; empty: any
+    description: str = ""
+
+
+def lazy(target: str) -> Callable[..., Any]:
+    """`module:attr`, imported on first call: a plugin's heavy imports (CasADi, PyBullet) wait
+    until a scenario uses it."""
+    module, _, attr = target.partition(":")
+
+    def call(*args: Any, **kwargs: Any) -> Any:
+        obj: Any = importlib.import_module(module)
+        for part in attr.split("."):
+            obj = getattr(obj, part)
+        return obj(*args, **kwargs)
+
+    call.__qualname__ = target
+    return call
+
+
+T = TypeVar("T", Controller, Node, RobotKind, WorldKind, MetricSet)
+
+
+@dataclass
+class Registry(Generic[T]):
+    """Plugins of one kind by name; filled from entry points and project plugins on first use."""
+
+    group: str  # entry-point group
+    what: str  # for messages: "controller", "robot kind", ...
+    kind: type[T]
+    items: dict[str, T] = field(default_factory=dict)
+    sources: dict[str, str] = field(default_factory=dict)  # name -> where it was registered
+
+    def register(self, item: T, replace: bool = False, source: str = "") -> T:
+        """Add one plugin; the same name twice is an error unless `replace`."""
+        if not isinstance(item, self.kind):
+            raise SpecError(f"{self.group}: {item!r} is not a kartci.plugins."
+                            f"{self.kind.__name__}")
+        old = self.items.get(item.name)
+        if old is not None and old != item and not replace:
+            raise SpecError(f"two different {self.what}s are registered as '{item.name}'")
+        self.items[item.name] = item
+        if source or item.name not in self.sources:
+            self.sources[item.name] = source or _caller_module()
+        return item
+
+    def get(self, name: str) -> T:
+        """The plugin of that name; a SpecError naming the known ones otherwise."""
+        load()
+        item = self.items.get(name)
+        if item is None:
+            raise SpecError(f"unknown {self.what} '{name}'{did_you_mean(name, self.items)}")
+        return item
+
+    def names(self) -> list[str]:
+        """Every registered name, sorted."""
+        load()
+        return sorted(self.items)
+
+    def all(self) -> list[T]:
+        """Every registered plugin, by name."""
+        load()
+        return [self.items[n] for n in sorted(self.items)]
+
+
+CONTROLLERS: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
+NODES: Registry[Node] = Registry("kartci.nodes", "node", Node)
+ROBOTS: Registry[RobotKind] = Registry("kartci.robots", "robot kind", RobotKind)
+WORLDS: Registry[WorldKind] = Registry("kartci.worlds", "world kind", WorldKind)
+METRICS: Registry[MetricSet] = Registry("kartci.metrics", "metric set", MetricSet)
+REGISTRIES: tuple[Registry[Any], ...] = (CONTROLLERS, NODES, ROBOTS, WORLDS, METRICS)
+
+
+def register(item: Controller | Node | RobotKind | WorldKind | MetricSet) -> None:
+    """Register a plugin from Python (a project plugin module, a test)."""
+    for reg in REGISTRIES:
+        if isinstance(item, reg.kind):
+            reg.register(item, source=_caller_module())
+            return
+    raise SpecError(f"cannot register {item!r}: not a Controller, Node, RobotKind, WorldKind "
+                    "or MetricSet")
+
+
+def _caller_module() -> str:
+    """The module that called into this one (for `kartci plugins`: where a plugin came from)."""
+    frame = sys._getframe(1)
+    while frame is not None and frame.f_globals.get("__name__") == __name__:
+        frame = frame.f_back  # type: ignore[assignment]
+    return str(frame.f_globals.get("__name__", "?")) if frame is not None else "?"
+
+
+def _entry_point_source(ep: Any) -> str:
+    dist = getattr(ep, "dist", None)
+    where = f" (entry point of {dist.name} {dist.version})" if dist is not None else ""
+    return f"{ep.module}{where}"
+
+
+@dataclass(frozen=True)
+class PluginInfo:
+    """One registered plugin, as `kartci plugins` lists it."""
+
+    kind: str  # "controller", "node", "robot kind", "world kind", "metric set"
+    name: str
+    description: str
+    source: str  # the module that registered it (and the distribution, for entry points)
+
+
+def catalogue(project: Project | None = None) -> list[PluginInfo]:
+    """Every registered plugin of every kind, installed ones and the project's own."""
+    load(project)
+    return [PluginInfo(reg.what, name, item.description, reg.sources.get(name, "?"))
+            for reg in REGISTRIES for name, item in sorted(reg.items.items())]
+
+
+_LOADED: set[str] = set()  # "entry points" and the roots whose project plugins are imported
+
+
+def load(project: Project | None = None) -> None:
+    """Import every installed plugin (entry points) and the project's plugin modules, once.
+    Worker processes call this with their parent's project before running anything."""
+    if "entry points" not in _LOADED:
+        _LOADED.add("entry points")
+        for reg in REGISTRIES:
+            for ep in sorted(entry_points(group=reg.group), key=lambda e: e.name):
+                try:
+                    item = ep.load()
+                except Exception as err:  # a broken plugin names itself, not a traceback
+                    raise SpecError(f"plugin {ep.name} ({ep.value}, group {reg.group}) "
+                                    f"failed to import: {type(err).__name__}: {err}") from err
+                if getattr(item, "name", None) != ep.name:
+                    raise SpecError(f"plugin {ep.value}: entry point '{ep.name}' must name an "
+                                    f"object whose name is '{ep.name}'")
+                reg.register(item, source=_entry_point_source(ep))
+    proj = project or project_mod.current()
+    key = str(proj.root)
+    if key in _LOADED or not proj.plugins:
+        return
+    _LOADED.add(key)
+    if str(proj.root) not in sys.path:  # plugin modules kept in the project folder
+        sys.path.insert(0, str(proj.root))
+    for module in proj.plugins:
+        try:
+            importlib.import_module(module)
+        except ImportError as err:
+            raise SpecError(f"{proj.config_file}: plugin module '{module}' cannot be imported "
+                            f"({err})") from err
+
+
+def definitions() -> dict[str, MetricDef]:
+    """Every registered metric's definition by name."""
+    out: dict[str, MetricDef] = {}
+    for mset in METRICS.all():
+        for name, d in mset.defs.items():
+            out.setdefault(name, d)
+    return out
+
+
+def definition(name: str) -> MetricDef | None:
+    """The definition of a metric (`name` or `agent.name`), or None for an unknown one."""
+    return definitions().get(name.rsplit(".", 1)[-1])

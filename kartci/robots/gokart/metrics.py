@@ -1,0 +1,103 @@
+"""The go-kart's metric sets: `laps` (laps, collisions, time off track, speed, progress) and
+`race` (clearance, overtakes, MPCC solver statistics), from a run log."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from kartci.core import Metric, MetricSet
+from kartci.metrics import ScoreContext, footprint_m, recorded_track
+from kartci.metrics.defs import DEFS, defs_of
+from kartci.metrics.progress import kart_track, lap_crossings
+from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.race import kart_rects, race_metrics
+from kartci.spec.models import Scenario
+from kartci.track import Track
+
+
+def _m(name: str, value: float, **extra: object) -> Metric:
+    return Metric(name, float(value), DEFS[name].unit, dict(extra))
+
+
+def kart_metrics(scenario: Scenario, agent: str, track: Track, tr: pd.DataFrame,
+                 collisions: pd.DataFrame | None) -> list[Metric]:
+    """Lap, collision and track metrics from the agent's `kart_track` path."""
+    model = scenario.agents[agent].model
+    assert isinstance(model, GokartModel)
+    t, total = tr["t"].to_numpy(), tr["s_total"].to_numpy()
+    laps = np.diff([0.0, *lap_crossings(t, total, track.length_m)])
+    lap_list = [round(float(x), 4) for x in laps]
+
+    wheels = np.asarray(model.wheel_xy_m)
+    yaw = tr["yaw"].to_numpy()
+    out_any = np.zeros(len(tr), bool)
+    for wx, wy in wheels:
+        px = tr["x"].to_numpy() + wx * np.cos(yaw) - wy * np.sin(yaw)
+        py = tr["y"].to_numpy() + wx * np.sin(yaw) + wy * np.cos(yaw)
+        _, lat, w_right, w_left = track.project(np.column_stack([px, py]))
+        out_any |= (lat > w_left) | (lat < -w_right)
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+
+    events = [] if collisions is None else [
+        {"time_s": round(float(t_c), 4), "other": str(other), "impulse_ns": round(float(imp), 3)}
+        for t_c, other, imp in zip(collisions["t"].to_numpy(), collisions["other"].tolist(),
+                                   collisions["impulse_ns"].to_numpy(), strict=True)]
+    return [
+        _m("laps_completed", len(lap_list)),
+        _m("lap_times_s", float(np.mean(laps)) if len(laps) else math.nan, laps=lap_list),
+        _m("best_lap_s", float(np.min(laps)) if len(laps) else math.nan),
+        _m("collisions", len(events), events=events),
+        _m("off_track_s", float(out_any.sum()) * dt),
+        _m("max_speed_mps", float(tr["speed"].max())),
+        _m("mean_speed_mps", float(tr["speed"].mean())),
+        _m("progress_m", float(total[-1] - total[0])),
+        _m("cross_track_rms_m", math.sqrt(float(np.mean(tr["offset"] ** 2)))),
+    ]
+
+
+def _paths(ctx: ScoreContext) -> dict[str, Any]:
+    """Every kart's path along the track, once per log: each agent's metrics use them all."""
+    track = ctx.shared("track", lambda: recorded_track(ctx.tables, ctx.path))
+    return ctx.shared("kart_paths", lambda: {
+        a: kart_track(track, ScoreContext(ctx.scenario, ctx.tables, ctx.path, a).odom)
+        for a in ctx.scenario.agents})
+
+
+def _laps(ctx: ScoreContext, params: Any) -> list[Metric]:
+    track = ctx.shared("track", lambda: recorded_track(ctx.tables, ctx.path))
+    return kart_metrics(ctx.scenario, ctx.agent, track, _paths(ctx)[ctx.agent],
+                        ctx.table("collision"))
+
+
+def _rects(ctx: ScoreContext) -> dict[str, Any]:
+    """Every robot's footprint along its path, once per log (robots without one are left out)."""
+    out = {}
+    for a in ctx.scenario.agents:
+        outline = footprint_m(ctx.scenario, a)
+        if outline is not None:
+            out[a] = kart_rects(ScoreContext(ctx.scenario, ctx.tables, ctx.path, a).odom, outline)
+    return out
+
+
+def _race(ctx: ScoreContext, params: Any) -> list[Metric]:
+    rects = ctx.shared("kart_rects", lambda: _rects(ctx))
+    return race_metrics(ctx.scenario, ctx.agent, _paths(ctx), rects, ctx.table("mpcc/stats"))
+
+
+LAPS = MetricSet(
+    "laps",
+    defs_of("laps_completed", "lap_times_s", "best_lap_s", "collisions", "off_track_s",
+            "max_speed_mps", "mean_speed_mps", "progress_m", "cross_track_rms_m"),
+    _laps, None, ("gokart",),
+    "laps and lap times, collisions, time off track, speed, progress, distance from the "
+    "centreline")
+RACE = MetricSet(
+    "race",
+    defs_of("min_clearance_m", "overtakes", "solver_failures", "solve_ms_median",
+            "solve_ms_p95", "solve_ms_max"),
+    _race, None, ("gokart",),
+    "clearance to obstacles and other karts, overtakes, MPCC solver statistics")

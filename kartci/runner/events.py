@@ -1,0 +1,45 @@
+"""What every executor shares (the in-process and pooled ones in executors, Ray's in
+ray_executor): the events it reports to progress listeners, and the outcome of a job whose
+process died."""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import StrEnum
+
+from kartci.runner.jobs import Context, Job, Outcome
+from kartci.runner.run import STAGE_PREFIX, mark_failed
+
+
+class EventKind(StrEnum):
+    """What an Event reports."""
+
+    STARTED = "started"
+    PROGRESS = "progress"
+    FINISHED = "finished"
+
+
+@dataclass(frozen=True)
+class Event:
+    """News of one job, for progress listeners."""
+
+    kind: EventKind
+    folder: str  # the job's folder, relative to OUT
+    sim_t: float = 0.0
+    outcome: Outcome | None = None  # FINISHED only
+
+
+Listener = Callable[[Event], None]
+
+
+def lost(job: Job, ctx: Context, error: str) -> Outcome:
+    """A job whose process died: its folder is marked failed here, since the dead process
+    could not (its own unfinished mark says no more than that it did not finish)."""
+    folder = ctx.out / job.folder
+    if folder.is_dir():
+        mark_failed(folder, job.label, error)
+        for stage in folder.glob(f"{STAGE_PREFIX}*"):  # its half-written run: nobody owns it
+            shutil.rmtree(stage, ignore_errors=True)
+    return Outcome.failed(job, error)
