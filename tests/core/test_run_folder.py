@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,10 @@ from kartci.api import load_scenario
 from kartci.core import UNFINISHED, RunFolder
 from kartci.logs import SCENARIO_TOPIC, messages
 from kartci.runner.run import mark_failed, run_one
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+
+from layers import edges
 
 OVERRIDES = ["duration_s=0.5", "criteria={}", "metrics.line_tracking.transient_s=0.1"]
 
@@ -50,3 +55,9 @@ def test_a_folder_marked_unfinished_says_so(tmp_path: Path) -> None:
     assert RunFolder(tmp_path).unfinished()
     stage = RunFolder(tmp_path).new_stage()
     assert stage.path.parent == tmp_path and RunFolder(tmp_path).stages() == [stage.path]
+
+
+def test_core_imports_nothing_above_it() -> None:
+    """Every package may ask a RunFolder for a name: core stays the bottom of the graph."""
+    below = {"kartci.atomic", "kartci.boundedio", "kartci.errors", "kartci.project"}
+    assert {e.target for e in edges() if e.source == "kartci.core"} <= below
