@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from kartci.core.runfolder import RunFolder
+
 if TYPE_CHECKING:
     from kartci.core import Metric
     from kartci.spec.models import Scenario
@@ -99,9 +101,7 @@ class RunResult:
     @property
     def log(self) -> Path:
         """The run's MCAP log (opens in Foxglove, plays with `ros2 bag play`)."""
-        from kartci.runner.run import LOG_NAME
-
-        return self.folder / LOG_NAME
+        return RunFolder(self.folder).log
 
     @property
     def status(self) -> Status:
@@ -209,7 +209,6 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
         load,
         made_where,
         read_json,
-        read_metrics,
     )
 
     if isinstance(scenario, Scenario):
@@ -222,8 +221,8 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     t0 = time.perf_counter()
     facts = run_pinned(spec, root, folder, agents)
     wall = time.perf_counter() - t0
-    doc = read_json(folder / "metrics.json")
-    values = read_metrics(folder / "metrics.json")
+    doc = read_json(RunFolder(folder).metrics)
+    values = RunFolder(folder).read_metrics()
     base_dir = Path(baselines) if baselines is not None else project.current().baselines
     base_file = base_dir / f"{spec.name}.json"
     baseline = load(base_file)

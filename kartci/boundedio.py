@@ -8,6 +8,7 @@ error type; nothing here quotes a file's contents.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import stat
@@ -120,5 +121,28 @@ def out_of_range(doc: Any) -> str | None:
     return None
 
 
-__all__ = ["JSON_MAX_BYTES", "RefusedFileError", "check_file", "check_log", "open_regular",
-           "out_of_range", "read_bytes", "size_text"]
+def is_number(x: Any) -> bool:
+    """A finite int or float, not a bool: what a metric value or tolerance may be."""
+    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _no_constants(name: str) -> float:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def read_json(path: Path, limit_bytes: int = JSON_MAX_BYTES) -> Any:
+    """JSON from a regular file of at most `limit_bytes`, without NaN / Infinity or a number a
+    float cannot hold; any problem is a ValueError or OSError (RefusedFileError: not a regular
+    file, or too large)."""
+    try:
+        doc = json.loads(read_bytes(path, limit_bytes), parse_constant=_no_constants)
+    except RecursionError:
+        raise ValueError("nested too deeply") from None
+    field = out_of_range(doc)
+    if field is not None:
+        raise ValueError(f"{field}: a number out of range (beyond a float's ±1.8e308)")
+    return doc
+
+
+__all__ = ["JSON_MAX_BYTES", "RefusedFileError", "check_file", "check_log", "is_number",
+           "open_regular", "out_of_range", "read_bytes", "read_json", "size_text"]

@@ -42,9 +42,10 @@ def baseline_update(
     complete, current, pinned run is taken: a scenario whose last run failed or did not finish
     is refused, and with no names only the scenarios of the last run in OUT are taken. A metric
     whose spread exceeds its tolerance is flagged ill-conditioned."""
+    from kartci.core import RunFolder
     from kartci.runner.outdir import check_inside, locked, read_manifest, valid_label
     from kartci.runner.run import check_complete, check_finished, reference_plots
-    from kartci.verdict import load, read_metrics, update
+    from kartci.verdict import load, update
     from kartci.verdict.trace import trace_path, write_trace
 
     _check_options(replicas, jobs)
@@ -67,7 +68,7 @@ def baseline_update(
             check_complete(folder)
             _check_pinned(folder)
             load(target / f"{label}.json")
-            checked.append((label, read_metrics(folder / "metrics.json")))
+            checked.append((label, RunFolder(folder).read_metrics()))
         if replicas:
             _replicate(out, target, labels, replicas, jobs)
         # the traces' plots read the logs: after the cheap checks, still before any write

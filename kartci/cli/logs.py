@@ -223,24 +223,25 @@ def _say(text: str) -> None:
 def _run_log(path: Path, which: str) -> Path:
     """The log a path names: a log file, a rosbag2 folder, a run folder's run.mcap, or the one
     run's log in an OUT folder."""
+    from kartci.core import RunFolder
     from kartci.errors import LogError
-    from kartci.runner.run import LOG_NAME
 
-    what = f"give a run log (.mcap) or a run folder (OUT/<scenario>, holding {LOG_NAME})"
+    name = RunFolder.LOG_NAME
+    what = f"give a run log (.mcap) or a run folder (OUT/<scenario>, holding {name})"
     if not path.exists():
         raise LogError(f"{which}: {path}: no such file or folder; {what}")
     if not path.is_dir() or (path / "metadata.yaml").is_file():
         return path
-    if (path / LOG_NAME).is_file():
-        return path / LOG_NAME
-    runs = sorted(path.glob(f"*/{LOG_NAME}"))
+    if RunFolder(path).log.is_file():
+        return RunFolder(path).log
+    runs = sorted(path.glob(f"*/{name}"))
     if len(runs) == 1:
         return runs[0]
     if runs:
         names = ", ".join(r.parent.name for r in runs)
         raise LogError(f"{which}: {path} holds {len(runs)} runs ({names}); give one of them, "
                        f"e.g. {runs[0].parent}")
-    raise LogError(f"{which}: {path}: no {LOG_NAME} in this folder; {what}")
+    raise LogError(f"{which}: {path}: no {name} in this folder; {what}")
 
 
 def _seconds(t_ns: int) -> str:

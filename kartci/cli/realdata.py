@@ -139,14 +139,14 @@ def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
     from kartci.atomic import write_text_atomic
     from kartci.cli.common import out_console
     from kartci.errors import SpecError
-    from kartci.logs import tables
+    from kartci.logs import SCENARIO_TOPIC, tables
     from kartci.metrics import recorded_scenario
     from kartci.mpcc.model import SingleTrack
     from kartci.mpcc.params import MpccVehicle
     from kartci.realdata.mpcc_fit import fit_mpcc, lateral_data
     from kartci.robots.gokart.params import GokartModel, cog_x_m
 
-    scenario = recorded_scenario(tables(log, ["/kartci/scenario"]), log)
+    scenario = recorded_scenario(tables(log, [SCENARIO_TOPIC]), log)
     agent, model = next(iter(scenario.agents.items()))
     if not isinstance(model.model, GokartModel):
         raise SpecError(f"{log}: --mpcc fits a go-kart's MPCC model; {agent} is a "

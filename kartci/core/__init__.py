@@ -6,6 +6,7 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Frozen` and the parameter bases (`ControllerParams`, `NodeParams`, `RobotParams`,
   `WorldParams`, `MetricParams`) that each plugin's own pydantic model extends.
 - `Controller`, `Node`, `RobotKind`, `WorldKind`, `MetricSet` and their registries.
+- `RunFolder`: the one owner of a run folder's file names.
 """
 
 from kartci.core.agent import Agent, Outbox
@@ -40,6 +41,7 @@ from kartci.core.registry import (
     load,
     register,
 )
+from kartci.core.runfolder import UNFINISHED, RunFolder
 
 __all__ = [
     "CONTROLLERS",
@@ -47,6 +49,7 @@ __all__ = [
     "NODES",
     "REGISTRIES",
     "ROBOTS",
+    "UNFINISHED",
     "WORLDS",
     "Agent",
     "AgentContext",
@@ -65,6 +68,7 @@ __all__ = [
     "Registry",
     "RobotKind",
     "RobotParams",
+    "RunFolder",
     "WorldKind",
     "WorldParams",
     "catalogue",

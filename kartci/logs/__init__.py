@@ -16,7 +16,7 @@ from kartci.logs.reader import (
     warn_salvaged,
 )
 from kartci.logs.tables import tables
-from kartci.logs.types import for_writing, header, msg, stamp_ns, typestore
+from kartci.logs.types import SCENARIO_TOPIC, for_writing, header, msg, stamp_ns, typestore
 from kartci.logs.writer import McapLogWriter
 
 
@@ -103,6 +103,7 @@ def _copy(log: LogReader, wanted: list[str], out: McapLogWriter) -> int:
 
 
 __all__ = [
+    "SCENARIO_TOPIC",
     "LogReader",
     "McapLogWriter",
     "SalvagedLog",

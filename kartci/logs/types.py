@@ -31,6 +31,7 @@ def typestore() -> Typestore:
 
 
 WORLD_FRAME = "map"  # the fixed frame of every world (REP 105's map)
+SCENARIO_TOPIC = "/kartci/scenario"  # std_msgs/String: the scenario run, as JSON, at t = 0
 
 
 def base_link(namespace: str) -> str:

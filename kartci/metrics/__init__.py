@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from kartci import core
 from kartci.core import Direction, Metric, MetricDef, MetricParams, definition, definitions
 from kartci.errors import LogError
+from kartci.logs import SCENARIO_TOPIC
 from kartci.spec import Scenario, scenario_from_json
 
 if TYPE_CHECKING:  # pandas, the log readers and scipy load when a log is scored, not before
@@ -78,9 +79,9 @@ def footprint_m(scenario: Scenario, agent: str) -> tuple[float, float, float] | 
 
 def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
     """The scenario a run log recorded on /kartci/scenario: the one its metrics are scored with."""
-    table = log_tables.get("/kartci/scenario")
+    table = log_tables.get(SCENARIO_TOPIC)
     if table is None or getattr(table, "empty", True):
-        raise LogError(f"{path}: no /kartci/scenario message; not a kartci run log")
+        raise LogError(f"{path}: no {SCENARIO_TOPIC} message; not a kartci run log")
     return scenario_from_json(str(table["data"].iloc[0]))
 
 

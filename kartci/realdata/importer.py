@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from kartci.errors import LogError
-from kartci.logs import McapLogWriter, header, msg, open_log, stamp_ns
+from kartci.logs import SCENARIO_TOPIC, McapLogWriter, header, msg, open_log, stamp_ns
 from kartci.logs.types import for_writing, yaw_of
 from kartci.realdata.profile import Profile
 from kartci.spec import Scenario
@@ -141,7 +141,7 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
     t1 = max(t for t, _ in poses["pose"])
     scenario = imported_scenario(profile, (t1 - t0) * 1e-9)
     out: list[tuple[str, int, Any]] = [
-        ("/kartci/scenario", t0, msg("std_msgs/msg/String", data=scenario.model_dump_json()))]
+        (SCENARIO_TOPIC, t0, msg("std_msgs/msg/String", data=scenario.model_dump_json()))]
     if profile.track is not None:
         out.append((TRACK_TOPIC, t0, msg("std_msgs/msg/String", data=_read(profile.track))))
     for role, name in (("pose", "odom"), ("estimate", "estimate")):

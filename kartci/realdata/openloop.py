@@ -16,7 +16,7 @@ import numpy as np
 from kartci import core
 from kartci.core import AgentContext, RobotParams
 from kartci.errors import LogError, SpecError
-from kartci.logs import McapLogWriter, messages, open_log, tables
+from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, open_log, tables
 from kartci.logs.types import for_writing
 from kartci.metrics import recorded_scenario
 from kartci.realdata.builtin import RecordedRobot
@@ -36,7 +36,7 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
     params: Any = None
     model: RobotParams = RecordedRobot()
     try:
-        scenario = recorded_scenario(tables(log, ["/kartci/scenario"]), log)
+        scenario = recorded_scenario(tables(log, [SCENARIO_TOPIC]), log)
     except LogError:
         scenario = None
     if scenario is not None:

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from kartci.errors import SpecError
-from kartci.logs import McapLogWriter, messages, open_log
+from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, open_log
 from kartci.logs.types import for_writing
 from kartci.realdata.divergence import SIM_WHOLE, SIM_WINDOWS, run_whole, run_windows
 from kartci.realdata.drive import Drive, read_drive
@@ -118,7 +118,7 @@ def _write(imported: Path, dst: Path, scenario: Scenario, agent: str, drive: Dri
         store = for_writing(reader.typestore)
     with McapLogWriter(dst, store) as out:
         for topic, t_ns, m in messages(imported):
-            if topic == "/kartci/scenario":
+            if topic == SCENARIO_TOPIC:
                 m = msg("std_msgs/msg/String", data=scenario.model_dump_json())
             out.write(topic, m, t_ns)
         stamp0 = _first_stamp(imported, agent)

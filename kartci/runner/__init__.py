@@ -13,8 +13,6 @@ if TYPE_CHECKING:
     from kartci.runner.jobs import Job, Outcome, expand, parse_shard, shard
     from kartci.runner.kinds import ExecutorKind
     from kartci.runner.run import (
-        ERROR_NAME,
-        LOG_NAME,
         default_baselines,
         evaluate,
         rescore,
@@ -26,7 +24,7 @@ if TYPE_CHECKING:
 
 _WHERE = {"Event": "events", "EventKind": "events", "ExecutorKind": "kinds",
           "Job": "jobs", "Outcome": "jobs", "expand": "jobs", "parse_shard": "jobs",
-          "shard": "jobs", "ERROR_NAME": "run", "LOG_NAME": "run", "default_baselines": "run",
+          "shard": "jobs", "default_baselines": "run",
           "evaluate": "run", "rescore": "run", "run_one": "run", "scenario_folders": "run",
           "score": "run", "run_jobs": "suite"}
 
@@ -39,6 +37,6 @@ def __getattr__(name: str) -> Any:
     return getattr(importlib.import_module(f"kartci.runner.{where}"), name)
 
 
-__all__ = ["ERROR_NAME", "LOG_NAME", "Event", "EventKind", "ExecutorKind", "Job", "Outcome",
+__all__ = ["Event", "EventKind", "ExecutorKind", "Job", "Outcome",
            "default_baselines", "evaluate", "expand", "parse_shard", "rescore", "run_jobs",
            "run_one", "scenario_folders", "score", "shard"]

@@ -7,23 +7,25 @@ import re
 from dataclasses import replace
 from pathlib import Path
 
+from kartci.core import RunFolder
 from kartci.errors import SpecError
 from kartci.figures import overlay
 from kartci.runner.jobs import REPEAT_PREFIX
 from kartci.runner.outdir import check_inside
 from kartci.runner.run import evaluate, failed_reason, scenario_folders
-from kartci.verdict import load, read_metrics
+from kartci.verdict import load
 from kartci.verdict.result import ScenarioResult
 from kartci.verdict.runs import ALPHA, Samples, compare_runs
 
 
 def samples(folder: Path) -> Samples:
     """The judged run's metrics plus those of its repeats (`repeat_<k>/metrics.json`)."""
-    repeats = sorted((p for p in folder.glob(f"{REPEAT_PREFIX}*/metrics.json")),
-                     key=lambda p: int(re.sub(r"\D", "", p.parent.name) or 0))
+    repeats = sorted((RunFolder(p.parent) for p in
+                      folder.glob(f"{REPEAT_PREFIX}*/{RunFolder.METRICS_NAME}")),
+                     key=lambda r: int(re.sub(r"\D", "", r.name) or 0))
     out: Samples = {}
-    for path in [folder / "metrics.json", *repeats]:
-        for name, m in read_metrics(path).items():
+    for run in [RunFolder(folder), *repeats]:
+        for name, m in run.read_metrics().items():
             entry = out.setdefault(name, {"unit": str(m.get("unit", "")), "values": []})
             entry["values"].append(m.get("value"))
     return out
@@ -41,7 +43,8 @@ def compare_outs(base_out: Path, head_out: Path, baselines: Path,
     for side, d, found in (("base", base_out, base), ("head", head_out, head)):
         check_inside(d, found)  # judging marks a bad folder: never through a symlink
         if not found:  # else every metric of the other side would be NEW, and pass
-            hint = (f"run `kartci report {d}` to score its logs" if any(d.glob("*/run.mcap"))
+            logged = any(d.glob(f"*/{RunFolder.LOG_NAME}"))
+            hint = (f"run `kartci report {d}` to score its logs" if logged
                     else "run `kartci run` first")
             raise SpecError(f"{side} {d}: no scored scenario folders; {hint}")
     return [_one(label, base.get(label), head.get(label), baselines, alpha)

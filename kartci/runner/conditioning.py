@@ -13,6 +13,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from kartci.core import RunFolder
 from kartci.errors import BaselineError
 from kartci.runner.jobs import REPEAT_PREFIX, START_STEP_M, Job, Vary, replica
 from kartci.verdict import (
@@ -21,7 +22,6 @@ from kartci.verdict import (
     compare,
     ill_conditioned,
     load,
-    read_metrics,
     spread,
 )
 from kartci.verdict.baseline import conditioning, definition, read_json
@@ -32,7 +32,7 @@ DEFAULT_REPLICAS = 4  # the run itself and 3 nudged: enough to see a bifurcation
 
 def _run_fact(folder: Path, key: str) -> dict[str, Any]:
     try:
-        run = read_json(folder / "run.json")
+        run = read_json(RunFolder(folder).run_record)
     except (OSError, ValueError):
         return {}
     found = run.get(key) if isinstance(run, dict) else None
@@ -52,7 +52,8 @@ def replica_folders(folder: Path) -> list[Path]:
     """The complete start replicas of a scenario folder."""
     out = []
     for rep in sorted(folder.glob(f"{REPEAT_PREFIX}*")):
-        if (rep / "metrics.json").is_file() and not (rep / "error.json").exists() and (
+        run = RunFolder(rep)
+        if run.metrics.is_file() and not run.error.exists() and (
                 _variation(rep).get("vary") == Vary.START.value):
             out.append(rep)
     return out
@@ -63,8 +64,7 @@ def spreads(folder: Path) -> dict[str, float | None] | None:
     reps = replica_folders(folder)
     if not reps:
         return None
-    samples = [read_metrics(folder / "metrics.json"), *(read_metrics(r / "metrics.json")
-                                                        for r in reps)]
+    samples = [RunFolder(f).read_metrics() for f in [folder, *reps]]
     names = sorted(set().union(*samples))
 
     def value(sample: dict[str, dict[str, Any]], name: str) -> float | None:
@@ -89,7 +89,7 @@ def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioRes
     base = load(baselines / f"{result.name}.json")
     entries = None if base is None else {
         name: {**entry, "spread": measured.get(name)} for name, entry in base.items()}
-    verdicts = compare(read_metrics(folder / "metrics.json"), entries)
+    verdicts = compare(RunFolder(folder).read_metrics(), entries)
     verdicts = [v if v.baseline is not None or v.name not in measured else
                 _unjudged(v, measured[v.name]) for v in verdicts]
     policed = {v.name: v for v in result.verdicts}  # the policy is the stored file's

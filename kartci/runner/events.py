@@ -9,8 +9,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 
+from kartci.core import RunFolder
 from kartci.runner.jobs import Context, Job, Outcome
-from kartci.runner.run import STAGE_PREFIX, mark_failed
+from kartci.runner.run import mark_failed
 
 
 class EventKind(StrEnum):
@@ -40,6 +41,6 @@ def lost(job: Job, ctx: Context, error: str) -> Outcome:
     folder = ctx.out / job.folder
     if folder.is_dir():
         mark_failed(folder, job.label, error)
-        for stage in folder.glob(f"{STAGE_PREFIX}*"):  # its half-written run: nobody owns it
+        for stage in RunFolder(folder).stages():  # its half-written run: nobody owns it
             shutil.rmtree(stage, ignore_errors=True)
     return Outcome.failed(job, error)

@@ -11,10 +11,11 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from kartci.core import UNFINISHED, RunFolder
 from kartci.errors import SpecError
 from kartci.runner.gate import require_baselines
 from kartci.runner.outdir import check_inside, valid_label
-from kartci.runner.run import STAGE_PREFIX, UNFINISHED, evaluate, mark_failed, scenario_folders
+from kartci.runner.run import evaluate, mark_failed, scenario_folders
 from kartci.verdict import read_json, write_json_atomic
 from kartci.verdict.result import ScenarioResult
 
@@ -143,7 +144,8 @@ def _replace_tree(src: Path, dst: Path) -> None:
     copy is complete, and stale run artifacts (a run's staging folder) are left out."""
     tmp = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".merge", dir=dst.parent))
     try:
-        shutil.copytree(src, tmp / "new", ignore=shutil.ignore_patterns(f"{STAGE_PREFIX}*"))
+        stages = shutil.ignore_patterns(f"{RunFolder.STAGE_PREFIX}*")
+        shutil.copytree(src, tmp / "new", ignore=stages)
         _relocate_log(tmp / "new", dst)
         if dst.is_symlink() or dst.is_file():
             dst.unlink()
@@ -156,7 +158,8 @@ def _replace_tree(src: Path, dst: Path) -> None:
 
 def _relocate_log(folder: Path, final: Path) -> None:
     """Point run.json's `log` at where the folder will be (`final`)."""
-    for run_json in [folder / "run.json", *folder.glob("*/run.json")]:
+    for run_json in [RunFolder(folder).run_record,
+                     *folder.glob(f"*/{RunFolder.RUN_RECORD_NAME}")]:
         try:
             doc = read_json(run_json)
         except (OSError, ValueError):

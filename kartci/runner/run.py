@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 import os
 import shutil
-import tempfile
 import time
 import traceback
 from collections.abc import Callable, Mapping
@@ -25,9 +24,10 @@ from kartci import core, metrics, portable, project
 from kartci.agents.kart import COMMANDS, JOY
 from kartci.agents.source import Recorded
 from kartci.atomic import write_text_atomic
+from kartci.core import UNFINISHED, RunFolder
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.figures import PlotContext, Plots
-from kartci.logs import tables
+from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.project import did_you_mean
 from kartci.runner.outdir import check_inside, manifest_labels
 from kartci.sim import simulate
@@ -45,17 +45,10 @@ from kartci.verdict import (
     made_where,
     police,
     read_json,
-    read_metrics,
     write_json_atomic,
 )
 from kartci.verdict.result import ScenarioResult, one_line
 from kartci.verdict.trace import load_trace, trace_path
-
-LOG_NAME = "run.mcap"
-ERROR_NAME = "error.json"  # marks a scenario whose last run failed (older outputs are kept)
-TRACEBACK_NAME = "traceback.txt"  # beside error.json when a run crashed: for debugging only
-STAGE_PREFIX = ".new-"  # a run in progress writes here; moved into place when complete
-UNFINISHED = "the run did not finish (interrupted, or its process died)"
 
 
 def default_baselines() -> Path:
@@ -67,8 +60,9 @@ def mark_failed(folder: Path, name: str, error: str, err: BaseException | None =
     """Mark a scenario folder as failed: its older outputs stay for debugging, but nothing
     (report, compare, baseline update) takes them for this run's. A crash (not a KartciError)
     also leaves its full traceback in traceback.txt; the message itself stays one line."""
-    write_json_atomic(folder / ERROR_NAME, {"scenario": name, "error": one_line(error)})
-    trace = folder / TRACEBACK_NAME
+    run = RunFolder(folder)
+    write_json_atomic(run.error, {"scenario": name, "error": one_line(error)})
+    trace = run.traceback
     if err is not None and not isinstance(err, KartciError):
         write_text_atomic(trace, "".join(traceback.format_exception(err)))
     else:
@@ -98,10 +92,10 @@ def run_one(scenario: Scenario, out: Path,
     leaves the folder marked."""
     folder = folder or out / scenario.name
     folder.mkdir(parents=True, exist_ok=True)
-    for old in folder.glob(f"{STAGE_PREFIX}*"):  # left by a killed run (OUT is locked)
+    for old in RunFolder(folder).stages():  # left by a killed run (OUT is locked)
         shutil.rmtree(old, ignore_errors=True)
     mark_failed(folder, scenario.name, UNFINISHED)
-    stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=folder))
+    stage = RunFolder(folder).new_stage().path
     try:
         run = _run_staged(scenario, stage, folder, on_progress, agents, facts)
         _commit(stage, folder)
@@ -133,31 +127,31 @@ def _run_staged(scenario: Scenario, stage: Path, folder: Path,
                 agents: Mapping[str, object] | None = None,
                 facts: Mapping[str, Any] | None = None) -> dict[str, Any]:
     t0 = time.perf_counter()
-    info = simulate(scenario, stage / LOG_NAME, on_progress, agents)
+    info = simulate(scenario, RunFolder(stage).log, on_progress, agents)
     wall = time.perf_counter() - t0
     score(stage)
     run: dict[str, Any] = {
         "sim_time_s": round(info.sim_time_s, 6), "wall_s": round(wall, 3),
         "real_time_factor": round(info.sim_time_s / wall, 2) if wall > 0 else None,
         "messages": info.messages, "finished_course": info.finished_course,
-        "log": str(folder / LOG_NAME), "platform": portable.describe(), **(facts or {})}
+        "log": str(RunFolder(folder).log), "platform": portable.describe(), **(facts or {})}
     if agents:
         run["replaced_agents"] = {name: describe(a) for name, a in sorted(agents.items())}
     warnings = input_warnings(scenario)
     if warnings:
         run["warnings"] = warnings
-    write_json_atomic(stage / "run.json", run)
+    write_json_atomic(RunFolder(stage).run_record, run)
     return run
 
 
 def _commit(stage: Path, folder: Path) -> None:
     """Move a complete result into place; the unfinished mark goes last, so a death half-way
     leaves the folder marked."""
-    for name in (LOG_NAME, "metrics.json", "run.json"):
-        os.replace(stage / name, folder / name)
+    run = RunFolder(folder)
+    run.adopt(RunFolder(stage))
     keep_outputs(stage, folder)
-    (folder / TRACEBACK_NAME).unlink(missing_ok=True)
-    (folder / ERROR_NAME).unlink(missing_ok=True)
+    run.traceback.unlink(missing_ok=True)
+    run.error.unlink(missing_ok=True)
 
 
 def keep_outputs(stage: Path, folder: Path) -> None:
@@ -190,7 +184,8 @@ def input_warnings(scenario: Scenario) -> list[str]:
 
 def score(folder: Path) -> dict[str, Any]:
     """Compute metrics.json from the log in `folder` (byte-identical for identical logs)."""
-    scenario, values = metrics.compute(folder / LOG_NAME)
+    run = RunFolder(folder)
+    scenario, values = metrics.compute(run.log)
 
     def timing(name: str) -> bool:
         d = metrics.definition(name)
@@ -199,7 +194,7 @@ def score(folder: Path) -> dict[str, Any]:
     doc = {"scenario": scenario.name, "seed": scenario.seed,
            "metrics": {name: m.to_json() for name, m in values.items() if not timing(name)},
            "timing": {name: m.to_json() for name, m in values.items() if timing(name)}}
-    write_json_atomic(folder / "metrics.json", doc)
+    write_json_atomic(run.metrics, doc)
     return doc
 
 
@@ -209,8 +204,8 @@ def plots(folder: Path, scenario: Scenario) -> Plots | None:
     kind = core.ROBOTS.get(next(iter(scenario.agents.values())).model.kind)
     if kind.plots is None:
         return None
-    result: Plots = kind.plots(PlotContext(scenario, tables(folder / LOG_NAME),
-                                           folder / LOG_NAME))
+    log = RunFolder(folder).log
+    result: Plots = kind.plots(PlotContext(scenario, tables(log), log))
     return result
 
 
@@ -220,27 +215,16 @@ def reference_plots(folder: Path) -> Plots | None:
     return plots(folder, scenario)
 
 
-def _marked(folder: Path) -> str | None:
-    """The reason in a folder's failure mark ("" when unreadable), None when it has none."""
-    marker = folder / ERROR_NAME
-    if not marker.exists() and not marker.is_symlink():
-        return None
-    try:
-        return str(read_json(marker).get("error", ""))
-    except (OSError, ValueError, AttributeError):
-        return ""
-
-
 def failed_reason(folder: Path) -> str | None:
     """Why a folder's last run failed, or None when it is not marked failed."""
-    reason = _marked(folder)
+    reason = RunFolder(folder).failure()
     return None if reason is None else f"the last run failed: {one_line(reason)}".rstrip(": ")
 
 
 def check_finished(out: Path, labels: list[str]) -> None:
     """Refuse (SpecError, naming them all) labels still marked unfinished: the command that
     selected them stopped before their run completed, so their outputs are an older run's."""
-    late = [label for label in labels if _marked(out / label) == UNFINISHED]
+    late = [label for label in labels if RunFolder(out / label).unfinished()]
     if late:
         one = len(late) == 1
         raise SpecError(f"{', '.join(late)}: not finished in {out} (the command that selected "
@@ -259,7 +243,7 @@ def check_complete(folder: Path) -> None:
         raise SpecError(f"{folder}: the last run of this scenario failed"
                         f"{f' ({why})' if why else ''}; its metrics are stale and will not "
                         "become a baseline")
-    missing = [n for n in (LOG_NAME, "metrics.json") if not (folder / n).is_file()]
+    missing = RunFolder(folder).missing()
     if missing:
         raise SpecError(f"{folder}: incomplete (no {' or '.join(missing)}); run it again")
 
@@ -292,11 +276,11 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
 def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, baselines: Path,
            with_plots: bool, reference: dict[str, pd.DataFrame]) -> ScenarioResult:
     scenario, _ = _recorded(folder)
-    values = read_metrics(folder / "metrics.json")
+    values = RunFolder(folder).read_metrics()
     verdicts, doubts, strict = trusted(compare(values, baseline), baseline, scenario,
                                        baselines / f"{folder.name}.json")
     crit = check_criteria(values, scenario.criteria)
-    run = _run_record(folder / "run.json")
+    run = RunFolder(folder).read_run_record()
     warnings = [str(w) for w in run.get("warnings") or [] if isinstance(w, str)]
     made = made_where(baselines / f"{folder.name}.json").get("platform")
     note = portable.mismatch(made, run.get("platform") or {}) if made else None
@@ -334,27 +318,15 @@ def trusted(verdicts: list[MetricVerdict], baseline: dict[str, dict[str, Any]] |
     return verdicts, [*stale, *loose], strict
 
 
-def _run_record(path: Path) -> dict[str, Any]:
-    """A run folder's run.json ({} when there is none); a LogError naming it when unreadable."""
-    if not path.exists():
-        return {}
-    try:
-        run = read_json(path)
-    except (OSError, ValueError) as err:
-        raise LogError(f"{path}: unreadable run record ({err})") from None
-    if not isinstance(run, dict):
-        raise LogError(f"{path}: expected a JSON object")
-    return run
-
-
 def recorded_scenario(folder: Path) -> Scenario:
     """The scenario a run folder's log recorded: exactly what ran, overrides applied."""
     return _recorded(folder)[0]
 
 
 def _recorded(folder: Path) -> tuple[Scenario, dict[str, pd.DataFrame]]:
-    t = tables(folder / LOG_NAME, ["/kartci/scenario"])
-    return metrics.recorded_scenario(t, folder / LOG_NAME), t
+    log = RunFolder(folder).log
+    t = tables(log, [SCENARIO_TOPIC])
+    return metrics.recorded_scenario(t, log), t
 
 
 def check_criteria_names(specs: list[Scenario]) -> None:
@@ -371,7 +343,8 @@ def check_criteria_names(specs: list[Scenario]) -> None:
 
 def scenario_folders(out: Path) -> list[Path]:
     """The scenario folders of a run: those holding metrics.json or a failed-run marker."""
-    return sorted({p.parent for pattern in ("*/metrics.json", f"*/{ERROR_NAME}")
+    return sorted({p.parent for pattern in (f"*/{RunFolder.METRICS_NAME}",
+                                            f"*/{RunFolder.ERROR_NAME}")
                    for p in out.glob(pattern)})
 
 
@@ -380,10 +353,11 @@ def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:
     last run in OUT (its manifest), else every folder with a log, metrics or a failure mark.
     Each gets a result: one whose log is gone or damaged is an error, its folder marked."""
     names = set(manifest_labels(out) or []) or {
-        p.parent.name for pattern in (f"*/{LOG_NAME}", "*/metrics.json", f"*/{ERROR_NAME}")
-        for p in out.glob(pattern)}
+        p.parent.name for name in (RunFolder.LOG_NAME, RunFolder.METRICS_NAME,
+                                   RunFolder.ERROR_NAME)
+        for p in out.glob(f"*/{name}")}
     if not names:
-        raise LogError(f"{out}: no <scenario>/{LOG_NAME} logs found")
+        raise LogError(f"{out}: no <scenario>/{RunFolder.LOG_NAME} logs found")
     check_inside(out, names)
     return [_rescore_one(out / name, baselines) for name in sorted(names)]
 
@@ -394,8 +368,9 @@ def _rescore_one(folder: Path, baselines: Path) -> ScenarioResult:
     if not folder.is_dir():
         return ScenarioResult(folder.name, "", error=f"{folder}: the scenario folder is missing")
     try:
-        if not (folder / LOG_NAME).is_file():
-            raise LogError(f"{folder / LOG_NAME}: missing; nothing to score")
+        log = RunFolder(folder).log
+        if not log.is_file():
+            raise LogError(f"{log}: missing; nothing to score")
         score(folder)
     except Exception as err:  # a log that breaks a reader in a new way: this scenario only
         error = str(err) if isinstance(err, KartciError) else f"{type(err).__name__}: {err}"

@@ -5,12 +5,13 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+from kartci.core import UNFINISHED
 from kartci.runner import conditioning, costs
 from kartci.runner.events import Event, Listener
 from kartci.runner.executors import execute
 from kartci.runner.jobs import REPEAT_PREFIX, Context, Draw, Job, Outcome, Vary
 from kartci.runner.kinds import ExecutorKind
-from kartci.runner.run import UNFINISHED, mark_failed
+from kartci.runner.run import mark_failed
 from kartci.verdict.result import ScenarioResult
 
 

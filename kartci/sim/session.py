@@ -31,7 +31,7 @@ import numpy as np
 from kartci import core, portable
 from kartci.core import Agent, AgentContext
 from kartci.errors import KartciError, SpecError
-from kartci.logs import McapLogWriter, msg
+from kartci.logs import SCENARIO_TOPIC, McapLogWriter, msg
 from kartci.project import did_you_mean
 from kartci.sim.messages import tf_message
 from kartci.sim.robot import Put, Robot, RobotContext, SimWorld
@@ -39,7 +39,6 @@ from kartci.sim.urdf import robot_descriptions
 from kartci.spec import Scenario
 from kartci.spec.models import Carry
 
-SCENARIO_TOPIC = "/kartci/scenario"
 REPLACED_TOPIC = "/kartci/replaced_agents"  # std_msgs/String, JSON {agent: "module.Class"}
 
 Message = tuple[str, Any]  # (absolute topic, ROS 2 message)

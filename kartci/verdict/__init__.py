@@ -18,7 +18,6 @@ from kartci.verdict.baseline import (
     made_where,
     police,
     read_json,
-    read_metrics,
     spread,
     update,
     worst,
@@ -29,4 +28,4 @@ from kartci.verdict.result import ScenarioResult, exit_code, one_line
 __all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Change", "Conditioning", "CriterionResult",
            "MetricVerdict", "Policy", "ScenarioResult", "Status", "check_criteria", "compare",
            "exit_code", "ill_conditioned", "load", "loosened", "made_where", "one_line", "police",
-           "read_json", "read_metrics", "spread", "update", "worst", "write_json_atomic"]
+           "read_json", "spread", "update", "worst", "write_json_atomic"]

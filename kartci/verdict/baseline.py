@@ -5,7 +5,6 @@ Only `update` writes a baseline file, atomically; a run never does.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass, replace
@@ -14,7 +13,9 @@ from pathlib import Path
 from typing import Any
 
 from kartci.atomic import write_json_atomic as write_json_atomic  # re-exported
-from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
+from kartci.boundedio import RefusedFileError
+from kartci.boundedio import is_number as _is_number
+from kartci.boundedio import read_json as read_json  # re-exported
 from kartci.core import Direction, MetricDef
 from kartci.core import definition as registered
 from kartci.errors import BaselineError
@@ -196,28 +197,6 @@ def definition(name: str) -> MetricDef | None:
     return registered(name)
 
 
-def _no_constants(name: str) -> float:
-    raise ValueError(f"{name} is not a number JSON allows")
-
-
-def _is_number(x: Any) -> bool:
-    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
-
-
-def read_json(path: Path, limit_bytes: int = JSON_MAX_BYTES) -> Any:
-    """JSON from a regular file of at most `limit_bytes`, without NaN / Infinity or a number a
-    float cannot hold; any problem is a ValueError or OSError (RefusedFileError: not a regular
-    file, or too large)."""
-    try:
-        doc = json.loads(read_bytes(path, limit_bytes), parse_constant=_no_constants)
-    except RecursionError:
-        raise ValueError("nested too deeply") from None
-    field = out_of_range(doc)
-    if field is not None:
-        raise ValueError(f"{field}: a number out of range (beyond a float's ±1.8e308)")
-    return doc
-
-
 def load(path: Path) -> dict[str, dict[str, Any]] | None:
     """The baseline's metrics by name, or None when there is no baseline file. A dangling
     symlink is a broken baseline, not a missing one (that would pass everything as NEW)."""
@@ -245,26 +224,6 @@ def load(path: Path) -> dict[str, dict[str, Any]] | None:
     except (OSError, ValueError, UnicodeDecodeError) as err:
         why = err if isinstance(err, RefusedFileError) else f"malformed baseline ({err})"
         raise BaselineError(f"{path}: {why}") from None
-    return dict(metrics)
-
-
-def read_metrics(path: Path) -> dict[str, dict[str, Any]]:
-    """The metrics of a run's metrics.json, checked: {NAME: {"value": number|null, ...}}."""
-    try:
-        data = read_json(path)
-        metrics = data.get("metrics") if isinstance(data, dict) else None
-        if not isinstance(metrics, dict):
-            raise ValueError('expected {"metrics": {NAME: {"value": ...}}}')
-        for name, entry in metrics.items():
-            if not isinstance(entry, dict) or not (entry.get("value") is None
-                                                   or _is_number(entry["value"])):
-                raise ValueError(f"{name}: expected {{\"value\": number or null, ...}}")
-    except FileNotFoundError:
-        raise BaselineError(f"{path}: not found; run `kartci run` first") from None
-    except RefusedFileError as err:
-        raise BaselineError(f"{path}: {err}") from None
-    except (OSError, ValueError, UnicodeDecodeError) as err:
-        raise BaselineError(f"{path}: malformed metrics file ({err})") from None
     return dict(metrics)
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from kartci.core import RunFolder
 from kartci.errors import LogError
 from kartci.logs import tables
 from kartci.metrics import recorded_scenario
@@ -54,9 +55,9 @@ def point_of(label: str) -> dict[str, float]:
 
 def curve(folder: Path) -> Curve:
     """The curve of one run folder (its `run.mcap`); a LogError when the log is missing."""
-    log = folder / "run.mcap"
+    log = RunFolder(folder).log
     if not log.is_file():
-        raise LogError(f"{folder}: no run.mcap; run the grid first")
+        raise LogError(f"{folder}: no {log.name}; run the grid first")
     tabs = tables(log)
     scenario = recorded_scenario(tabs, log)
     agent = next(iter(scenario.agents))

@@ -1,0 +1,130 @@
+"""`RunFolder`: the one owner of a run folder's file names (OUT/<label>, a repeat's
+OUT/<label>/repeat_<k>, or a run's private staging folder), so that the runner, the importers,
+the reports and the CLI write and read one layout instead of each spelling it.
+
+A run folder holds `run.mcap` (the log), `metrics.json` (deterministic), `run.json` (wall-clock
+facts), and while or after a run fails `error.json` (with `traceback.txt` for a crash); a run
+in progress writes into a `.new-*` staging folder inside it.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+from kartci.boundedio import RefusedFileError, is_number, read_json
+from kartci.errors import BaselineError, LogError
+
+UNFINISHED = "the run did not finish (interrupted, or its process died)"  # error.json's reason
+
+
+@dataclass(frozen=True)
+class RunFolder:
+    """A run folder's path and the names of what a run writes there."""
+
+    path: Path
+
+    LOG_NAME: ClassVar[str] = "run.mcap"
+    METRICS_NAME: ClassVar[str] = "metrics.json"
+    RUN_RECORD_NAME: ClassVar[str] = "run.json"
+    ERROR_NAME: ClassVar[str] = "error.json"  # the last run failed (older outputs are kept)
+    TRACEBACK_NAME: ClassVar[str] = "traceback.txt"  # beside error.json after a crash
+    STAGE_PREFIX: ClassVar[str] = ".new-"  # a run in progress; moved into place when complete
+    OUTPUTS: ClassVar[tuple[str, ...]] = (LOG_NAME, METRICS_NAME, RUN_RECORD_NAME)
+
+    @property
+    def name(self) -> str:
+        """The folder's label (the scenario, sweep point or repeat it holds)."""
+        return self.path.name
+
+    @property
+    def log(self) -> Path:
+        """The run's MCAP log."""
+        return self.path / self.LOG_NAME
+
+    @property
+    def metrics(self) -> Path:
+        """The scored metrics (byte-identical for identical logs)."""
+        return self.path / self.METRICS_NAME
+
+    @property
+    def run_record(self) -> Path:
+        """The run's wall-clock facts (time, platform, warnings)."""
+        return self.path / self.RUN_RECORD_NAME
+
+    @property
+    def error(self) -> Path:
+        """The failure mark: present while a run is under way and after one failed."""
+        return self.path / self.ERROR_NAME
+
+    @property
+    def traceback(self) -> Path:
+        """A crashed run's full traceback, for debugging only."""
+        return self.path / self.TRACEBACK_NAME
+
+    def stages(self) -> list[Path]:
+        """Staging folders left here by runs that were killed half-way."""
+        return sorted(self.path.glob(f"{self.STAGE_PREFIX}*"))
+
+    def new_stage(self) -> RunFolder:
+        """A fresh private staging folder inside this one, for a run in progress."""
+        return RunFolder(Path(tempfile.mkdtemp(prefix=self.STAGE_PREFIX, dir=self.path)))
+
+    def adopt(self, stage: RunFolder) -> None:
+        """Move a staged run's log, metrics and run record into this folder."""
+        for name in self.OUTPUTS:
+            os.replace(stage.path / name, self.path / name)
+
+    def missing(self) -> list[str]:
+        """The names of the log and metrics when absent: a folder lacking one is incomplete."""
+        return [n for n in (self.LOG_NAME, self.METRICS_NAME) if not (self.path / n).is_file()]
+
+    def failure(self) -> str | None:
+        """The reason in the failure mark ("" when unreadable), None when there is none."""
+        if not self.error.exists() and not self.error.is_symlink():
+            return None
+        try:
+            return str(read_json(self.error).get("error", ""))
+        except (OSError, ValueError, AttributeError):
+            return ""
+
+    def unfinished(self) -> bool:
+        """Whether the command that started this folder's run stopped before it completed."""
+        return self.failure() == UNFINISHED
+
+    def read_metrics(self) -> dict[str, dict[str, Any]]:
+        """The metrics, checked: {NAME: {"value": number|null, ...}}; a BaselineError naming
+        the file when it is missing or malformed."""
+        path = self.metrics
+        try:
+            data = read_json(path)
+            metrics = data.get("metrics") if isinstance(data, dict) else None
+            if not isinstance(metrics, dict):
+                raise ValueError('expected {"metrics": {NAME: {"value": ...}}}')
+            for name, entry in metrics.items():
+                if not isinstance(entry, dict) or not (entry.get("value") is None
+                                                       or is_number(entry["value"])):
+                    raise ValueError(f"{name}: expected {{\"value\": number or null, ...}}")
+        except FileNotFoundError:
+            raise BaselineError(f"{path}: not found; run `kartci run` first") from None
+        except RefusedFileError as err:
+            raise BaselineError(f"{path}: {err}") from None
+        except (OSError, ValueError, UnicodeDecodeError) as err:
+            raise BaselineError(f"{path}: malformed metrics file ({err})") from None
+        return dict(metrics)
+
+    def read_run_record(self) -> dict[str, Any]:
+        """The run record ({} when there is none); a LogError naming it when unreadable."""
+        path = self.run_record
+        if not path.exists():
+            return {}
+        try:
+            run = read_json(path)
+        except (OSError, ValueError) as err:
+            raise LogError(f"{path}: unreadable run record ({err})") from None
+        if not isinstance(run, dict):
+            raise LogError(f"{path}: expected a JSON object")
+        return run
