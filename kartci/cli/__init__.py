@@ -6,6 +6,8 @@ from __future__ import annotations
 import os
 import sys
 import warnings
+from types import TracebackType
+from typing import NoReturn
 
 from kartci.cli import (  # noqa: F401  (importing a command module registers its commands)
     baseline,
@@ -41,6 +43,21 @@ def _interrupted(err: BaseException) -> bool:
     return False
 
 
+def _quiet_hook(kind: type[BaseException], err: BaseException,
+                tb: TracebackType | None) -> None:
+    """sys.excepthook once the interrupt has been reported: nothing more to print."""
+
+
+def _die_interrupted() -> NoReturn:
+    """Ctrl-C: one line, then die by SIGINT after the normal clean-up, as Python does for an
+    uncaught KeyboardInterrupt, so a calling shell sees 130 and stops its script too. A plain
+    exit 130 is not reliable: an interrupt landing inside exec() (a dataclass built by a lazy
+    import) makes CPython kill itself with SIGINT at exit anyway."""
+    print("kartci: interrupted", file=sys.stderr)
+    sys.excepthook = _quiet_hook
+    raise KeyboardInterrupt
+
+
 def main() -> None:
     """Entry point: every KartciError becomes one line on stderr and exit code 2."""
     warnings.formatwarning = _warning_line
@@ -54,11 +71,10 @@ def main() -> None:
         print(f"kartci: error: {where}{err.strerror or err}", file=sys.stderr)
         sys.exit(2)
     except KeyboardInterrupt:
-        print("kartci: interrupted", file=sys.stderr)
-        sys.exit(130)
+        _die_interrupted()
     except SystemExit as exit_:
         if _interrupted(exit_):  # typer turns Ctrl-C into a silent exit 130
-            print("kartci: interrupted", file=sys.stderr)
+            _die_interrupted()
         raise
     except Exception as err:  # a bug: still one line, and exit 2, never CI's "regression" 1
         if os.environ.get("KARTCI_TRACEBACK"):
