@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from kartci.bench import Better, Figure, Record
+from kartci.scenario import load_scenario
 from kartci.sim import Session, simulate
-from kartci.spec import load_scenario
 
 ECHO = Path(__file__).resolve().parents[1] / "tests" / "bridge" / "zenoh_listener.py"
 

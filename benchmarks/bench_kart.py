@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from kartci.bench import Better, Record
+from kartci.scenario import load_scenario
+from kartci.scenario.models import HallWorld
 from kartci.sim import lidar, simulate
 from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
-from kartci.spec import load_scenario
-from kartci.spec.models import HallWorld
 
 RUNS: tuple[tuple[str, str, list[str]], ...] = (
     ("kart_manual, no lidar", "kart_manual", []),

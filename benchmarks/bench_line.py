@@ -16,9 +16,9 @@ from pathlib import Path
 
 from kartci._bullet import pb
 from kartci.bench import Better, Record
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
 from kartci.sim.session import Session
-from kartci.spec import load_scenario
 
 SCENARIOS = ("line_straight", "line_circle")
 MODES = ("geometric", "rendered")

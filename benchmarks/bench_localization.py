@@ -28,12 +28,12 @@ from kartci.localization.registration import MapMatcher, pose_matrix
 from kartci.perception.clusters import MapMask, clusters, obstacle_points
 from kartci.pointcloud import read_ply
 from kartci.robots.gokart.noise import distorted_scan
+from kartci.scenario import load_scenario
+from kartci.scenario.load import load_world
+from kartci.scenario.models import HallWorld
 from kartci.sim import lidar, simulate
 from kartci.sim.body import BodyState
 from kartci.sim.hall import blocks
-from kartci.spec import load_scenario
-from kartci.spec.load import load_world
-from kartci.spec.models import HallWorld
 from kartci.track import load_track
 
 V, W, H = 6.0, 0.5, 1.28

@@ -30,8 +30,8 @@ from kartci.mpcc.cache import get_solver
 from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
 from kartci.mpcc.rti import _qp_options
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = (MpccMethod.IPOPT, MpccMethod.RTI)

@@ -29,8 +29,8 @@ if TYPE_CHECKING:
     from kartci import plugins
     from kartci.api import RunResult, load_scenario, run
     from kartci.core import Agent, Direction, Metric
+    from kartci.scenario.models import Scenario
     from kartci.sim.session import RunInfo, Session, StepResult
-    from kartci.spec.models import Scenario
     from kartci.verdict import CriterionResult, MetricVerdict, Status
 
 # public name -> the module it lives in, imported on first access
@@ -42,7 +42,7 @@ _LAZY = {
     "MetricVerdict": "kartci.verdict",
     "RunInfo": "kartci.sim.session",
     "RunResult": "kartci.api",
-    "Scenario": "kartci.spec.models",
+    "Scenario": "kartci.scenario.models",
     "Session": "kartci.sim.session",
     "Status": "kartci.verdict",
     "StepResult": "kartci.sim.session",

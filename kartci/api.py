@@ -28,7 +28,7 @@ from kartci.core.runfolder import RunFolder
 
 if TYPE_CHECKING:
     from kartci.core import Metric
-    from kartci.spec.models import Scenario
+    from kartci.scenario.models import Scenario
     from kartci.verdict import CriterionResult, MetricVerdict, Status
 
 
@@ -51,7 +51,7 @@ def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
         SpecError: The file is missing or malformed, or a value is bad; the message names the
             file, the key and what was expected.
     """
-    from kartci.spec.load import load_scenario as load
+    from kartci.scenario.load import load_scenario as load
 
     return load(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
 
@@ -200,8 +200,8 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
 
     from kartci import portable, project
     from kartci.runner.run import check_criteria_names, run_pinned, trusted
-    from kartci.spec.load import with_overrides
-    from kartci.spec.models import Scenario
+    from kartci.scenario.load import with_overrides
+    from kartci.scenario.models import Scenario
     from kartci.verdict import (
         check_criteria,
         compare,

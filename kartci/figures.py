@@ -16,7 +16,7 @@ import pandas as pd
 if TYPE_CHECKING:  # field types only: a PlotContext carries a scenario, nothing here calls spec
     import numpy as np
 
-    from kartci.spec import Scenario
+    from kartci.scenario import Scenario
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from kartci.spec.models import CircleCourse, StraightCourse
+from kartci.scenario.models import CircleCourse, StraightCourse
 
 Course = StraightCourse | CircleCourse
 Array = NDArray[np.float64]

@@ -99,7 +99,7 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> ScenarioFi
 def _tags(path: Path) -> list[str]:
     """The scenario's `tags:` as marker names (anything but letters, digits and _ becomes _);
     a file that does not parse has none (its item reports the problem when it runs)."""
-    from kartci.spec.yamlio import read_yaml
+    from kartci.scenario.yamlio import read_yaml
 
     try:
         data = read_yaml(path)

@@ -18,7 +18,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from kartci.errors import SpecError
-from kartci.spec.yamlio import TRACK_MAX_BYTES, read_text_bounded
+from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
 
 Array = NDArray[np.float64]
 SAMPLE_M = 0.05  # spacing of the dense centreline samples

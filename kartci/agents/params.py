@@ -8,7 +8,7 @@ from typing import Literal
 from pydantic import Field
 
 from kartci.core import ControllerParams, Frozen
-from kartci.spec.models import LogSource
+from kartci.scenario.models import LogSource
 
 
 class LinePidController(ControllerParams):

@@ -8,7 +8,7 @@ from typing import Any
 
 from kartci.errors import LogError
 from kartci.logs import messages, topics
-from kartci.spec.models import LogSource
+from kartci.scenario.models import LogSource
 
 
 def resolve(path: str) -> Path:

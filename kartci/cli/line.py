@@ -28,7 +28,7 @@ def characterise(
     6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
     from kartci.report.plots import sensor_sweep
     from kartci.robots.line_tracker.characterise import sweep
-    from kartci.spec import load_scenario
+    from kartci.scenario import load_scenario
 
     out = out_dir(out, "characterisation")
     spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)

@@ -71,8 +71,8 @@ def replay(
     from kartci.robots.gokart.joy import check_pad, load_mapping
     from kartci.runner import Job, run_jobs
     from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
-    from kartci.spec import load_scenario
-    from kartci.spec.models import LogSource
+    from kartci.scenario import load_scenario
+    from kartci.scenario.models import LogSource
 
     out = out_dir(out, "replay")
     spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)

@@ -23,7 +23,7 @@ def list_cmd() -> None:
     one-line description. A file that cannot be loaded is listed with its error (exit 2); the
     others are listed all the same."""
     from kartci import project
-    from kartci.spec import scenario_catalogue
+    from kartci.scenario import scenario_catalogue
 
     entries = scenario_catalogue()
     if not entries:
@@ -46,7 +46,7 @@ def show(name: Annotated[str, typer.Argument(help="A scenario name or YAML path.
                                              autocompletion=complete_scenario)],
          set_: SetOpt = None, allow_outside_paths: AllowOutsideOpt = False) -> None:
     """Print a scenario fully resolved (world and model files included, overrides applied)."""
-    from kartci.spec import load_scenario
+    from kartci.scenario import load_scenario
 
     spec = load_scenario(name, set_ or [], allow_outside_paths=allow_outside_paths)
     typer.echo(json.dumps(spec.model_dump(mode="json"), indent=2))
@@ -57,7 +57,7 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
     """JSON Schema of scenario files, for editor completion and validation: with every
     registered plugin, the project's own included. Point a scenario at it with a first line
     `# yaml-language-server: $schema=<path relative to the scenario file>`."""
-    from kartci.spec.schema import scenario_schema, write_schema
+    from kartci.scenario.schema import scenario_schema, write_schema
 
     if out is None:
         typer.echo(json.dumps(scenario_schema(), indent=2))

@@ -8,7 +8,7 @@ from typing import Literal
 from pydantic import Field
 
 from kartci.core import Frozen, NodeParams
-from kartci.spec.models import Length_m
+from kartci.scenario.models import Length_m
 
 
 class InitialGuess(Frozen):

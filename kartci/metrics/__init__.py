@@ -14,7 +14,7 @@ from kartci import core
 from kartci.core import Direction, Metric, MetricDef, MetricParams, definition, definitions
 from kartci.errors import LogError
 from kartci.logs import SCENARIO_TOPIC
-from kartci.spec import Scenario, scenario_from_json
+from kartci.scenario import Scenario, scenario_from_json
 
 if TYPE_CHECKING:  # pandas, the log readers and scipy load when a log is scored, not before
     import pandas as pd

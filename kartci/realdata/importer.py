@@ -16,8 +16,8 @@ from kartci.errors import LogError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, header, msg, open_log, stamp_ns
 from kartci.logs.types import for_writing, yaw_of
 from kartci.realdata.profile import Profile
-from kartci.spec import Scenario
-from kartci.spec.yamlio import TRACK_MAX_BYTES, read_text_bounded
+from kartci.scenario import Scenario
+from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
 from kartci.track import TRACK_TOPIC
 
 # where each role's messages go, relative to the robot's namespace (commands by type)

@@ -18,8 +18,8 @@ from kartci.errors import SpecError
 from kartci.logs import header, msg
 from kartci.realdata.drive import Drive
 from kartci.realdata.profile import CommandRole
+from kartci.scenario import Scenario
 from kartci.sim.session import build_world
-from kartci.spec import Scenario
 
 Converter = Callable[[str, Any, int], list[tuple[str, Any]]]
 

@@ -16,8 +16,8 @@ from kartci import project
 from kartci.core import Frozen
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
-from kartci.spec.models import Criterion
-from kartci.spec.yamlio import read_yaml
+from kartci.scenario.models import Criterion
+from kartci.scenario.yamlio import read_yaml
 
 POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",
               "geometry_msgs/msg/PoseWithCovarianceStamped")

@@ -20,7 +20,7 @@ from kartci.realdata.drive import Drive, read_drive
 from kartci.realdata.importer import _odom, import_log, imported_scenario
 from kartci.realdata.plant import Converter, Plant, as_recorded, diff_drive
 from kartci.realdata.profile import Profile
-from kartci.spec import Scenario, load_scenario
+from kartci.scenario import Scenario, load_scenario
 
 DEFAULT_SCENARIO = {"gokart": "kart_simreal", "line_tracker": "diffdrive_simreal"}
 DIFF_DRIVE_KINDS = ("line_tracker",)  # robot kinds that take wheel speeds, not Twist

@@ -16,8 +16,8 @@ from kartci.logs import McapLogWriter, header, messages, msg, open_log
 from kartci.logs.types import for_writing
 from kartci.realdata.plant import diff_drive
 from kartci.realdata.profile import CommandRole
+from kartci.scenario import load_scenario
 from kartci.sim.session import Session
-from kartci.spec import load_scenario
 
 # (hold time s, speed m/s, front-wheel angle rad): steps in speed and steering excite the
 # speed loop, the steering rate and the speed scale (kart)

@@ -17,7 +17,7 @@ from kartci.errors import SpecError
 from kartci.report.figures import Axis, Figure, Series
 from kartci.report.interactive import body_assets, figures_block, head_assets
 from kartci.report.tables import CSS
-from kartci.spec.yamlio import clip
+from kartci.scenario.yamlio import clip
 
 History = dict[str, dict[str, list[float | None]]]  # scenario -> metric -> value per commit
 

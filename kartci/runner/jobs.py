@@ -33,9 +33,9 @@ from kartci.runner.run import (
     failure_text,
     run_one,
 )
-from kartci.spec import Scenario, load_scenario
-from kartci.spec.load import scenario_loader
-from kartci.spec.yamlio import clip
+from kartci.scenario import Scenario, load_scenario
+from kartci.scenario.load import scenario_loader
+from kartci.scenario.yamlio import clip
 from kartci.verdict.result import ScenarioResult, one_line
 
 REPEAT_PREFIX = "repeat_"

@@ -30,10 +30,10 @@ from kartci.figures import PlotContext, Plots
 from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.project import did_you_mean
 from kartci.runner.outdir import check_inside, manifest_labels
+from kartci.scenario import Scenario
+from kartci.scenario.models import LogSource
 from kartci.sim import simulate
 from kartci.sim.session import describe
-from kartci.spec import Scenario
-from kartci.spec.models import LogSource
 from kartci.verdict import (
     MetricVerdict,
     check_criteria,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from kartci.core import WorldKind, lazy
-from kartci.spec.models import CircuitWorld, HallWorld, LineLabWorld
+from kartci.scenario.models import CircuitWorld, HallWorld, LineLabWorld
 
 LINE_LAB = WorldKind("line_lab", LineLabWorld, lazy("kartci.sim.line_lab:LineLab"),
                      "a white floor with one black line (straight or circle)")

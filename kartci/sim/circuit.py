@@ -9,9 +9,9 @@ import math
 import numpy as np
 
 from kartci.core import WorldParams
+from kartci.scenario.models import CircuitWorld
 from kartci.sim.blocks import Block
 from kartci.sim.track_world import TrackWorld
-from kartci.spec.models import CircuitWorld
 from kartci.track import Track
 
 NO_CEILING_M = 1000.0  # open sky: upward lidar beams find nothing in range

@@ -9,9 +9,9 @@ import numpy as np
 from kartci import geometry
 from kartci._bullet import pb
 from kartci.logs import header, msg
+from kartci.scenario.models import LineLabWorld, Pose2D, StraightCourse
 from kartci.sim.messages import WORLD_FRAME, pose
 from kartci.sim.world import World
-from kartci.spec.models import LineLabWorld, Pose2D, StraightCourse
 
 LINE_Z_M = 0.0002  # the line's visual sits 0.2 mm above the floor so the renderer sees it on top
 COURSE_TOPIC = "/kartci/course"  # nav_msgs/Path: the line's axis or the track's centreline

@@ -8,8 +8,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+from kartci.scenario import Scenario
 from kartci.sim.session import Bus, RunInfo, Session, build_world, make_world
-from kartci.spec import Scenario
 
 PROGRESS_EVERY = 500  # physics steps between progress reports
 

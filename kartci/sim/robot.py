@@ -13,7 +13,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from kartci.core import Agent, WorldParams
-from kartci.spec.models import AgentSpec, Pose2D
+from kartci.scenario.models import AgentSpec, Pose2D
 
 
 class Put(Protocol):

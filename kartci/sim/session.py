@@ -33,11 +33,11 @@ from kartci.core import Agent, AgentContext
 from kartci.errors import KartciError, SpecError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, msg
 from kartci.project import did_you_mean
+from kartci.scenario import Scenario
+from kartci.scenario.models import Carry
 from kartci.sim.messages import tf_message
 from kartci.sim.robot import Put, Robot, RobotContext, SimWorld
 from kartci.sim.urdf import robot_descriptions
-from kartci.spec import Scenario
-from kartci.spec.models import Carry
 
 REPLACED_TOPIC = "/kartci/replaced_agents"  # std_msgs/String, JSON {agent: "module.Class"}
 

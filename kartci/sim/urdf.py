@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from kartci.atomic import write_text_atomic
 from kartci.errors import SpecError
-from kartci.spec.yamlio import read_bytes_bounded, read_text_bounded
+from kartci.scenario.yamlio import read_bytes_bounded, read_text_bounded
 
 URDF_MAX_BYTES = 8 << 20  # a URDF (meshes are files of their own); the shipped ones are 6 KB
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from kartci._bullet import pb
 from kartci.core import WorldParams
-from kartci.spec.models import Pose2D
+from kartci.scenario.models import Pose2D
 
 if TYPE_CHECKING:
     from kartci.sim.robot import Robot

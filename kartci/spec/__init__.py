@@ -1,37 +1,8 @@
-"""Scenario specs: typed models, loading, `--set` overrides, JSON Schema."""
+"""Deprecated: the scenario model is `kartci.scenario` ("spec" read as "test specification").
 
-from kartci.spec.load import (
-    ScenarioEntry,
-    json_schema,
-    load_scenario,
-    project_root,
-    scenario_catalogue,
-    scenario_from_json,
-    scenario_names,
-    with_overrides,
-)
-from kartci.spec.models import (
-    AgentSpec,
-    CircleCourse,
-    Criterion,
-    LineLabWorld,
-    Scenario,
-    StraightCourse,
-)
+Every name here and in the submodules is `kartci.scenario`'s own object, so code written against
+the old path keeps working. Nothing in kartci imports this package.
+"""
 
-__all__ = [
-    "AgentSpec",
-    "CircleCourse",
-    "Criterion",
-    "LineLabWorld",
-    "Scenario",
-    "ScenarioEntry",
-    "StraightCourse",
-    "json_schema",
-    "load_scenario",
-    "project_root",
-    "scenario_catalogue",
-    "scenario_from_json",
-    "scenario_names",
-    "with_overrides",
-]
+from kartci.scenario import *  # noqa: F403
+from kartci.scenario import __all__ as __all__

@@ -19,7 +19,7 @@ from kartci.boundedio import read_json as read_json  # re-exported
 from kartci.core import Direction, MetricDef
 from kartci.core import definition as registered
 from kartci.errors import BaselineError
-from kartci.spec.models import Criterion
+from kartci.scenario.models import Criterion
 from kartci.verdict.fingerprint import digest
 
 

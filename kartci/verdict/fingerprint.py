@@ -24,7 +24,7 @@ from typing import Any
 
 from kartci import project
 from kartci.boundedio import open_regular
-from kartci.spec.models import Scenario
+from kartci.scenario.models import Scenario
 
 # what neither the run nor its metrics depend on: criteria are checked from the run's own
 # scenario on every run, a sweep only lists the other points (each point is its own scenario)

@@ -7,7 +7,7 @@ import numpy as np
 from kartci.agents.line_pid import widened
 from kartci.agents.params import LinePidController
 from kartci.robots.line_tracker.characterise import sweep
-from kartci.spec import load_scenario
+from kartci.scenario import load_scenario
 
 
 def _estimates() -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -14,7 +14,7 @@ from kartci.bridge.params import ExternalController
 from kartci.errors import RunError
 from kartci.logs.types import header, msg, typestore
 from kartci.plugins import AgentContext
-from kartci.spec import load_scenario
+from kartci.scenario import load_scenario
 
 
 def agent(commands: list[dict[str, str]]) -> ExternalAgent:

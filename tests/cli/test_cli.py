@@ -313,7 +313,7 @@ def test_plugins_lists_every_registered_one_with_its_module(tmp_path: Path) -> N
     (tmp_path / "kartci.toml").write_text('plugins = ["team_worlds"]\n')
     (tmp_path / "team_worlds.py").write_text(
         "from kartci.plugins import WorldKind, lazy, register\n"
-        "from kartci.spec.models import LineLabWorld\n"
+        "from kartci.scenario.models import LineLabWorld\n"
         "register(WorldKind('team_floor', LineLabWorld, lazy('kartci.sim.line_lab:LineLab'),\n"
         "                   'our lab floor, taped'))\n")
     p = kartci("plugins", cwd=tmp_path)

@@ -159,7 +159,7 @@ def test_a_data_file_edited_in_place_makes_the_fields_differ(
     """The track CSV is named by path in the scenario; its bytes are hashed beside it, so a
     track edited in place moves the scenario hash as an edited scenario does."""
     from kartci import project
-    from kartci.spec import load_scenario
+    from kartci.scenario import load_scenario
     from kartci.verdict import fingerprint
 
     world = tmp_path / "worlds" / "my"
@@ -188,7 +188,7 @@ def test_committed_baselines_were_accepted_from_the_scenarios_as_they_are() -> N
     """Every baseline in baselines/ records a scenario hash, and it matches the scenario (or
     sweep point) as it loads today: a change to a shipped scenario, world, model or data file
     without re-accepting its baselines fails here, not only in CI's run."""
-    from kartci.spec import load_scenario
+    from kartci.scenario import load_scenario
     from kartci.verdict import fingerprint
 
     stale = []

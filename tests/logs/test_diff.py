@@ -22,8 +22,8 @@ from kartci.logs import McapLogWriter, header, msg, open_log, topics, typestore
 from kartci.logs.diff import DiffOptions, Ignore, diff_logs
 from kartci.logs.types import for_writing
 from kartci.logs.wallclock import WALL_CLOCK
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 
 Change = Callable[[str, int, int, Any], Any]  # (topic, index on topic, log time ns, message)
 

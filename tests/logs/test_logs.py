@@ -151,8 +151,8 @@ def test_run_log_decodes_with_mcap_ros2_too(tmp_path: Path) -> None:
     """A second, independent decoder (mcap_ros2) reads every topic of a real run log."""
     from mcap_ros2.decoder import DecoderFactory
 
+    from kartci.scenario import load_scenario
     from kartci.sim import simulate
-    from kartci.spec import load_scenario
 
     log = tmp_path / "run.mcap"
     simulate(load_scenario("line_straight", ["duration_s=1"]), log)

@@ -14,8 +14,8 @@ from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.metrics.localization import LocalizationMetricsParams, episodes
 from kartci.metrics.trajectory import Trajectory
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 from kartci.verdict.baseline import Status
 from kartci.verdict.runs import compare_runs
 

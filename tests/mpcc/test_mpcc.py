@@ -17,8 +17,8 @@ from kartci.mpcc.params import MpccController, MpccMethod, MpccWeights
 from kartci.project import BUILTIN
 from kartci.robots.gokart import race
 from kartci.robots.gokart.params import GokartModel
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 from kartci.track import load_track
 
 

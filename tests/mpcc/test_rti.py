@@ -24,8 +24,8 @@ from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
 from kartci.mpcc.rti import RtiStatus
 from kartci.project import BUILTIN
 from kartci.robots.gokart.params import GokartModel
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 from kartci.track import load_track
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -12,8 +12,8 @@ from kartci import plugins
 from kartci.errors import SpecError
 from kartci.logs import msg
 from kartci.plugins import AgentContext, Node, NodeParams
+from kartci.scenario import load_scenario
 from kartci.sim.session import Session
-from kartci.spec import load_scenario
 
 
 class CountParams(NodeParams):

@@ -16,9 +16,9 @@ from kartci.metrics import compute, definitions
 from kartci.metrics.base import MetricDef
 from kartci.plugins import Controller, MetricSet
 from kartci.project import BUILTIN
+from kartci.scenario import load_scenario
+from kartci.scenario.models import ControllerParams
 from kartci.sim import simulate
-from kartci.spec import load_scenario
-from kartci.spec.models import ControllerParams
 from kartci.verdict import check_criteria
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -12,11 +12,11 @@ from kartci._bullet import pb
 from kartci.metrics import compute
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel
+from kartci.scenario import load_scenario, project_root
+from kartci.scenario.models import HallWorld
 from kartci.sim import lidar, simulate
 from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
-from kartci.spec import load_scenario, project_root
-from kartci.spec.models import HallWorld
 from kartci.vehicle import KartInput, wheel_angles
 
 MODELS = project_root() / "kartci" / "data" / "models" / "gokart"

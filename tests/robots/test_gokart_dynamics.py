@@ -19,8 +19,8 @@ from kartci.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, discre
 from kartci.mpcc.params import MpccVehicle
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel
+from kartci.scenario import load_scenario, project_root
 from kartci.sim.circuit import Circuit
-from kartci.spec import load_scenario, project_root
 from kartci.vehicle import KartInput, wheel_angles
 
 MODELS = project_root() / "kartci" / "data" / "models" / "gokart"

@@ -11,7 +11,7 @@ import pandas as pd
 
 from kartci.metrics import ScoreContext
 from kartci.robots.line_tracker.response import LineResponseParams, response_metrics
-from kartci.spec import load_scenario
+from kartci.scenario import load_scenario
 
 ZETA, WN, D0 = 0.3, 3.0, 0.005
 

@@ -10,9 +10,9 @@ import pytest
 
 from kartci.metrics import compute
 from kartci.robots.line_tracker.body import LineTracker
+from kartci.scenario import load_scenario, project_root
 from kartci.sim import simulate
 from kartci.sim.line_lab import LineLab as World
-from kartci.spec import load_scenario, project_root
 
 DT = 0.002
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from kartci.metrics import compute
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 
 CTRL = "agents.lt0.controller"
 MODEL = "agents.lt0.model"

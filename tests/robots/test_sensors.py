@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from kartci.robots.line_tracker.characterise import Sweep, sweep
-from kartci.spec import load_scenario
+from kartci.scenario import load_scenario
 
 OFFSETS = np.round(np.arange(-0.025, 0.02501, 0.0005), 6)
 

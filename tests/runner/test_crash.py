@@ -49,7 +49,7 @@ import numpy as np
 
 from kartci.logs import header, msg
 from kartci.plugins import Controller, register
-from kartci.spec.models import ControllerParams
+from kartci.scenario.models import ControllerParams
 
 
 class Params(ControllerParams):

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from kartci.logs import tables
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 
 
 def test_carry_moves_the_kart_once_and_keeps_its_speed(tmp_path: Path) -> None:

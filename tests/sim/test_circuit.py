@@ -9,8 +9,8 @@ import pytest
 
 from kartci.errors import SpecError
 from kartci.metrics import compute
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 
 
 def test_a_kart_steered_off_the_circuit_hits_the_barrier(tmp_path: Path) -> None:

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from kartci import geometry
-from kartci.spec import CircleCourse, StraightCourse
+from kartci.scenario import CircleCourse, StraightCourse
 
 
 def test_straight_offset_and_progress() -> None:

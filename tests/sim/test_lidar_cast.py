@@ -7,11 +7,11 @@ import math
 import numpy as np
 
 from kartci.robots.gokart.noise import SECTORS, distorted_scan
+from kartci.scenario import load_scenario
+from kartci.scenario.models import HallWorld
 from kartci.sim import lidar
 from kartci.sim.body import BodyState
 from kartci.sim.hall import blocks
-from kartci.spec import load_scenario
-from kartci.spec.models import HallWorld
 
 VLP16 = lidar.MODELS["vlp16"]
 AZ = VLP16.azimuths(10.0)

@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from kartci.scenario import load_scenario
 from kartci.sim.session import Session
 from kartci.sim.track_world import TrackWorld
-from kartci.spec import load_scenario
 
 
 def _drive(name: str, sets: list[str]) -> tuple[np.ndarray, list[Any]]:

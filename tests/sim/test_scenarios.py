@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from kartci.metrics import Metric, compute
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.spec import load_scenario
 
 
 def _run(tmp_path: Path, name: str, *sets: str) -> dict[str, Metric]:

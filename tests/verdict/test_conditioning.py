@@ -12,7 +12,7 @@ from helpers import QUICK, kartci
 
 from kartci import portable
 from kartci.runner.jobs import START_STEP_M, Vary, replica
-from kartci.spec import load_scenario
+from kartci.scenario import load_scenario
 from kartci.verdict import Conditioning, Status, load, spread, update
 from kartci.verdict.baseline import judge
 

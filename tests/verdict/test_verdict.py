@@ -8,8 +8,8 @@ import pandas as pd
 import pytest
 
 from kartci.robots.line_tracker.metrics import line_metrics
-from kartci.spec import Criterion, load_scenario
-from kartci.spec.models import LineMetricsParams
+from kartci.scenario import Criterion, load_scenario
+from kartci.scenario.models import LineMetricsParams
 from kartci.verdict import Status, check_criteria, compare, update
 from kartci.verdict import load as load_baseline
 

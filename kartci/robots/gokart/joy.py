@@ -18,7 +18,7 @@ from kartci.logs.types import header, msg
 from kartci.project import did_you_mean
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput
-from kartci.spec.yamlio import read_yaml
+from kartci.scenario.yamlio import read_yaml
 
 
 class _M(BaseModel):

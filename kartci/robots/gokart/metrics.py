@@ -15,7 +15,7 @@ from kartci.metrics.defs import DEFS, defs_of
 from kartci.metrics.progress import kart_track, lap_crossings
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.race import kart_rects, race_metrics
-from kartci.spec.models import Scenario
+from kartci.scenario.models import Scenario
 from kartci.track import Track
 
 

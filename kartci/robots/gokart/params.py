@@ -8,7 +8,7 @@ from typing import Literal
 from pydantic import Field
 
 from kartci.core import Frozen, RobotParams
-from kartci.spec.models import Angle_rad, Length_m
+from kartci.scenario.models import Angle_rad, Length_m
 
 # The kart's footprint in base_link: centre ahead of the rear axle, length, width (m), from the
 # wheel positions (Table 3.2) and tyre radii with the bodywork around them.

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from kartci.core import Metric
-from kartci.spec.models import Box
+from kartci.scenario.models import Box
 
 Rect = np.ndarray  # (4, 2) corners, counter-clockwise
 

@@ -9,9 +9,9 @@ from kartci import geometry
 from kartci._bullet import pb, quiet_c_output
 from kartci.errors import SpecError
 from kartci.robots.line_tracker.params import LineTrackerModel
+from kartci.scenario.models import AgentSpec, LineLabWorld
 from kartci.sim.body import Base
 from kartci.sim.urdf import fixed_frames, physics_urdf
-from kartci.spec.models import AgentSpec, LineLabWorld
 
 
 class LineTracker(Base):

@@ -14,9 +14,9 @@ from kartci._bullet import pb
 from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineTrackerSensors, line_parts
 from kartci.robots.line_tracker.sensors import LineCamera
+from kartci.scenario import Scenario
 from kartci.sim.line_lab import LineLab
 from kartci.sim.urdf import urdf_path
-from kartci.spec import Scenario
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from kartci.errors import SpecError
 from kartci.metrics import ScoreContext
 from kartci.metrics.defs import DEFS, defs_of
 from kartci.robots.line_tracker.params import line_parts
-from kartci.spec.models import LineMetricsParams, Scenario, StraightCourse
+from kartci.scenario.models import LineMetricsParams, Scenario, StraightCourse
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:

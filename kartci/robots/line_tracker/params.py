@@ -8,7 +8,7 @@ from pydantic import Field
 
 from kartci.core import Frozen, RobotParams
 from kartci.errors import SpecError
-from kartci.spec.models import LineLabWorld, Scenario
+from kartci.scenario.models import LineLabWorld, Scenario
 
 
 class LineTrackerModel(RobotParams):

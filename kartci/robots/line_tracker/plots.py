@@ -9,7 +9,7 @@ from kartci import geometry
 from kartci.figures import PlotContext, Plots, wheel_series
 from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
-from kartci.spec.models import LineMetricsParams
+from kartci.scenario.models import LineMetricsParams
 
 
 def line_plots(ctx: PlotContext) -> Plots:

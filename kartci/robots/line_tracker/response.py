@@ -14,7 +14,7 @@ from kartci.core import Direction, Metric, MetricDef, MetricParams, MetricSet
 from kartci.metrics import ScoreContext
 from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
-from kartci.spec.models import StraightCourse
+from kartci.scenario.models import StraightCourse
 
 DEFS: dict[str, MetricDef] = {
     "overshoot_ratio": MetricDef("1", Direction.LOWER, 0.02, 0.10,

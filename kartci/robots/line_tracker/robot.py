@@ -16,13 +16,13 @@ from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineTrackerSensors
 from kartci.robots.line_tracker.render import unseen_links
 from kartci.robots.line_tracker.sensors import LineCamera, Sonar
+from kartci.scenario.models import StraightCourse
 from kartci.sim.body import BodyState
 from kartci.sim.line_lab import LineLab
 from kartci.sim.messages import joint_state
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.urdf import urdf_path
-from kartci.spec.models import StraightCourse
 
 
 class LineTrackerRobot(RobotBase):

@@ -11,9 +11,9 @@ from kartci import geometry
 from kartci._bullet import pb
 from kartci.robots.line_tracker.params import LineSensorSpec, SonarSpec
 from kartci.robots.line_tracker.render import RenderScene
+from kartci.scenario.models import LineLabWorld
 from kartci.sim.line_lab import LineLab
 from kartci.sim.world import SENSED_GROUPS
-from kartci.spec.models import LineLabWorld
 
 # Eq. 5.1 of the line-tracker seed (ITU-R BT.709 luma weights).
 LUMA = np.array([0.2126, 0.7152, 0.0722])

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from kartci.spec.yamlio import read_yaml
+from kartci.scenario.yamlio import read_yaml
 
 Vec = tuple[float, float, float]
 # imu_link and velodyne_link translations (Table 3.4)

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
+from kartci.scenario import load_scenario
 from kartci.sim.hall import blocks
-from kartci.spec import load_scenario
 from kartci.track import track_from_rows, write_csv
 
 HALF_WIDTH_M = 1.8

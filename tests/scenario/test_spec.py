@@ -6,7 +6,7 @@ import pytest
 
 from kartci.agents.params import LinePidController
 from kartci.errors import SpecError
-from kartci.spec import json_schema, load_scenario, scenario_names
+from kartci.scenario import json_schema, load_scenario, scenario_names
 
 
 @pytest.mark.parametrize("name", scenario_names())

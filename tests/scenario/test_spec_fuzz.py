@@ -9,7 +9,7 @@ generated `--set` assignments to `line_straight`; any exception but a KartciErro
 does a message of more than one line. The normal run tries a few hundred derandomized examples
 (the same ones on every CI run). The long run, 10,000+ random examples of each, is opt-in:
 
-    KARTCI_LONG=1 pytest -m long tests/spec/test_spec_fuzz.py --hypothesis-show-statistics
+    KARTCI_LONG=1 pytest -m long tests/scenario/test_spec_fuzz.py --hypothesis-show-statistics
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from kartci.errors import KartciError, SpecError
-from kartci.spec import load_scenario
-from kartci.spec.yamlio import (
+from kartci.scenario import load_scenario
+from kartci.scenario.yamlio import (
     SPEC_MAX_BYTES,
     YAML_MAX_DEPTH_LEVELS,
     YAML_MAX_NODES,

@@ -18,9 +18,9 @@ from pydantic import Field
 from kartci import plugins
 from kartci.agents.base import Agent
 from kartci.project import BUILTIN
-from kartci.spec import json_schema, load_scenario
-from kartci.spec.models import ControllerParams
-from kartci.spec.schema import scenario_schema
+from kartci.scenario import json_schema, load_scenario
+from kartci.scenario.models import ControllerParams
+from kartci.scenario.schema import scenario_schema
 
 jsonschema = pytest.importorskip("jsonschema", reason="pip install jsonschema (the dev extra)")
 

@@ -1,0 +1,132 @@
+"""Step one of scenario validation: the registered type names (`world.kind`, `model.kind`,
+`controller.type`, the keys of `nodes` and of `metrics`) pick each part's own parameter model,
+which then validates that part. A problem is a `ParamsError` that knows where in the file it is."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from kartci import core
+from kartci.errors import SpecError
+
+
+class ParamsError(SpecError):
+    """A part of a scenario failed its registered type's validation (or named no type)."""
+
+    def __init__(self, loc: tuple[str | int, ...], errors: list[dict[str, Any]]) -> None:
+        self.loc, self.errors = loc, errors
+        first = errors[0]
+        where = ".".join(str(p) for p in (*loc, *first.get("loc", ())))
+        super().__init__(f"{where}: {first['msg']}")
+
+
+def _validate(model: type[BaseModel], value: Any, loc: tuple[str | int, ...]) -> Any:
+    if isinstance(value, model):
+        return value
+    try:
+        return model.model_validate(value)
+    except ValidationError as err:
+        raise ParamsError(loc, with_allowed_keys(model, err)) from err
+
+
+def with_allowed_keys(model: type[BaseModel], err: ValidationError) -> list[dict[str, Any]]:
+    """The errors, each unknown key with the keys its model has (for a "did you mean")."""
+    out: list[dict[str, Any]] = []
+    for error in err.errors():
+        e: dict[str, Any] = dict(error)
+        if e["type"] == "extra_forbidden":
+            owner: Any = model
+            for part in e["loc"][:-1]:
+                field = owner.model_fields.get(str(part)) if isinstance(owner, type) and (
+                    issubclass(owner, BaseModel)) else None
+                owner = field.annotation if field is not None else None
+            if isinstance(owner, type) and issubclass(owner, BaseModel):
+                e["ctx"] = {"allowed": list(owner.model_fields)}
+        out.append(e)
+    return out
+
+
+def _tag(value: Any, key: str, loc: tuple[str | int, ...], what: str) -> str | None:
+    """The registered name a mapping gives under `key`; None when the part is already built."""
+    if isinstance(value, BaseModel):
+        return None
+    if not isinstance(value, dict):
+        raise ParamsError(loc, [{"loc": (), "msg": f"expected a mapping with `{key}` naming "
+                                 f"a {what}", "type": "model_type", "input": value}])
+    tag = value.get(key)
+    if not isinstance(tag, str):
+        raise ParamsError(loc, [{"loc": (key,), "msg": f"required: the name of a registered "
+                                 f"{what}", "type": "missing"}])
+    return tag
+
+
+def _named(registry: Any, tag: str, loc: tuple[str | int, ...]) -> Any:
+    try:
+        return registry.get(tag)
+    except SpecError as err:
+        raise ParamsError(loc, [{"loc": (), "msg": str(err), "type": "unknown_plugin",
+                                 "input": tag}]) from err
+
+
+def dispatch(data: Any) -> Any:
+    """A copy of raw scenario data with plugin-typed parts replaced by their parameter models
+    (already-built parts are kept as they are)."""
+    if not isinstance(data, dict):
+        return data
+    data = dict(data)
+    world = data.get("world")
+    tag = _tag(world, "kind", ("world",), "world kind") if "world" in data else None
+    if tag is not None:
+        kind = _named(core.WORLDS, tag, ("world", "kind"))
+        data["world"] = _validate(kind.params, world, ("world",))
+    agents = data.get("agents")
+    if isinstance(agents, dict):
+        data["agents"] = {name: _agent(agent, ("agents", name)) for name, agent in
+                          agents.items()}
+    metrics = data.get("metrics")
+    if isinstance(metrics, dict):
+        built = {}
+        for name, params in metrics.items():
+            loc = ("metrics", str(name))
+            mset = _named(core.METRICS, str(name), loc)
+            if mset.params is None:
+                if params not in (None, {}):
+                    raise ParamsError(loc, [{"loc": (), "msg": f"metric set {name} takes no "
+                                             "parameters", "type": "extra_forbidden"}])
+                built[name] = core.MetricParams()
+            else:
+                built[name] = _validate(mset.params, params or {}, loc)
+        data["metrics"] = built
+    return data
+
+
+def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
+    if not isinstance(agent, dict):
+        return agent
+    agent = dict(agent)
+    model, controller = agent.get("model"), agent.get("controller")
+    if "model" in agent:
+        tag = _tag(model, "kind", (*loc, "model"), "robot kind")
+        if tag is not None:
+            kind = _named(core.ROBOTS, tag, (*loc, "model", "kind"))
+            agent["model"] = _validate(kind.params, model, (*loc, "model"))
+            sensors = agent.get("sensors") or {}
+            if kind.sensors is not None:
+                agent["sensors"] = _validate(kind.sensors, sensors, (*loc, "sensors"))
+            elif sensors:
+                raise ParamsError((*loc, "sensors"), [{"loc": (), "msg": f"robot kind {tag} "
+                                                       "has no sensors to set",
+                                                       "type": "extra_forbidden"}])
+    if "controller" in agent:
+        tag = _tag(controller, "type", (*loc, "controller"), "controller")
+        if tag is not None:
+            ctl = _named(core.CONTROLLERS, tag, (*loc, "controller", "type"))
+            agent["controller"] = _validate(ctl.params, controller, (*loc, "controller"))
+    if isinstance(agent.get("nodes"), dict):
+        agent["nodes"] = {str(name): _validate(_named(core.NODES, str(name),
+                                                      (*loc, "nodes", str(name))).params,
+                                               params or {}, (*loc, "nodes", str(name)))
+                          for name, params in agent["nodes"].items()}
+    return agent

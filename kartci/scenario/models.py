@@ -1,0 +1,366 @@
+"""Typed, frozen scenario specs. Units are in the key names (SI, radians)."""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    Field,
+    SerializeAsAny,
+    field_validator,
+    model_validator,
+)
+
+from kartci.core.params import ControllerParams as ControllerParams
+from kartci.core.params import Frozen as Frozen
+from kartci.core.params import MetricParams as MetricParams
+from kartci.core.params import NodeParams as NodeParams
+from kartci.core.params import RobotParams as RobotParams
+from kartci.core.params import WorldParams as WorldParams
+from kartci.scenario.dispatch import dispatch
+from kartci.scenario.yamlio import preview
+
+# --- physical bounds: every numeric key is bounded by what its unit (the key's suffix) can mean
+# for a kart or a line tracker, generously (every shipped scenario is far inside), so that no
+# value runs nonsense physics or overflows geometry. A key's own bounds narrow these:
+#   m +-1e4 (10 km: wider than any race circuit), m/s +-100 (a kart tops 30 m/s),
+#   m/s^2 +-100 (10 g), m/s^3 +-1e4, s +-3600 (the longest run; periods > 0), Hz 0-1e5,
+#   rad +-2 pi, rad/s +-1e3 (a kart's wheel spins at 250 rad/s), kg, kg m^2, N m 0-1e5,
+#   1/m +-1e3, 1/s +-1e4, per sqrt(s) 0-1e3, friction 0-10 (rubber: about 1),
+#   dimensionless gains, weights and scales +-1e6, pixels 1-8192, counts 0-1e6.
+Length_m = Annotated[float, Field(ge=-1e4, le=1e4)]
+Coordinate_m = Length_m  # a coordinate in a world
+Point_m = tuple[Coordinate_m, Coordinate_m]
+Edge_m = Annotated[float, Field(gt=0.0, le=1e4)]  # a size: a box or a hall of no extent is no body
+Angle_rad = Annotated[float, Field(ge=-2 * math.pi, le=2 * math.pi)]
+LATERAL_MAX_M = 100.0  # a start this far beside a line or centreline is off any course
+UNITS = {"_mps2": "m/s^2", "_mps3": "m/s^3", "_mps": "m/s",
+         "_radps": "rad/s", "_rad": "rad", "_kgm2": "kg m^2", "_kg": "kg", "_nm": "N m",
+         "_hz": "Hz", "_px": "px", "_per_m": "1/m", "_per_s": "1/s", "_m": "m", "_s": "s"}
+
+
+def unit_of(key: str) -> str:
+    """The unit a key's name states (`v1_mps`: m/s), or '' for a dimensionless one."""
+    if key.endswith("_per_sqrt_s"):
+        return f"{unit_of(key.removesuffix('_per_sqrt_s'))}/sqrt(s)"
+    return next((unit for suffix, unit in UNITS.items() if key.endswith(suffix)), "")
+
+
+# --- worlds -----------------------------------------------------------------------------------
+
+
+class StraightCourse(Frozen):
+    """A straight black line from `start_m` to `end_m`."""
+
+    type: Literal["straight"] = Field("straight", description="course shape: a straight line")
+    start_m: Point_m = Field((0.0, 0.0), description="start of the line's axis, (x, y) in m, "
+                             "world frame; the robot drives from here")
+    end_m: Point_m = Field((2.5, 0.0), description="end of the line's axis, (x, y) in m, world "
+                           "frame (the seed's straight test line)")
+
+    @model_validator(mode="after")
+    def _has_length(self) -> StraightCourse:
+        if (self.end_m[0] - self.start_m[0]) ** 2 + (self.end_m[1] - self.start_m[1]) ** 2 < 1e-4:
+            raise ValueError("end_m must be at least 0.01 m from start_m")
+        return self
+
+
+class CircleCourse(Frozen):
+    """A closed circular black line, driven counter-clockwise from angle `start_rad`."""
+
+    type: Literal["circle"] = Field("circle", description="course shape: a closed circle")
+    center_m: Point_m = Field((0.0, 0.0), description="centre of the circle, (x, y) in m, world "
+                              "frame")
+    radius_m: float = Field(1.0, gt=0.05, le=1e6, description="radius of the line's axis, m "
+                            "(seed 001 Sec. 7.2 does not give it; line_lab/circle uses 0.362 m)")
+    start_rad: float = Field(-1.5707963267948966, ge=-math.tau, le=math.tau,
+                             description="polar angle of the start point "
+                             "about the centre, rad (-pi/2: the bottom of the circle, heading +x)")
+
+
+Course = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]
+
+
+class Box(Frozen):
+    """A static box obstacle standing on the floor."""
+
+    center_m: Point_m = Field(description="centre of the box's footprint, (x, y) "
+                                          "in m, world frame")
+    size_m: tuple[Edge_m, Edge_m, Edge_m] = Field((0.1, 0.1, 0.1), description="edge lengths "
+                                               "(x, y, z) in m, before the yaw rotation")
+    yaw_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
+                           description="rotation about the vertical axis, rad, "
+                           "counter-clockwise")
+
+
+class LineLabWorld(WorldParams):
+    """White floor with one black line (seed 001, Sec. 5.2.1), plus optional obstacles."""
+
+    kind: Literal["line_lab"] = Field("line_lab", description="world kind: the line lab")
+    description: str = Field("", description="one line about the world, shown in reports")
+    line_width_m: float = Field(0.014, gt=0.0, lt=0.2, description="width of the black line, "
+                                "m (14 mm: with the 14.5 mm camera height, the seed's Eq. 5.2 "
+                                "dead-zone field of view of 1.38 rad)")
+    light_level: float = Field(
+        0.571, gt=0.0, le=1.0,
+        description="luminance of the white floor as the line cameras see it (0-1, Eq. 5.1); "
+        "calibrated so that the sensor sweep gives the seed's slope, Eq. 6.12 (39.4 per m)",
+    )
+    floor_friction: float = Field(1.0, ge=0.0, le=10.0,
+                                  description="Coulomb friction coefficient of "
+                                  "the floor (dimensionless); seed 001 Sec. 5.6: no slip")
+    course: Course = Field(description="the black line: `{type: straight, ...}` or "
+                           "`{type: circle, ...}`")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (the sonar "
+                                       "sees them, seed 001 Sec. 5.3)")
+
+
+class FloorZone(Frozen):
+    """A rectangle of floor with its own friction coefficient (mu = pull force / weight)."""
+
+    name: str = Field(description="name of the surface, e.g. `coated`")
+    min_m: Point_m = Field(description="lower-left corner (x, y), m, world frame")
+    max_m: Point_m = Field(description="upper-right corner (x, y), m, world frame")
+    friction: float = Field(ge=0.0, le=10.0, description="friction coefficient mu = pull force / "
+                            "weight (seed 000 Sec. 4.2; REFERENCE.md: about 0.6 for a coated "
+                            "floor)")
+
+
+class TrackWorldParams(WorldParams):
+    """What every world around a closed race track has (each kind documents its own)."""
+
+    track: str = Field(description="closed track, TUMFTM CSV on the project's world path")
+    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
+                                  description="friction coefficient of the floor")
+    zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor")
+
+
+class HallWorld(TrackWorldParams):
+    """An indoor hall: walls, pillars, a ceiling, floor zones and a closed TUMFTM track."""
+
+    kind: Literal["hall"] = Field("hall", description="world kind: an indoor hall")
+    description: str = Field("", description="one line about the world, shown in reports")
+    size_m: tuple[Edge_m, Edge_m] = Field((32.0, 20.0), description="interior (x, y) extent, m, "
+                                        "from (0, 0) (an approximation of the Winti lab, "
+                                        "REFERENCE.md)")
+    wall_height_m: float = Field(4.0, gt=0.5, le=1e4, description="height of walls and pillars, m")
+    wall_thickness_m: float = Field(0.3, gt=0.0, le=1e4,
+                                    description="thickness of the walls, m, outside the "
+                                    "interior")
+    pillars_m: tuple[Point_m, ...] = Field((), description="centres (x, y) of "
+                                                       "square pillars, m")
+    pillar_size_m: float = Field(0.5, gt=0.0, le=1e4, description="side of a square pillar, m")
+    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
+                                  description="friction coefficient of the floor "
+                                  "outside any zone (mu = pull force / weight, seed 000 Sec. "
+                                  "4.2); 0.9: tire on concrete (REFERENCE.md)")
+    zones: tuple[FloorZone, ...] = Field((), description="rectangles of floor with their own "
+                                         "friction (the seed's second, coated surface)")
+    track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
+                       "w_tr_left_m`: relative to a world folder on the project's search path "
+                       "(e.g. `winti/track.csv`), or absolute")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (seed 000 "
+                                       "Sec. 6.5)")
+
+
+class CircuitWorld(TrackWorldParams):
+    """An outdoor race circuit from a TUMFTM track alone: ground sized to the track, optional
+    barriers along both edges, no hall."""
+
+    kind: Literal["circuit"] = Field("circuit", description="world kind: an outdoor race "
+                                     "circuit")
+    description: str = Field("", description="one line about the world, shown in reports")
+    track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
+                       "w_tr_left_m`: relative to a world folder on the project's search path, "
+                       "or absolute")
+    margin_m: float = Field(10.0, ge=1.0, le=1e4, description="ground beyond the track's extent, m")
+    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
+                                  description="friction coefficient of the ground "
+                                  "(mu, dimensionless): tyre on asphalt or concrete, about 0.9 "
+                                  "(REFERENCE.md)")
+    zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
+    barriers: bool = Field(True, description="walls along both track edges")
+    barrier_offset_m: float = Field(1.0, ge=0.0, le=1e4,
+                                    description="gap from the track edge to the "
+                                    "barrier's inner face, m")
+    barrier_height_m: float = Field(0.8, gt=0.0, le=1e4, description="barrier height, m")
+    barrier_thickness_m: float = Field(0.3, gt=0.0, le=1e4, description="barrier thickness, m")
+    barrier_segment_m: float = Field(3.0, gt=0.2, le=1e4, description="length of one barrier box "
+                                     "along the edge, m (shorter follows curves closer)")
+    obstacles: tuple[Box, ...] = Field((), description="static boxes on or beside the track")
+
+
+# --- agents -----------------------------------------------------------------------------------
+
+
+class LogSource(Frozen):
+    """Messages recorded in a log (ROS 1 bag, rosbag2 folder or MCAP), re-based to sim time."""
+
+    log: str = Field(description="path of the log (.bag, rosbag2 folder, .db3 or .mcap), "
+                     "relative to the scenario file, or absolute")
+    topic: str | None = Field(None, description="topic to replay; default: the only topic of a "
+                              "suitable message type")
+    time_offset_s: float = Field(0.0, ge=-3600.0, le=3600.0,
+                                 description="sim time of the log's first message, s")
+
+
+class Pose2D(Frozen):
+    """Start pose relative to the course start, in the course frame: of the line-sensor
+    midpoint for a line tracker, of base_link for a kart (along the track's centreline)."""
+
+    along_m: float = Field(0.0, ge=0.0, le=1e4,
+                           description="distance along the course (line or track "
+                           "centreline) from its start, m")
+    lateral_m: float = Field(0.0, ge=-LATERAL_MAX_M, le=LATERAL_MAX_M, description="offset "
+                                "from the line or centreline, m; left of it is positive; on a "
+                                "track, within the track's width there")
+    heading_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
+                               description="heading relative to the course direction at "
+                               "that point, rad; counter-clockwise is positive")
+
+
+class Carry(Frozen):
+    """The robot carried once, without its knowledge (a kidnap): its pose jumps, its motion
+    is kept."""
+
+    at_s: float = Field(ge=0.0, le=3600.0, description="when, sim time, s")
+    offset_m: Point_m = Field(description="the jump (x, y) in the world frame, m")
+    yaw_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
+                           description="turned by this much too, rad")
+
+
+class AgentSpec(Frozen):
+    """One robot in the scenario: its model, its controller, where it starts, its sensors."""
+
+    model: SerializeAsAny[RobotParams] = Field(description="the robot: a model folder's name "
+                                               "(e.g. `gokart`) or `{kind: NAME, ...}` with its "
+                                               "parameters")
+    controller: SerializeAsAny[ControllerParams] = Field(description="what drives the robot: "
+                                                         "`{type: NAME, ...}`, a registered "
+                                                         "controller and its parameters")
+    start: Pose2D = Field(Pose2D(), description="start pose relative to the course start")
+    sensors: SerializeAsAny[Frozen] = Field(
+        default_factory=Frozen, description="the robot kind's sensors: {NAME: {...}}")
+    nodes: dict[str, SerializeAsAny[NodeParams]] = Field(
+        {}, description="nodes beside the controller (localization, obstacle_detector, ...): "
+        "{NAME: {...}}, each a registered node and its parameters (`kartci plugins`)")
+    carry: Carry | None = Field(None, description="carry the robot once mid-run (a kidnap): "
+                                "for robots that can be re-placed (go-kart, line tracker)")
+
+
+# An agent name is a ROS 2 name token (design.ros2.org "Topic and Service name mapping to DDS":
+# alphanumerics and `_`, no leading digit, no repeated `_`; tokens do not end in `_`); kartci's
+# own limit on its length keeps `/<agent>/<longest topic>` far inside rmw's 255 characters.
+AGENT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*(?<!_)")
+AGENT_NAME_MAX = 64  # characters
+
+
+# --- scenario ---------------------------------------------------------------------------------
+
+
+class PhysicsSpec(Frozen):
+    """The simulation's clock: a fixed physics step, sim time only."""
+
+    dt_s: float = Field(0.002, ge=1e-5, le=0.01, description="fixed physics step, s; every "
+                        "controller period and sensor rate is a whole multiple of it (seed 001 "
+                        "Sec. 7.2 ran its fastest control at 0.002 s)")
+    odom_rate_hz: float = Field(50.0, gt=0.0, le=1e5,
+                                description="rate of each robot's ground-truth "
+                                "odometry (`odom`, nav_msgs/Odometry), Hz")
+
+
+class LineMetricsParams(MetricParams):
+    """Parameters of the line tracker's tracking metrics."""
+
+    transient_s: float = Field(5.0, ge=0.0, le=3600.0,
+                               description="start-up transient excluded from "
+                               "the cross-track errors, s")
+    lost_threshold_m: float = Field(0.021, gt=0.0, le=1e4,
+                                    description="the sensor's range, m: farther "
+                                    "from the line axis counts as lost (seed 001 Eq. 6.15: "
+                                    "+-0.021 m)")
+    settle_band_m: float = Field(0.002, gt=0.0, le=1e4,
+                                 description="the cross-track error band that "
+                                 "ends settling (settle_time_s), m")
+
+
+class Criterion(Frozen):
+    """A pass criterion on one metric; any combination of bounds."""
+
+    max: float | None = Field(None, description="the metric must be at most this, in the "
+                              "metric's unit")
+    min: float | None = Field(None, description="the metric must be at least this, in the "
+                              "metric's unit")
+    equal: float | None = Field(None, description="the metric must equal this, in the metric's "
+                                "unit")
+
+
+class Scenario(Frozen):
+    """One scenario file: a world, its agents, how long, which metrics and pass criteria."""
+
+    name: str = Field(pattern=r"^[a-z0-9_]+$", description="the scenario's name: lower-case "
+                      "letters, digits and _; default: the file name without .yaml")
+    description: str = Field(description="one line saying what the scenario checks, shown by "
+                             "`kartci list` and in reports")
+    world: SerializeAsAny[WorldParams] = Field(description="the world: a world file's name on "
+                                               "the search path (e.g. `winti/hall`), "
+                                               "`{from: NAME, KEY: value}` to change some keys "
+                                               "of one, or `{kind: NAME, ...}` in full")
+    agents: dict[str, AgentSpec] = Field(min_length=1, description="the robots by name; the "
+                                         "name is their topic namespace (`/kart0/...`)")
+    duration_s: float = Field(gt=0.0, le=3600.0, description="simulated time to run, s")
+    seed: int = Field(0, ge=0, le=2**63 - 1, description="seed of the run's one random "
+                      "generator (fits an int64): the same scenario and seed give the same "
+                      "numbers on every run")
+    physics: PhysicsSpec = Field(PhysicsSpec(), description="physics step and odometry rate")
+    metrics: dict[str, SerializeAsAny[MetricParams]] = Field(
+        {}, description="metric sets to compute besides the robots' own, and parameters of "
+        "any set: {NAME: {...}}")
+    criteria: dict[str, Criterion] = Field({}, description="pass criteria by metric name: "
+                                           "a bare name judges every agent's metric, "
+                                           "`agent.metric` one agent's; a failed criterion "
+                                           "fails the run (exit 1)")
+    tags: tuple[str, ...] = Field((), description="free labels; `tool` keeps a scenario out of "
+                                  "a plain `kartci run` (run it by name)")
+    sweep: dict[str, tuple[float | int | bool | str, ...]] = Field(
+        {}, description="a grid: `dotted.key: [values]`, one run per combination when the "
+        "scenario is run by name without `--sweep` (each point judged against its own baseline, "
+        "`<scenario>@<key>=<value>`); a scenario with a sweep stays out of a plain `kartci run`")
+
+    @field_validator("agents")
+    @classmethod
+    def _agent_names_are_ros_names(cls, agents: dict[str, AgentSpec]) -> dict[str, AgentSpec]:
+        """An agent's name is its topics' namespace (`/<name>/odom`), so it must be one ROS 2
+        name token: what rcl, rmw and rosbags accept, and never a path (`../../etc`)."""
+        for name in agents:
+            if not AGENT_NAME.fullmatch(name) or "__" in name or len(name) > AGENT_NAME_MAX:
+                raise ValueError(f"agent name {preview(name, 40)} is not a ROS 2 name token: "
+                                 "a letter, then letters, digits and single underscores, not "
+                                 f"ending in one, at most {AGENT_NAME_MAX} characters (e.g. kart0)")
+        return agents
+
+    @model_validator(mode="before")
+    @classmethod
+    def _registered_types(cls, data: Any) -> Any:
+        """Step one of validation: registered type names pick each part's parameter model."""
+        return dispatch(data)
+
+    @model_validator(mode="after")
+    def _rates_are_multiples_of_the_physics_step(self) -> Scenario:
+        """Controller and sensor periods must be whole multiples of the physics step."""
+        dt = self.physics.dt_s
+        periods = {"physics.odom_rate_hz": 1.0 / self.physics.odom_rate_hz}
+        for name, agent in self.agents.items():
+            periods[f"agents.{name}.controller.period_s"] = agent.controller.period_s
+            for node, params in agent.nodes.items():
+                periods[f"agents.{name}.nodes.{node}.period_s"] = params.period_s
+        for key, period in periods.items():
+            ratio = period / dt
+            if not math.isfinite(ratio) or abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+                raise ValueError(
+                    f"{key}: period {period:g} s is not a whole multiple of physics.dt_s {dt:g} s"
+                )
+        return self
