@@ -15,17 +15,13 @@ from kartci.agents.params import (
     ManualController,
     ScriptController,
 )
-from kartci.agents.source import Recorded
 from kartci.core import AgentContext, Outbox
+from kartci.logs.recorded import COMMANDS, JOY, Recorded
 from kartci.logs.types import base_link, header, msg, yaw_of
 from kartci.robots.gokart import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
 from kartci.robots.gokart.joy import check_counts, kart_command, load_mapping, to_command, to_joy
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, Track, track_from_text
-
-JOY = ("sensor_msgs/msg/Joy",)
-COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",
-            "geometry_msgs/msg/Twist")
 
 
 def _kart(ctx: AgentContext) -> GokartModel:

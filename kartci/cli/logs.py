@@ -65,8 +65,8 @@ def replay(
     if open_loop:
         _open_loop(log, agent, ns, reference, tolerance or [], out_dir(out, "openloop"))
         return
-    from kartci.agents.kart import JOY
     from kartci.agents.params import CommandsController, ManualController
+    from kartci.logs.recorded import JOY
     from kartci.report.static import scenario_svgs
     from kartci.robots.gokart.joy import check_pad, load_mapping
     from kartci.runner import Job, run_jobs
@@ -104,8 +104,8 @@ def replay(
 def _input_topic(log: Path, topic: str | None) -> TopicInfo:
     """The log's input topic: the one named (which must be a Joy or drive-command topic with
     messages), else its only such topic."""
-    from kartci.agents.kart import COMMANDS, JOY
     from kartci.logs import topics
+    from kartci.logs.recorded import COMMANDS, JOY
 
     info = topics(log)
     usable = (*JOY, *COMMANDS)

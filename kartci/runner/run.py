@@ -21,13 +21,12 @@ from typing import Any
 import pandas as pd
 
 from kartci import core, metrics, portable, project
-from kartci.agents.kart import COMMANDS, JOY
-from kartci.agents.source import Recorded
 from kartci.atomic import write_text_atomic
 from kartci.core import UNFINISHED, RunFolder
 from kartci.errors import KartciError, LogError, SpecError
 from kartci.figures import PlotContext, Plots
 from kartci.logs import SCENARIO_TOPIC, tables
+from kartci.logs.recorded import COMMANDS, JOY, Recorded
 from kartci.project import did_you_mean
 from kartci.runner.outdir import check_inside, manifest_labels
 from kartci.scenario import Scenario

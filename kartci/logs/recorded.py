@@ -1,4 +1,5 @@
-"""Input streams recorded in a log, re-based onto sim time."""
+"""Input streams recorded in a log, re-based onto sim time: what replaying controllers drive a
+robot from (a joystick's Joy messages, or drive commands)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,10 @@ from typing import Any
 from kartci.errors import LogError
 from kartci.logs import messages, topics
 from kartci.scenario.models import LogSource
+
+JOY = ("sensor_msgs/msg/Joy",)
+COMMANDS = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",
+            "geometry_msgs/msg/Twist")
 
 
 def resolve(path: str) -> Path:
