@@ -6,7 +6,6 @@ from __future__ import annotations
 from kartci.agents.params import (
                       CommandsController,
                       JoyDriverController,
-                      LinePidController,
                       ManualController,
                       ScriptController,
 )
@@ -18,8 +17,6 @@ from kartci.perception.params import DetectorParams
 
 KART = ("gokart",)
 
-LINE_PID = Controller("line_pid", LinePidController, lazy("kartci.agents.line_pid:LinePid"),
-                      ("line_tracker",), "the seed's P / PI line-tracking controller")
 MANUAL = Controller("manual", ManualController, lazy("kartci.agents.kart:ManualAgent"), KART,
                     "a recorded joystick (sensor_msgs/Joy) through a mapping")
 COMMANDS = Controller("commands", CommandsController, lazy("kartci.agents.kart:CommandsAgent"),

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from kartci.agents.line_pid import widened
-from kartci.agents.params import LinePidController
 from kartci.robots.line_tracker.characterise import sweep
+from kartci.robots.line_tracker.controllers import LinePidController
+from kartci.robots.line_tracker.line_pid import widened
 from kartci.scenario import load_scenario
 
 

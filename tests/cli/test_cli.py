@@ -323,7 +323,8 @@ def test_plugins_lists_every_registered_one_with_its_module(tmp_path: Path) -> N
         words = reg.what.split()  # "controller", "robot kind", ...
         for name in reg.names():
             assert any(ln.split()[:len(words) + 1] == [*words, name] for ln in lines), name
-    assert "line_pid" in p.stdout and "kartci.agents.builtin (entry point of kartci" in p.stdout
+    assert "line_pid" in p.stdout and ("kartci.robots.line_tracker.controllers (entry point of "
+                                      "kartci") in p.stdout
     team = next(ln for ln in p.stdout.splitlines() if "team_floor" in ln)
     assert team.split()[:2] == ["world", "kind"] and "our lab floor, taped" in team
     assert team.rstrip().endswith("team_worlds")

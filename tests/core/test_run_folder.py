@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from kartci.agents.base import Outbox
-from kartci.agents.line_pid import LinePid
 from kartci.api import load_scenario
 from kartci.core import UNFINISHED, RunFolder
 from kartci.logs import SCENARIO_TOPIC, messages
+from kartci.robots.line_tracker.line_pid import LinePid
 from kartci.runner.run import mark_failed, run_one
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))

@@ -10,9 +10,9 @@ import yaml
 from helpers import PAIR, QUICK, kartci
 
 from kartci.agents.base import Outbox
-from kartci.agents.line_pid import LinePid
 from kartci.project import BUILTIN
 from kartci.report import write_all
+from kartci.robots.line_tracker.line_pid import LinePid
 from kartci.runner import expand, run_jobs
 from kartci.verdict import Status
 from kartci.verdict.result import exit_code

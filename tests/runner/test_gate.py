@@ -24,13 +24,13 @@ from mcap.writer import Writer
 
 from kartci import metrics
 from kartci.agents.base import Outbox
-from kartci.agents.line_pid import LinePid
 from kartci.cli.common import finish
 from kartci.errors import BaselineError, RunError
 from kartci.figures import Plots
 from kartci.logs import McapLogWriter, messages, msg
 from kartci.project import BUILTIN
 from kartci.report import write_all
+from kartci.robots.line_tracker.line_pid import LinePid
 from kartci.runner import expand, run_jobs
 from kartci.verdict import Status, load
 from kartci.verdict.result import ScenarioResult
@@ -148,7 +148,7 @@ def test_baseline_update_prints_values_that_show_the_change(tmp_path: Path,
 
 DOOMED_PLUGIN = '''
 import multiprocessing, os, signal
-from kartci.agents.line_pid import LinePid
+from kartci.robots.line_tracker.line_pid import LinePid
 
 _real = LinePid.step
 

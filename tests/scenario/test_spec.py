@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from kartci.agents.params import LinePidController
 from kartci.errors import SpecError
+from kartci.robots.line_tracker.controllers import LinePidController
 from kartci.scenario import json_schema, load_scenario, scenario_names
 
 

@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from kartci.agents.params import LinePidController
 from kartci.core import AgentContext, Outbox
 from kartci.logs.types import base_link, header, msg
+from kartci.robots.line_tracker.controllers import LinePidController
 from kartci.robots.line_tracker.params import LineTrackerModel
 
 
