@@ -26,10 +26,10 @@ import numpy as np
 
 from kartci.bench import Better, Record
 from kartci.logs import tables
-from kartci.mpcc.cache import get_solver
-from kartci.mpcc.model import SingleTrack
-from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
-from kartci.mpcc.rti import _qp_options
+from kartci.robots.gokart.mpcc.cache import get_solver
+from kartci.robots.gokart.mpcc.model import SingleTrack
+from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, QpSolver
+from kartci.robots.gokart.mpcc.rti import _qp_options
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 

@@ -65,9 +65,9 @@ def replay(
     if open_loop:
         _open_loop(log, agent, ns, reference, tolerance or [], out_dir(out, "openloop"))
         return
-    from kartci.agents.params import CommandsController, ManualController
     from kartci.logs.recorded import JOY
     from kartci.report.static import scenario_svgs
+    from kartci.robots.gokart.controllers import CommandsController, ManualController
     from kartci.robots.gokart.joy import check_pad, load_mapping
     from kartci.runner import Job, run_jobs
     from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest

@@ -141,9 +141,9 @@ def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
     from kartci.errors import SpecError
     from kartci.logs import SCENARIO_TOPIC, tables
     from kartci.metrics import recorded_scenario
-    from kartci.mpcc.model import SingleTrack
-    from kartci.mpcc.params import MpccVehicle
-    from kartci.realdata.mpcc_fit import fit_mpcc, lateral_data
+    from kartci.robots.gokart.mpcc.fit import fit_mpcc, lateral_data
+    from kartci.robots.gokart.mpcc.model import SingleTrack
+    from kartci.robots.gokart.mpcc.params import MpccVehicle
     from kartci.robots.gokart.params import GokartModel, cog_x_m
 
     scenario = recorded_scenario(tables(log, [SCENARIO_TOPIC]), log)

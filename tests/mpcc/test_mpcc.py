@@ -11,11 +11,11 @@ import pytest
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.metrics.progress import kart_track
-from kartci.mpcc.cache import get_solver, solver_key
-from kartci.mpcc.model import SingleTrack
-from kartci.mpcc.params import MpccController, MpccMethod, MpccWeights
 from kartci.project import BUILTIN
 from kartci.robots.gokart import race
+from kartci.robots.gokart.mpcc.cache import get_solver, solver_key
+from kartci.robots.gokart.mpcc.model import SingleTrack
+from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, MpccWeights
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario
 from kartci.sim import simulate

@@ -17,12 +17,12 @@ import pytest
 from kartci.errors import SpecError
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
-from kartci.mpcc import Mpcc
-from kartci.mpcc.cache import solver_key
-from kartci.mpcc.model import SingleTrack
-from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
-from kartci.mpcc.rti import RtiStatus
 from kartci.project import BUILTIN
+from kartci.robots.gokart.mpcc import Mpcc
+from kartci.robots.gokart.mpcc.cache import solver_key
+from kartci.robots.gokart.mpcc.model import SingleTrack
+from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, QpSolver
+from kartci.robots.gokart.mpcc.rti import RtiStatus
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario
 from kartci.sim import simulate

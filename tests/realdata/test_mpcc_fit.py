@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from kartci.errors import SpecError
-from kartci.mpcc.model import SingleTrack
-from kartci.mpcc.params import MpccVehicle
-from kartci.realdata.mpcc_fit import Lateral, fit_mpcc, fittable, lateral_data, predict
+from kartci.robots.gokart.mpcc.fit import Lateral, fit_mpcc, fittable, lateral_data, predict
+from kartci.robots.gokart.mpcc.model import SingleTrack
+from kartci.robots.gokart.mpcc.params import MpccVehicle
 from kartci.robots.gokart.params import GokartModel, cog_x_m
 
 NAMES = ("mass_per_yaw_inertia_per_m2", "front.d_mps2")

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from kartci._bullet import pb
-from kartci.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, discrete
-from kartci.mpcc.params import MpccVehicle
 from kartci.robots.gokart.body import Gokart
+from kartci.robots.gokart.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, discrete
+from kartci.robots.gokart.mpcc.params import MpccVehicle
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario, project_root
 from kartci.sim.circuit import Circuit

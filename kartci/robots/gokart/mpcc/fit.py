@@ -1,4 +1,4 @@
-"""Fit the MPCC's own prediction model (kartci.mpcc.model) to a kart's log: its single-track
+"""Fit the MPCC's own prediction model (`model`) to a kart's log: its single-track
 parameters (read from the kart's own parameters, `SingleTrack.of`) checked against, and tuned
 to, what the kart did.
 
@@ -20,8 +20,8 @@ import numpy as np
 
 from kartci.errors import LogError, SpecError
 from kartci.logs import tables
-from kartci.mpcc.model import SingleTrack
-from kartci.mpcc.params import MpccVehicle
+from kartci.robots.gokart.mpcc.model import SingleTrack
+from kartci.robots.gokart.mpcc.params import MpccVehicle
 
 STEER_JOINTS = ("front_left_wheel_steer_joint.position", "front_right_wheel_steer_joint.position")
 
@@ -79,7 +79,7 @@ def _step_function(track: SingleTrack, vehicle: MpccVehicle, names: Sequence[str
     longitudinal acceleration: the lateral dynamics alone)."""
     import casadi as ca
 
-    from kartci.mpcc.model import DELTA, NU, NX, PSI, VX, VY, R, continuous
+    from kartci.robots.gokart.mpcc.model import DELTA, NU, NX, PSI, VX, VY, R, continuous
 
     p = ca.SX.sym("p", len(names))
     m = _symbolic(track, names, p)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from kartci.mpcc.model import (
+from kartci.robots.gokart.mpcc.model import (
     ACC,
     DDELTA,
     DELTA,
@@ -32,7 +32,7 @@ from kartci.mpcc.model import (
     Y,
     discrete,
 )
-from kartci.mpcc.params import MpccController, MpccWeights
+from kartci.robots.gokart.mpcc.params import MpccController, MpccWeights
 
 STAGE_PARAMS = 8  # x_ref, y_ref, cos(heading), sin(heading), s_ref, lateral lo/hi, s_max
 N_WEIGHTS = 6

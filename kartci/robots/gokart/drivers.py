@@ -9,16 +9,16 @@ from typing import Any
 
 import numpy as np
 
-from kartci.agents.params import (
+from kartci.core import AgentContext, Outbox
+from kartci.logs.recorded import COMMANDS, JOY, Recorded
+from kartci.logs.types import base_link, header, msg, yaw_of
+from kartci.robots.gokart import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
+from kartci.robots.gokart.controllers import (
     CommandsController,
     JoyDriverController,
     ManualController,
     ScriptController,
 )
-from kartci.core import AgentContext, Outbox
-from kartci.logs.recorded import COMMANDS, JOY, Recorded
-from kartci.logs.types import base_link, header, msg, yaw_of
-from kartci.robots.gokart import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
 from kartci.robots.gokart.joy import check_counts, kart_command, load_mapping, to_command, to_joy
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, Track, track_from_text

@@ -22,10 +22,10 @@ import casadi as ca
 
 from kartci.cachedir import cache_dir
 from kartci.errors import RunError
-from kartci.mpcc.model import SingleTrack
-from kartci.mpcc.ocp import Layout, build
-from kartci.mpcc.params import MpccController, MpccMethod
-from kartci.mpcc.rti import Rti, linearisation
+from kartci.robots.gokart.mpcc.model import SingleTrack
+from kartci.robots.gokart.mpcc.ocp import Layout, build
+from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod
+from kartci.robots.gokart.mpcc.rti import Rti, linearisation
 
 SOURCES = {MpccMethod.IPOPT: ("model.py", "ocp.py", "cache.py"),
            MpccMethod.RTI: ("model.py", "ocp.py", "cache.py", "rti.py")}

@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 
 import casadi as ca
 
-from kartci.mpcc.params import MpccVehicle
+from kartci.robots.gokart.mpcc.params import MpccVehicle
 from kartci.robots.gokart.params import GokartModel, Tyre, axle_distance_m
 
 NX, NU = 9, 4

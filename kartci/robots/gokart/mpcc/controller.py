@@ -11,13 +11,13 @@ from typing import Any
 
 import numpy as np
 
-from kartci.mpcc.cache import Built, get_solver
-from kartci.mpcc.model import ACC, DELTA, PSI, SLACK, VS, VX, S, SingleTrack, X, Y
-from kartci.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
-from kartci.mpcc.params import MpccController
-from kartci.mpcc.reference import Obstacle, progress_guess, stage_params
-from kartci.mpcc.rti import Rti
 from kartci.robots.gokart import STEERING_RATIO, wheel_angles
+from kartci.robots.gokart.mpcc.cache import Built, get_solver
+from kartci.robots.gokart.mpcc.model import ACC, DELTA, PSI, SLACK, VS, VX, S, SingleTrack, X, Y
+from kartci.robots.gokart.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
+from kartci.robots.gokart.mpcc.params import MpccController
+from kartci.robots.gokart.mpcc.reference import Obstacle, progress_guess, stage_params
+from kartci.robots.gokart.mpcc.rti import Rti
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import Track
 

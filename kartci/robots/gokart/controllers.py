@@ -1,4 +1,6 @@
-"""Parameters of kartci's built-in controllers other than the MPCC."""
+"""The kart's controllers as registered (entry points `kartci.controllers`): their parameter
+models (the MPCC's: `mpcc.params`) and `Controller` entries; the implementations load on first
+use (`drivers`, `mpcc.agent`), so a run without an MPCC never imports CasADi."""
 
 from __future__ import annotations
 
@@ -7,7 +9,8 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.core import ControllerParams, Frozen
+from kartci.core import Controller, ControllerParams, Frozen, lazy
+from kartci.robots.gokart.mpcc.params import MpccController
 from kartci.scenario.models import LogSource
 
 
@@ -82,3 +85,20 @@ class JoyDriverController(ControllerParams):
     period_s: float = Field(0.02, gt=0.0, le=3600.0,
                             description="control period, s: a whole multiple of "
                             "physics.dt_s")
+
+
+KART = ("gokart",)
+
+MANUAL = Controller("manual", ManualController,
+                    lazy("kartci.robots.gokart.drivers:ManualAgent"), KART,
+                    "a recorded joystick (sensor_msgs/Joy) through a mapping")
+COMMANDS = Controller("commands", CommandsController,
+                      lazy("kartci.robots.gokart.drivers:CommandsAgent"), KART,
+                      "a recorded AckermannDriveStamped, Twist or TwistStamped stream")
+SCRIPT = Controller("script", ScriptController, lazy("kartci.robots.gokart.drivers:ScriptAgent"),
+                    KART, "a fixed command timeline")
+JOY_DRIVER = Controller("joy_driver", JoyDriverController,
+                        lazy("kartci.robots.gokart.drivers:JoyDriver"), KART,
+                        "a scripted human: pure pursuit expressed as joystick messages")
+MPCC = Controller("mpcc", MpccController, lazy("kartci.robots.gokart.mpcc.agent:MpccAgent"),
+                  KART, "model predictive contouring control (CasADi / Ipopt)")

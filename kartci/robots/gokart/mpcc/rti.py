@@ -14,9 +14,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from kartci.mpcc.model import NU, NX
-from kartci.mpcc.ocp import CONSTRAINTS_PER_STAGE, equality
-from kartci.mpcc.params import MpccController, QpSolver
+from kartci.robots.gokart.mpcc.model import NU, NX
+from kartci.robots.gokart.mpcc.ocp import CONSTRAINTS_PER_STAGE, equality
+from kartci.robots.gokart.mpcc.params import MpccController, QpSolver
 
 REGULARISATION = 1e-2  # Levenberg-Marquardt term: states without a cost (vy, r) keep H > 0
 QP_TOL = 1e-6  # the QP solvers' residual tolerance (cost, dynamics, bounds, complementarity)
