@@ -23,10 +23,9 @@ from kartci.bridge import ros2
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening
 from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
-from kartci.core import AgentContext, Outbox
-from kartci.errors import RunError
+from kartci.core import ROBOTS, AgentContext, JoyCommand, Outbox, RobotParams
+from kartci.errors import RunError, SpecError
 from kartci.logs.types import base_link, msg, stamp_ns, typestore
-from kartci.robots.gokart.joy import kart_command, load_mapping, to_command
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 LATE_TOPIC = "bridge/late_commands"  # std_msgs/UInt32: the count so far, at each late tick
@@ -49,6 +48,15 @@ def substitute(text: str, values: dict[str, str]) -> str:
     return text
 
 
+def joystick(agent: str, model: RobotParams, mapping: str) -> JoyCommand:
+    """What the robot's kind makes of the stack's Joy messages through `mapping`."""
+    make = ROBOTS.get(model.kind).joystick
+    if make is None:
+        raise SpecError(f"agent {agent}: a {model.kind} robot reads no joystick; command it "
+                        "with another of the external controller's command types")
+    return make(model, mapping)
+
+
 class ExternalAgent:
     """The bridge for one agent: a Zenoh node, the stack's process, the lockstep."""
 
@@ -56,8 +64,7 @@ class ExternalAgent:
         self.spec, self.name, self.period_s = spec, ctx.name, spec.period_s
         self.inputs: tuple[str, ...] = tuple(spec.publish)
         self.frame = base_link(ctx.name)
-        self.model = ctx.model
-        self.mapping = load_mapping(spec.mapping) if any(
+        self.joystick = joystick(ctx.name, ctx.model, spec.mapping) if any(
             c.type == "sensor_msgs/msg/Joy" for c in spec.commands) else None
         self.commands = {self._full(c.topic): c.type for c in spec.commands}
         self.late = self._late_in_row = 0
@@ -256,12 +263,8 @@ class ExternalAgent:
             m = got[topic]
             target = COMMAND_TYPES[self.commands[topic]]
             out.append((target, m))
-            if target == "joy" and self.mapping is not None:
-                from kartci.robots.gokart.params import GokartModel
-
-                assert isinstance(self.model, GokartModel)
-                out.append(("cmd", kart_command(to_command(self.mapping, self.model, m),
-                                                stamp_ns(m.header), self.frame)))
+            if target == "joy" and self.joystick is not None:
+                out.append(self.joystick(m, self.frame))
         return out
 
     def close(self) -> None:

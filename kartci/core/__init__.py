@@ -5,7 +5,8 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Direction`, `Metric`, `MetricDef`: a metric's value and its definition.
 - `Frozen` and the parameter bases (`ControllerParams`, `NodeParams`, `RobotParams`,
   `WorldParams`, `MetricParams`) that each plugin's own pydantic model extends.
-- `Controller`, `Node`, `RobotKind`, `WorldKind`, `MetricSet` and their registries.
+- `Controller`, `Node`, `RobotKind` (with what kind-neutral code asks of a kind:
+  `WheelOdometry`, `JoyCommand`, `SimReal`), `WorldKind`, `MetricSet` and their registries.
 - `RunFolder`: the one owner of a run folder's file names.
 """
 
@@ -28,11 +29,14 @@ from kartci.core.registry import (
     WORLDS,
     AgentContext,
     Controller,
+    JoyCommand,
     MetricSet,
     Node,
     PluginInfo,
     Registry,
     RobotKind,
+    SimReal,
+    WheelOdometry,
     WorldKind,
     catalogue,
     definition,
@@ -57,6 +61,7 @@ __all__ = [
     "ControllerParams",
     "Direction",
     "Frozen",
+    "JoyCommand",
     "Metric",
     "MetricDef",
     "MetricParams",
@@ -69,6 +74,8 @@ __all__ = [
     "RobotKind",
     "RobotParams",
     "RunFolder",
+    "SimReal",
+    "WheelOdometry",
     "WorldKind",
     "WorldParams",
     "catalogue",

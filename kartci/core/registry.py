@@ -59,14 +59,24 @@ class _AgentType(Generic[P]):
     factory: Callable[[Any, AgentContext], Agent]
     robots: tuple[str, ...] = ()
     description: str = ""
+    # instead of naming kinds: it works with every registered kind this is true of (a kind-
+    # neutral agent states what it needs of a robot: the topics it reads, its wheel odometry)
+    fits: Callable[[RobotKind], bool] | None = None
     works_on: ClassVar[str] = "works with"  # the verb of the wrong-robot error
+
+    def kinds(self) -> tuple[str, ...]:
+        """The robot kinds it works with (empty and no `fits`: any)."""
+        if self.fits is None:
+            return self.robots
+        return tuple(k.name for k in ROBOTS.all() if self.fits(k))
 
     def build(self, params: P, ctx: AgentContext) -> Agent:
         """The agent for one robot; a SpecError when it cannot work with that robot's kind."""
-        if self.robots and ctx.model.kind not in self.robots:
+        kinds = self.kinds()
+        if (kinds or self.fits is not None) and ctx.model.kind not in kinds:
             raise SpecError(f"agent {ctx.name}: {type(self).__name__.lower()} {self.name} "
-                            f"{self.works_on} {' or '.join(self.robots)} robots, not "
-                            f"{ctx.model.kind}")
+                            f"{self.works_on} {' or '.join(kinds) or 'no registered'} robots, "
+                            f"not {ctx.model.kind}")
         return self.factory(params, ctx)
 
 
@@ -87,8 +97,32 @@ class Node(_AgentType[NodeParams]):
 
 
 @dataclass(frozen=True)
+class WheelOdometry:
+    """Forward speed from a robot's `joint_states`: the mean spin of these wheel joints (rad/s)
+    times their radius."""
+
+    joints: tuple[str, ...]
+    radius_m: float
+
+
+@dataclass(frozen=True)
+class SimReal:
+    """How `kartci simreal` replays a real log of a robot kind into its simulation."""
+
+    scenario: str  # the scenario simulated when neither the command line nor the profile names one
+    commands: tuple[str, ...]  # message types a log's commands may have
+    wheel_speeds: bool = False  # Twist commands become wheel speeds (a differential drive's base)
+
+
+# (sensor_msgs/Joy, frame to stamp with) -> the (topic, message) that commands the robot
+JoyCommand = Callable[[Any, str], tuple[str, Any]]
+
+
+@dataclass(frozen=True)
 class RobotKind:
-    """A robot kind: its parameter model, the simulated robot, its metric sets and plots."""
+    """A robot kind: its parameter model, the simulated robot, its metric sets and plots, and
+    what kind-neutral code (nodes, the bridge, real-log import, the CLI) asks of it instead of
+    naming it."""
 
     name: str
     params: type[RobotParams]
@@ -100,6 +134,15 @@ class RobotKind:
     # its outline in base_link: centre ahead of base_link, length, width (m); what clearance
     # and detection metrics draw around a robot of this kind (None: a point at base_link)
     footprint_m: tuple[float, float, float] | None = None
+    publishes: tuple[str, ...] = ()  # topics its sensors can publish in its namespace (`imu`)
+    accepts: tuple[str, ...] = ()  # command topics it applies (`cmd_vel`, `wheel_cmd`)
+    odometry: Callable[[Any], WheelOdometry] | None = None  # (params) -> its wheel odometry
+    joystick: Callable[[Any, str], JoyCommand] | None = None  # (params, mapping name)
+    # (log, topic, message type, joystick mapping) -> the ControllerParams that replay that
+    # recorded input into a robot of this kind (`kartci replay`); checks the log first
+    replay: Callable[[Path, str, str, str], ControllerParams] | None = None
+    simreal: SimReal | None = None
+    cli: Callable[[], Any] | None = None  # () -> a typer.Typer: its own `kartci` commands
 
 
 @dataclass(frozen=True)

@@ -16,17 +16,15 @@ from typing import Any
 import numpy as np
 
 from kartci import project
-from kartci.core import AgentContext, Outbox
+from kartci.core import ROBOTS, AgentContext, Outbox
 from kartci.localization.deskew import deskew
 from kartci.localization.ekf import BIAS, VY, Noise, PlanarEkf, wrap
 from kartci.localization.params import LocalizationParams
 from kartci.localization.registration import MapMatcher, Match, pose_matrix
 from kartci.logs.types import WORLD_FRAME, header, msg, stamp_ns
 from kartci.pointcloud import cloud_xyz
-from kartci.robots.gokart.params import GokartModel
 from kartci.track import TRACK_TOPIC, track_from_text
 
-REAR = ("rear_left_wheel_joint", "rear_right_wheel_joint")
 SCAN_RATE_HZ = 10.0  # the revolution time deskewing assumes when the header gives none
 
 
@@ -36,13 +34,16 @@ def map_path(name: str) -> Path:
 
 
 class LocalizationNode:
-    """One kart's localization (see the module's docstring)."""
+    """One robot's localization (see the module's docstring); its kind names the wheels whose
+    joint states give the forward speed (`RobotKind.odometry`)."""
 
     def __init__(self, spec: LocalizationParams, ctx: AgentContext) -> None:
         """Load and preprocess the map; the filter starts when the track arrives."""
-        assert isinstance(ctx.model, GokartModel)  # Node.build checked the robot kind
+        odometry = ROBOTS.get(ctx.model.kind).odometry
+        assert odometry is not None  # Node.build checked that the robot's kind fits
         self.spec, self.ns, self.period_s = spec, ctx.name, spec.period_s
-        self.wheel_radius_m = ctx.model.rear_wheel_radius_m
+        wheels = odometry(ctx.model)
+        self.wheels, self.wheel_radius_m = wheels.joints, wheels.radius_m
         self.inputs = (TRACK_TOPIC, "/tf_static", "imu", "joint_states", "velodyne_points")
         self.mount = np.array([0.0, 0.0, spec.sensor_height_m])  # velodyne_link in base_link
         self.imu_xy = np.zeros(2)  # imu_link in base_link, from /tf_static (lever arm)
@@ -73,9 +74,9 @@ class LocalizationNode:
                     self.imu_xy = np.array([t.x, t.y])
         elif topic == "joint_states":
             names = list(message.name)
-            if all(n in names for n in REAR):
+            if all(n in names for n in self.wheels):
                 self.v_mps = self.wheel_radius_m * float(np.mean(
-                    [message.velocity[names.index(n)] for n in REAR]))
+                    [message.velocity[names.index(n)] for n in self.wheels]))
         elif topic == "imu":
             self._predict(stamp_ns(message.header), float(message.angular_velocity.z),
                           float(message.linear_acceleration.y))

@@ -154,7 +154,7 @@ def _robot_model(description: str, robots: list[core.RobotKind], ref: Any,
 def _controller(description: str, controllers: list[core.Controller],
                 ref: Any) -> dict[str, Any]:
     def says(c: core.Controller) -> str:
-        robots = f" (drives {', '.join(c.robots)})" if c.robots else ""
+        robots = f" (drives {', '.join(c.kinds())})" if c.kinds() else ""
         return f"controller `{c.name}`: {c.description}{robots}"
 
     return {"description": description,

@@ -4,7 +4,7 @@ Public for a team's own kart controller: the command (`KartInput`), the steering
 (`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`) and the outline (`FOOTPRINT_M`).
 """
 
-from kartci.core import RobotKind, lazy
+from kartci.core import RobotKind, WheelOdometry, lazy
 from kartci.robots.gokart.params import FOOTPRINT_M, GokartModel, KartSensors, axle_distance_m
 from kartci.robots.gokart.steering import (
     STEERING_RATIO,
@@ -15,10 +15,21 @@ from kartci.robots.gokart.steering import (
     wheel_angles,
 )
 
+
+def odometry(model: GokartModel) -> WheelOdometry:
+    """The kart's wheel odometry: its driven rear wheels."""
+    return WheelOdometry(("rear_left_wheel_joint", "rear_right_wheel_joint"),
+                         model.rear_wheel_radius_m)
+
+
 ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRobot"),
                   ("laps", "race"), lazy("kartci.robots.gokart.plots:kart_plots"),
                   "the ETH go-kart (seed 000): steering map, two rear motors, lidar, IMU",
-                  KartSensors, FOOTPRINT_M)
+                  KartSensors, FOOTPRINT_M,
+                  publishes=("odom", "joint_states", "imu", "velodyne_points",
+                             "camera/image_raw", "collision"),
+                  accepts=("cmd", "ackermann_cmd", "cmd_vel"), odometry=odometry,
+                  joystick=lazy("kartci.robots.gokart.joy:joystick"))
 
 __all__ = ["FOOTPRINT_M", "ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",
            "axle_distance_m", "column_for_wheel_angle", "speed_to_pedals", "steer_for_turn_rate",

@@ -13,8 +13,9 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from kartci import project
+from kartci.core import JoyCommand, RobotParams
 from kartci.errors import SpecError
-from kartci.logs.types import header, msg
+from kartci.logs.types import header, msg, stamp_ns
 from kartci.project import did_you_mean
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput
@@ -150,6 +151,18 @@ def to_joy(m: JoyMapping, model: GokartModel, cmd: KartInput, t_ns: int, frame: 
     buttons[m.reverse.button] = int(cmd.reverse)
     buttons[m.emergency_stop.button] = int(cmd.estop)
     return msg("sensor_msgs/msg/Joy", header=header(t_ns, frame), axes=axes, buttons=buttons)
+
+
+def joystick(model: RobotParams, mapping: str) -> JoyCommand:
+    """The kart's `RobotKind.joystick`: a Joy message through `mapping` to the `cmd`
+    (kartci_msgs/KartCommand) it means, stamped with the Joy's time."""
+    m = load_mapping(mapping)
+    assert isinstance(model, GokartModel)  # a kind is asked only about its own robots
+
+    def command(joy: Any, frame: str) -> tuple[str, Any]:
+        return "cmd", kart_command(to_command(m, model, joy), stamp_ns(joy.header), frame)
+
+    return command
 
 
 def kart_command(cmd: KartInput, t_ns: int, frame: str) -> Any:

@@ -6,4 +6,6 @@ from kartci.robots.line_tracker.params import LineTrackerModel, LineTrackerSenso
 ROBOT = RobotKind("line_tracker", LineTrackerModel,
                   lazy("kartci.robots.line_tracker.robot:LineTrackerRobot"), ("line_tracking",),
                   lazy("kartci.robots.line_tracker.plots:line_plots"),
-                  "the differential-drive line tracker of seed 001", LineTrackerSensors)
+                  "the differential-drive line tracker of seed 001", LineTrackerSensors,
+                  publishes=("odom", "joint_states", "line_sensor", "sonar"),
+                  accepts=("wheel_cmd",))
