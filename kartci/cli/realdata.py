@@ -54,8 +54,8 @@ def simreal_cmd(
     log: LogArg,
     profile: ProfileOpt = None,
     scenario: Annotated[str | None, typer.Option(
-        help="Scenario whose world and robot are simulated (default: the profile's, else "
-             "kart_simreal for a go-kart, diffdrive_simreal for a differential drive).")] = None,
+        help="Scenario whose world and robot are simulated (default: the profile's, else the "
+             "one its robot kind names for sim vs real).")] = None,
     window_s: Annotated[float, typer.Option(
         "--window-s", min=0.05, help="Re-start the sim from the log's state every this many "
              "seconds.")] = 2.0,
@@ -134,34 +134,12 @@ def calibrate_cmd(
 
 
 def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
-    import json
-
-    from kartci.atomic import write_text_atomic
     from kartci.cli.common import out_console
+    from kartci.core import CONTROLLERS
     from kartci.errors import SpecError
-    from kartci.logs import SCENARIO_TOPIC, tables
-    from kartci.metrics import recorded_scenario
-    from kartci.robots.gokart.mpcc.fit import fit_mpcc, lateral_data
-    from kartci.robots.gokart.mpcc.model import SingleTrack
-    from kartci.robots.gokart.mpcc.params import MpccVehicle
-    from kartci.robots.gokart.params import GokartModel, cog_x_m
 
-    scenario = recorded_scenario(tables(log, [SCENARIO_TOPIC]), log)
-    agent, model = next(iter(scenario.agents.items()))
-    if not isinstance(model.model, GokartModel):
-        raise SpecError(f"{log}: --mpcc fits a go-kart's MPCC model; {agent} is a "
-                        f"{model.model.kind}")
-    fit = fit_mpcc(lateral_data(log, agent, cog_x_m(model.model)),
-                   SingleTrack.of(model.model), MpccVehicle(), names)
-    out.mkdir(parents=True, exist_ok=True)
-    doc = {"log": str(log), "agent": agent, "params": dict(zip(fit.names, fit.values,
-                                                                strict=True)),
-           "start": dict(zip(fit.names, fit.start, strict=True)),
-           "rms_before": {"vy_mps": fit.rms_before[0], "yaw_rate_radps": fit.rms_before[1]},
-           "rms_after": {"vy_mps": fit.rms_after[0], "yaw_rate_radps": fit.rms_after[1]}}
-    write_text_atomic(out / "mpcc_fit.json", json.dumps(doc, indent=2) + "\n")
-    for name, start, value in zip(fit.names, fit.start, fit.values, strict=True):
-        out_console.print(f"{name}: {start:g} -> {value:.6g}", highlight=False)
-    out_console.print(f"prediction RMS (vy m/s, yaw rate rad/s): {fit.rms_before[0]:.4g}, "
-                      f"{fit.rms_before[1]:.4g} -> {fit.rms_after[0]:.4g}, "
-                      f"{fit.rms_after[1]:.4g}; wrote {out / 'mpcc_fit.json'}", highlight=False)
+    fit = CONTROLLERS.get("mpcc").fit
+    if fit is None:
+        raise SpecError("--mpcc: the registered mpcc controller has no model to fit")
+    for line in fit(log, names, out):
+        out_console.print(line, highlight=False)

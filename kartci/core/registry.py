@@ -84,6 +84,9 @@ class _AgentType(Generic[P]):
 class Controller(_AgentType[ControllerParams]):
     """A controller type: what drives a robot (`agents.<name>.controller: {type: NAME}`)."""
 
+    # (run log, parameter names, output folder) -> lines to show: fits the controller's own
+    # prediction model to a log and writes the result there (`kartci calibrate --mpcc`)
+    fit: Callable[[Path, list[str], Path], list[str]] | None = None
     works_on: ClassVar[str] = "drives"
 
 

@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from kartci import core
+from kartci.core import SimReal
 from kartci.errors import SpecError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, open_log
 from kartci.logs.types import for_writing
@@ -22,8 +24,19 @@ from kartci.realdata.plant import Converter, Plant, as_recorded, diff_drive
 from kartci.realdata.profile import Profile
 from kartci.scenario import Scenario, load_scenario
 
-DEFAULT_SCENARIO = {"gokart": "kart_simreal", "line_tracker": "diffdrive_simreal"}
-DIFF_DRIVE_KINDS = ("line_tracker",)  # robot kinds that take wheel speeds, not Twist
+TWIST = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
+# what a log's commands may be when the robot's kind says nothing (`RobotKind.simreal`): the
+# standard drive commands and the seed's KartCommand, applied as recorded
+AS_RECORDED = (*TWIST, "ackermann_msgs/msg/AckermannDriveStamped",
+               "kartci_msgs/msg/KartCommand")
+
+
+def kind_simreal(kind: object) -> SimReal | None:
+    """What a robot kind says about replaying its logs (None: not a registered kind's name, or
+    it says nothing)."""
+    if not isinstance(kind, str) or kind not in core.ROBOTS.names():
+        return None
+    return core.ROBOTS.get(kind).simreal
 
 
 @dataclass(frozen=True)
@@ -39,7 +52,8 @@ def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str]) 
     """The scenario to simulate (given, else the profile's, else by the profile's robot kind),
     with the profile's robot parameters and then `overrides` (`--set`, calibrated values)."""
     kind = (profile.robot or {}).get("kind")
-    name = scenario or profile.scenario or DEFAULT_SCENARIO.get(str(kind))
+    default = kind_simreal(kind)
+    name = scenario or profile.scenario or (default.scenario if default else None)
     if name is None:
         raise SpecError(f"profile {profile.name}: no scenario to simulate the log in; give "
                         "--scenario or the profile's `robot: {kind: ...}` or `scenario:`")
@@ -57,20 +71,18 @@ def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str]) 
     model_kind = spec.agents[agent].model.kind
     if profile.commands is None:
         raise SpecError(f"profile {profile.name}: names no commands topic to replay")
-    convert = diff_drive(profile.commands) if model_kind in DIFF_DRIVE_KINDS else as_recorded
+    replay = kind_simreal(model_kind)
+    wheels = replay is not None and replay.wheel_speeds
+    convert = diff_drive(profile.commands) if wheels else as_recorded
     return SimSetup(spec, tuple(sets), convert)
 
 
-TWIST = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
-KART_COMMANDS = (*TWIST, "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")
-
-
 def check_commands(setup: SimSetup, profile: Profile, types: dict[str, str]) -> None:
-    """The log's commands must be a kind the simulated robot is driven by: Twist for a
-    differential drive; Twist, Ackermann or KartCommand for the kart (Joy goes through
-    `kartci replay` and its joystick mapping instead)."""
+    """The log's commands must be a type the simulated robot is driven by, as its kind says
+    (Joy goes through `kartci replay` and its joystick mapping instead)."""
     kind = next(iter(setup.scenario.agents.values())).model.kind
-    usable = TWIST if kind in DIFF_DRIVE_KINDS else KART_COMMANDS
+    replay = kind_simreal(kind)
+    usable = replay.commands if replay is not None else AS_RECORDED
     got = types.get("commands")
     if got not in usable:
         raise SpecError(f"profile {profile.name}: commands are {got}; a {kind} is replayed from "

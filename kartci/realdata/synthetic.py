@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from kartci import core
 from kartci.logs import McapLogWriter, header, messages, msg, open_log
 from kartci.logs.types import for_writing
 from kartci.realdata.plant import diff_drive
@@ -73,7 +74,8 @@ def synthetic_log(scenario: str, overrides: Sequence[str], duration_s: float, ds
     (`noise_m` on x and y, `noise_rad` on yaw) and twist (a tenth of those, per second)."""
     spec = load_scenario(scenario, [*overrides, f"duration_s={duration_s}"])
     agent = next(iter(spec.agents))
-    diff = spec.agents[agent].model.kind == "line_tracker"
+    replay = core.ROBOTS.get(spec.agents[agent].model.kind).simreal
+    diff = replay is not None and replay.wheel_speeds
     rng = np.random.default_rng(seed)
     with tempfile.TemporaryDirectory() as tmp:
         raw = Path(tmp) / "raw.mcap"

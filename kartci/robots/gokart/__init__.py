@@ -4,7 +4,7 @@ Public for a team's own kart controller: the command (`KartInput`), the steering
 (`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`) and the outline (`FOOTPRINT_M`).
 """
 
-from kartci.core import RobotKind, WheelOdometry, lazy
+from kartci.core import RobotKind, SimReal, WheelOdometry, lazy
 from kartci.robots.gokart.params import FOOTPRINT_M, GokartModel, KartSensors, axle_distance_m
 from kartci.robots.gokart.steering import (
     STEERING_RATIO,
@@ -29,7 +29,10 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                   publishes=("odom", "joint_states", "imu", "velodyne_points",
                              "camera/image_raw", "collision"),
                   accepts=("cmd", "ackermann_cmd", "cmd_vel"), odometry=odometry,
-                  joystick=lazy("kartci.robots.gokart.joy:joystick"))
+                  joystick=lazy("kartci.robots.gokart.joy:joystick"),
+                  simreal=SimReal("kart_simreal", (
+                      "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped",
+                      "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")))
 
 __all__ = ["FOOTPRINT_M", "ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",
            "axle_distance_m", "column_for_wheel_angle", "speed_to_pedals", "steer_for_turn_rate",

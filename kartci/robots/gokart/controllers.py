@@ -101,4 +101,5 @@ JOY_DRIVER = Controller("joy_driver", JoyDriverController,
                         lazy("kartci.robots.gokart.drivers:JoyDriver"), KART,
                         "a scripted human: pure pursuit expressed as joystick messages")
 MPCC = Controller("mpcc", MpccController, lazy("kartci.robots.gokart.mpcc.agent:MpccAgent"),
-                  KART, "model predictive contouring control (CasADi / Ipopt)")
+                  KART, "model predictive contouring control (CasADi / Ipopt)",
+                  fit=lazy("kartci.robots.gokart.mpcc.fit:fit_log"))

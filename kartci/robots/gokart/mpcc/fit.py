@@ -10,6 +10,7 @@ start values and bounded to a third .. three times them."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,10 +19,13 @@ from typing import Any
 
 import numpy as np
 
+from kartci.atomic import write_text_atomic
 from kartci.errors import LogError, SpecError
-from kartci.logs import tables
+from kartci.logs import SCENARIO_TOPIC, tables
+from kartci.metrics import recorded_scenario
 from kartci.robots.gokart.mpcc.model import SingleTrack
 from kartci.robots.gokart.mpcc.params import MpccVehicle
+from kartci.robots.gokart.params import GokartModel, cog_x_m
 
 STEER_JOINTS = ("front_left_wheel_steer_joint.position", "front_right_wheel_steer_joint.position")
 
@@ -156,3 +160,27 @@ def fit_mpcc(data: Lateral, track: SingleTrack, vehicle: MpccVehicle, names: Seq
 
     return MpccFit(tuple(names), tuple(start.tolist()), tuple((result.x * start).tolist()),
                    rms(np.ones(len(names))), rms(result.x))
+
+
+def fit_log(log: Path, names: list[str], out: Path) -> list[str]:
+    """The MPCC's `Controller.fit` (`kartci calibrate --mpcc`): fit `names` to a simulated
+    kart's run log, write OUT/mpcc_fit.json and say what changed, one line each."""
+    scenario = recorded_scenario(tables(log, [SCENARIO_TOPIC]), log)
+    agent, model = next(iter(scenario.agents.items()))
+    if not isinstance(model.model, GokartModel):
+        raise SpecError(f"{log}: --mpcc fits a go-kart's MPCC model; {agent} is a "
+                        f"{model.model.kind}")
+    fit = fit_mpcc(lateral_data(log, agent, cog_x_m(model.model)),
+                   SingleTrack.of(model.model), MpccVehicle(), names)
+    out.mkdir(parents=True, exist_ok=True)
+    doc = {"log": str(log), "agent": agent, "params": dict(zip(fit.names, fit.values,
+                                                                strict=True)),
+           "start": dict(zip(fit.names, fit.start, strict=True)),
+           "rms_before": {"vy_mps": fit.rms_before[0], "yaw_rate_radps": fit.rms_before[1]},
+           "rms_after": {"vy_mps": fit.rms_after[0], "yaw_rate_radps": fit.rms_after[1]}}
+    write_text_atomic(out / "mpcc_fit.json", json.dumps(doc, indent=2) + "\n")
+    return [*(f"{name}: {start:g} -> {value:.6g}"
+              for name, start, value in zip(fit.names, fit.start, fit.values, strict=True)),
+            f"prediction RMS (vy m/s, yaw rate rad/s): {fit.rms_before[0]:.4g}, "
+            f"{fit.rms_before[1]:.4g} -> {fit.rms_after[0]:.4g}, "
+            f"{fit.rms_after[1]:.4g}; wrote {out / 'mpcc_fit.json'}"]
