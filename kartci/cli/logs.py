@@ -36,8 +36,9 @@ def replay(
     topic: Annotated[str | None, typer.Option(
         help="Input topic (default: the log's only Joy or command topic).")] = None,
     mapping: Annotated[str, typer.Option(help="Joystick mapping for Joy logs: a name "
-                                              "(models/gokart/joy/<name>.yaml: ps4, xbox, g29) "
-                                              "or a path to a mapping YAML file.")] = "ps4",
+                                              "(models/<robot kind>/joy/<name>.yaml; the "
+                                              "kart's: ps4, xbox, g29) or a path to a mapping "
+                                              "YAML file.")] = "ps4",
     agent: Annotated[str | None, typer.Option(help="Agent to drive (default: the first).")]
     = None,
     set_: SetOpt = None,
@@ -65,14 +66,11 @@ def replay(
     if open_loop:
         _open_loop(log, agent, ns, reference, tolerance or [], out_dir(out, "openloop"))
         return
-    from kartci.logs.recorded import JOY
+    from kartci.core import ROBOTS
     from kartci.report.static import scenario_svgs
-    from kartci.robots.gokart.controllers import CommandsController, ManualController
-    from kartci.robots.gokart.joy import check_pad, load_mapping
     from kartci.runner import Job, run_jobs
     from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
     from kartci.scenario import load_scenario
-    from kartci.scenario.models import LogSource
 
     out = out_dir(out, "replay")
     spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)
@@ -81,13 +79,12 @@ def replay(
         raise SpecError(f"scenario {spec.name} has no agent '{name}' "
                         f"(agents: {', '.join(spec.agents)})")
     chosen = _input_topic(log, topic)
-    source = LogSource(log=str(log.resolve()), topic=chosen.topic)
-    controller: ManualController | CommandsController
-    if chosen.msgtype in JOY:
-        check_pad(load_mapping(mapping), mapping, log, chosen.topic)
-        controller = ManualController(mapping=mapping, source=source)
-    else:
-        controller = CommandsController(source=source)
+    kind = spec.agents[name].model.kind
+    make = ROBOTS.get(kind).replay
+    if make is None:
+        raise SpecError(f"scenario {spec.name}: agent {name} is a {kind} robot, which cannot be "
+                        "driven from a recorded input")
+    controller = make(log, chosen.topic, chosen.msgtype, mapping)
     agents = dict(spec.agents)
     agents[name] = agents[name].model_copy(update={"controller": controller})
     spec = spec.model_copy(update={"agents": agents})

@@ -13,7 +13,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from kartci import project
+from kartci import core, project
 from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
 from kartci.scenario.dispatch import ParamsError, dispatch, with_allowed_keys
@@ -218,8 +218,10 @@ def _check_run_time_files(agent: dict[str, Any], where: str, allow_outside: bool
             source["log"] = str(proj.contained(Path(source["log"]),
                                                f"{where}.controller.source.log", allow_outside))
         if isinstance(controller.get("mapping"), str):
-            controller["mapping"] = _mapping(controller["mapping"], f"{where}.controller.mapping",
-                                             proj, allow_outside)
+            model = agent.get("model")
+            kind = model.get("kind") if isinstance(model, dict) else None
+            controller["mapping"] = _mapping(controller["mapping"], kind,
+                                             f"{where}.controller.mapping", proj, allow_outside)
     nodes = agent.get("nodes")
     for node, params in nodes.items() if isinstance(nodes, dict) else ():
         if isinstance(params, dict) and isinstance(params.get("map"), str):
@@ -230,15 +232,19 @@ def _check_run_time_files(agent: dict[str, Any], where: str, allow_outside: bool
                                 else proj.world_file(str(given), allow_outside))
 
 
-def _mapping(value: str, what: str, proj: project.Project, allow_outside: bool) -> str:
-    """A joystick mapping given by path (kartci.robots.gokart.joy.load_mapping's rule: ending in
-    .yaml / .yml or holding a separator) as its absolute, checked path; a name stays a name
-    (it reads better in `kartci show`), its file on the model path checked for a link out."""
+def _mapping(value: str, kind: Any, what: str, proj: project.Project,
+             allow_outside: bool) -> str:
+    """A joystick mapping given by path (ending in .yaml / .yml or holding a separator) as its
+    absolute, checked path; a name stays a name (it reads better in `kartci show`), its file
+    (`<kind>/joy/<name>.yaml` on the model path, where a robot kind keeps its mappings) checked
+    for a link out."""
     if value.endswith((".yaml", ".yml")) or "/" in value or os.sep in value:
         return str(proj.contained(Path(value).expanduser(), what, allow_outside))
+    if kind not in core.ROBOTS.names():
+        return value  # not a robot kind: validation names the problem
     for folder in proj.model_path:
         for suffix in (".yaml", ".yml"):
-            found = folder / "gokart" / "joy" / f"{value}{suffix}"
+            found = folder / kind / "joy" / f"{value}{suffix}"
             if found.is_file():
                 proj.contained(found, what, allow_outside)
                 return value

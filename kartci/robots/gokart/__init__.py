@@ -30,6 +30,7 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                              "camera/image_raw", "collision"),
                   accepts=("cmd", "ackermann_cmd", "cmd_vel"), odometry=odometry,
                   joystick=lazy("kartci.robots.gokart.joy:joystick"),
+                  replay=lazy("kartci.robots.gokart.drivers:replay"),
                   simreal=SimReal("kart_simreal", (
                       "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped",
                       "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")))

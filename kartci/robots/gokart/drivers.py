@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from kartci.core import AgentContext, Outbox
+from kartci.core import AgentContext, ControllerParams, Outbox
 from kartci.logs.recorded import COMMANDS, JOY, Recorded
 from kartci.logs.types import base_link, header, msg, yaw_of
 from kartci.robots.gokart import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
@@ -19,8 +20,16 @@ from kartci.robots.gokart.controllers import (
     ManualController,
     ScriptController,
 )
-from kartci.robots.gokart.joy import check_counts, kart_command, load_mapping, to_command, to_joy
+from kartci.robots.gokart.joy import (
+    check_counts,
+    check_pad,
+    kart_command,
+    load_mapping,
+    to_command,
+    to_joy,
+)
 from kartci.robots.gokart.params import GokartModel
+from kartci.scenario.models import LogSource
 from kartci.track import TRACK_TOPIC, Track, track_from_text
 
 
@@ -157,3 +166,14 @@ class JoyDriver:
         joy = to_joy(self.mapping, self.model, wish, t_ns, "joy")
         cmd = to_command(self.mapping, self.model, joy)
         return [("joy", joy), ("cmd", kart_command(cmd, t_ns, self.frame))]
+
+
+def replay(log: Path, topic: str, msgtype: str, mapping: str) -> ControllerParams:
+    """The kart's `RobotKind.replay` (`kartci replay`): a Joy stream drives it through
+    `mapping`, whose axis and button counts the log's pad must have; a command stream is
+    republished on its standard command topic."""
+    source = LogSource(log=str(log.resolve()), topic=topic)
+    if msgtype in JOY:
+        check_pad(load_mapping(mapping), mapping, log, topic)
+        return ManualController(mapping=mapping, source=source)
+    return CommandsController(source=source)
