@@ -20,7 +20,6 @@ from kartci.cli import (  # noqa: F401  (importing a command module registers it
     run,
     scenarios,
 )
-from kartci.cli import line as line_commands  # noqa: F401
 from kartci.cli.common import app
 from kartci.errors import KartciError
 

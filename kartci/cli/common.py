@@ -3,23 +3,61 @@ the one way a command ends (reports written, exit code)."""
 
 from __future__ import annotations
 
-import sys
+from functools import cache
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 from rich.table import Table
 from rich.text import Text
+from typer.core import TyperGroup
 
+from kartci import core
+from kartci.commandline import AllowOutsideOpt as AllowOutsideOpt
+from kartci.commandline import OutOpt as OutOpt
+from kartci.commandline import SetOpt as SetOpt
+from kartci.commandline import err_console as err_console
+from kartci.commandline import out_console as out_console
+from kartci.commandline import out_dir as out_dir
 from kartci.errors import KartciError, RunError, SpecError
 from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
 from kartci.verdict.result import ScenarioResult, exit_code, one_line
 
+
+class WithKindCommands(TyperGroup):
+    """kartci's own commands, then those the registered robot kinds bring (`RobotKind.cli`):
+    the registry loads only when a name is not kartci's own or the commands are listed."""
+
+    def list_commands(self, ctx: Any) -> list[str]:  # typer's own vendored click.Context
+        """kartci's commands in their order, then the kinds' (none while a plugin is broken:
+        the commands that use the registry name it), then the command groups."""
+        own = super().list_commands(ctx)
+        try:
+            extra = sorted(set(kind_commands()) - set(own))
+        except KartciError:
+            extra = []
+        groups = [n for n in own if isinstance(self.commands[n], TyperGroup)]  # listed last
+        return [*(n for n in own if n not in groups), *extra, *groups]
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        """kartci's own command of that name, else a robot kind's."""
+        return super().get_command(ctx, cmd_name) or kind_commands().get(cmd_name)
+
+
+@cache
+def kind_commands() -> dict[str, Any]:
+    """Every registered robot kind's own commands, by name."""
+    found: dict[str, Any] = {}
+    for kind in core.ROBOTS.all():
+        if kind.cli is not None:
+            found.update(typer.main.get_group(kind.cli()).commands)
+    return found
+
+
 # Help text is shown as written (rich_markup_mode=None): rich markup would eat `kartci[ray]`
 # and `[default: ...]`.
 app = typer.Typer(add_completion=True, pretty_exceptions_enable=False, no_args_is_help=True,
-                  rich_markup_mode=None,
+                  rich_markup_mode=None, cls=WithKindCommands,
                   help="Run robot scenarios headless, record them, score them against baselines.")
 baseline_app = typer.Typer(help="Inspect and update stored baselines.", no_args_is_help=True,
                            rich_markup_mode=None)
@@ -54,20 +92,9 @@ def complete_scenario(incomplete: str) -> list[tuple[str, str]]:
     return [(name, proj.origin_of(path).value) for name, path in found.items()
             if name.startswith(incomplete)]
 
-# In CI logs (no terminal) rich would wrap at 80 columns and cut metric names: use 160.
-out_console = Console(width=None if sys.stdout.isatty() else 160)
-err_console = Console(stderr=True, width=None if sys.stderr.isatty() else 160)
 
-SetOpt = Annotated[list[str] | None, typer.Option(
-    "--set", help="Override a scenario value: dotted.key=value (repeatable).")]
-OutOpt = Annotated[Path | None, typer.Option(
-    "--out", "-o", help="Output folder [default: the project's reports/<command>].")]
 BaselinesOpt = Annotated[Path | None, typer.Option(
     help="Folder of baseline files (default: the project's baselines/).")]
-AllowOutsideOpt = Annotated[bool, typer.Option(
-    "--allow-outside-paths", help="Let data files (tracks, worlds, models, maps, joystick "
-    "mappings, a scenario's or profile's log and track; absolute paths, '..', symlinks) lie "
-    "outside the project and kartci's data.")]
 StrictOpt = Annotated[bool | None, typer.Option(
     "--strict/--no-strict", help="Fail a scenario without a baseline, with a metric its "
     "baseline lacks, with a stale baseline (accepted from another scenario) or a tolerance "
@@ -88,13 +115,6 @@ def baselines_dir(path: Path | None, must_exist: bool = True) -> Path:
     if path is not None and must_exist and not path.is_dir():
         raise SpecError(f"--baselines {path}: no such folder")
     return path or default_baselines()
-
-
-def out_dir(out: Path | None, name: str) -> Path:
-    """`--out`, or `<the project's reports folder>/<name>`."""
-    from kartci import project
-
-    return out if out is not None else project.current().reports / name
 
 
 def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:

@@ -13,8 +13,8 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 
 from kartci.figures import Plots
+from kartci.plotstyle import svg  # also sets Agg, the SVG settings and the mathtext guard
 from kartci.report.figures import Axis, Figure, Role, Series, scenario_figures, thin
-from kartci.report.plots import _svg  # also sets Agg, the SVG settings and the mathtext guard
 
 STYLE: dict[Role, dict[str, Any]] = {Role.REFERENCE: {"color": "grey", "ls": "--", "lw": 1.0},
          Role.COMMAND: {"ls": ":", "lw": 0.8}, Role.OUTLINE: {"color": "black", "lw": 0.8},
@@ -88,7 +88,7 @@ def figure_svg(f: Figure) -> str:
     if len(f.series) <= 12 and any(s.role not in (Role.OUTLINE, Role.SHAPE) and s.c is None
                                    for s in f.series):
         ax.legend(loc="best", fontsize=6)
-    return _svg(fig)
+    return svg(fig)
 
 
 def scenario_svgs(plots: Plots) -> tuple[str, ...]:

@@ -32,7 +32,8 @@ def _one_clean_line(p: subprocess.CompletedProcess[str]) -> str:
 
 def _commands() -> list[list[str]]:
     """Every command and command group of the CLI, found from the app itself (typer's own
-    click: groups are told by their `commands`)."""
+    click: groups are told by their `commands`), the robot kinds' own commands included (the
+    top-level group lists them: `list_commands`, `get_command`)."""
     import typer
 
     from kartci.cli import app
@@ -40,7 +41,8 @@ def _commands() -> list[list[str]]:
     found: list[list[str]] = [[]]
 
     def walk(group: Any, prefix: list[str]) -> None:
-        for name, cmd in sorted(group.commands.items()):
+        for name in sorted(group.list_commands(None)):
+            cmd = group.get_command(None, name)
             found.append([*prefix, name])
             if hasattr(cmd, "commands"):
                 walk(cmd, [*prefix, name])

@@ -1,4 +1,5 @@
-"""`kartci characterise`: the line tracker's sensor characterisation."""
+"""The line tracker's own commands (`RobotKind.cli`): `kartci characterise`, its sensor
+characterisation, and `kartci study`, the seed's study figures from its grid runs."""
 
 from __future__ import annotations
 
@@ -9,8 +10,15 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from kartci.cli.common import AllowOutsideOpt, OutOpt, SetOpt, app, out_console, out_dir
+from kartci.commandline import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
 from kartci.errors import SpecError
+
+app = typer.Typer(rich_markup_mode=None)  # help shown as written, as kartci's own commands
+
+
+def commands() -> typer.Typer:
+    """What the line tracker's `RobotKind.cli` gives kartci's command line."""
+    return app
 
 
 @app.command()
@@ -26,7 +34,6 @@ def characterise(
 ) -> None:
     """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
     6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
-    from kartci.report.plots import sensor_sweep
     from kartci.robots.line_tracker.characterise import sweep
     from kartci.scenario import load_scenario
 
@@ -82,6 +89,21 @@ def characterise(
         out_console.print(line, highlight=False)
     out_console.print(f"wrote {out}/sweep.csv, fov_sweep.csv, characterisation.html",
                       highlight=False)
+
+
+def sensor_sweep(offsets_m: list[float], curves: dict[str, list[float]], title: str) -> str:
+    """Line-sensor luminance curves against the sensor's lateral offset (mm), its ±8 mm range
+    marked."""
+    import matplotlib.pyplot as plt  # matplotlib loads to draw, not when kartci starts
+
+    from kartci.plotstyle import finish  # kartci's figure look (and Agg)
+
+    fig, ax = plt.subplots(figsize=(5.5, 3.5))
+    for label, ys in curves.items():
+        ax.plot([o * 1000 for o in offsets_m], ys, lw=1.2, label=label)
+    ax.axvline(-8, color="grey", ls="--", lw=0.8)
+    ax.axvline(8, color="grey", ls="--", lw=0.8)
+    return finish(fig, ax, "offset of the sensor from the line axis [mm]", "luminance", title)
 
 
 @app.command()

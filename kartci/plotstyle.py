@@ -1,4 +1,5 @@
-"""Report figures as inline SVG (matplotlib, Agg): no JavaScript, no network, opens anywhere."""
+"""Figures as inline SVG (matplotlib, Agg): no JavaScript, no network, opens anywhere. One look
+for the reports and a robot kind's own pages; importing this selects Agg and sets it."""
 
 from __future__ import annotations
 
@@ -19,16 +20,16 @@ plt.rcParams.update({"svg.hashsalt": "kartci", "figure.dpi": 96, "font.size": 9,
                      "text.parse_math": False, "svg.fonttype": "none"})
 
 
-def _finish(fig: Figure, ax: Axes, xlabel: str, ylabel: str, title: str) -> str:
+def finish(fig: Figure, ax: Axes, xlabel: str, ylabel: str, title: str) -> str:
     """Labels, title and legend, then the figure as inline SVG."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
-    return _svg(fig)
+    return svg(fig)
 
 
-def _svg(fig: Figure) -> str:
+def svg(fig: Figure) -> str:
     """The figure as SVG text; laid out once (tight_layout), not cropped with
     bbox_inches="tight", which draws every figure twice (a third of the static report's time)."""
     fig.tight_layout()
@@ -37,14 +38,3 @@ def _svg(fig: Figure) -> str:
     plt.close(fig)
     text = buf.getvalue()
     return text[text.index("<svg"):]
-
-
-def sensor_sweep(offsets_m: list[float], curves: dict[str, list[float]], title: str) -> str:
-    """Line-sensor luminance curves against the sensor's lateral offset (mm), its ±8 mm range
-    marked."""
-    fig, ax = plt.subplots(figsize=(5.5, 3.5))
-    for label, ys in curves.items():
-        ax.plot([o * 1000 for o in offsets_m], ys, lw=1.2, label=label)
-    ax.axvline(-8, color="grey", ls="--", lw=0.8)
-    ax.axvline(8, color="grey", ls="--", lw=0.8)
-    return _finish(fig, ax, "offset of the sensor from the line axis [mm]", "luminance", title)
