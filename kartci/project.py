@@ -153,7 +153,7 @@ class Project:
         return self._find(self.world_path, f"{name}.yaml", f"world {name!r}", allow_outside)
 
     def find_model(self, name: str, allow_outside: bool = False) -> Path:
-        """`gokart` -> the first `<model folder>/gokart/params.yaml` on the search path."""
+        """`NAME` -> the first `<model folder>/NAME/params.yaml` on the search path."""
         return self._find(self.model_path, f"{name}/params.yaml", f"robot model {name!r}",
                           allow_outside)
 

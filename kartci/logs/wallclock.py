@@ -18,7 +18,7 @@ from types import MappingProxyType
 from typing import Final
 
 WALL_CLOCK: Final[Mapping[str, tuple[str, ...]]] = MappingProxyType({
-    # kartci.robots.gokart.mpcc.controller: time.perf_counter() around the MPCC solve, ms
+    # the kart's MPCC (its mpcc.controller): time.perf_counter() around the solve, ms
     "kartci_msgs/msg/SolverStats": ("solve_ms",),
 })
 

@@ -154,7 +154,7 @@ def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path,
     model = agent.get("model")
     given: dict[str, Any] = {}
     if isinstance(model, dict) and isinstance(model.get("from"), str):
-        # `model: {from: line_tracker, wheel_time_constant_s: 0}`: a model with keys replaced
+        # `model: {from: NAME, wheel_time_constant_s: 0}`: a model folder's, with keys replaced
         given = {k: v for k, v in model.items() if k != "from"}
         model = model["from"]
     if isinstance(model, str):

@@ -236,8 +236,8 @@ class AgentSpec(Frozen):
     """One robot in the scenario: its model, its controller, where it starts, its sensors."""
 
     model: SerializeAsAny[RobotParams] = Field(description="the robot: a model folder's name "
-                                               "(e.g. `gokart`) or `{kind: NAME, ...}` with its "
-                                               "parameters")
+                                               "(`NAME/params.yaml` on the model path) or "
+                                               "`{kind: NAME, ...}` with its parameters")
     controller: SerializeAsAny[ControllerParams] = Field(description="what drives the robot: "
                                                          "`{type: NAME, ...}`, a registered "
                                                          "controller and its parameters")

@@ -139,12 +139,12 @@ def _robot_model(description: str, robots: list[core.RobotKind], ref: Any,
         "type": "object", "required": ["from"], "additionalProperties": False,
         "description": f"a `{r.name}` model folder with some keys replaced",
         "properties": {"from": {"type": "string", "description": "the model folder's name on "
-                                "the project's model path, e.g. `line_tracker`"},
+                                "the project's model path (`<name>/params.yaml`)"},
                        **copy.deepcopy(defs[_name(ref(r.params))].get("properties", {}))}}
         for r in robots]
     return {"description": description, "anyOf": [
         {"type": "string", "description": "a robot model folder's name on the project's "
-         "model path (`<name>/params.yaml`, e.g. `gokart`, `line_tracker`)"},
+         "model path (`<name>/params.yaml`)"},
         {"anyOf": from_folder, "description": "`{from: NAME, ...}`: a model folder's "
          "parameters with the keys given here replaced"},
         {"oneOf": kinds, "description": "a robot in full, its kind named by `kind`"},

@@ -21,7 +21,7 @@ class LineLab(World):
     """A floor with the line (a straight strip or a ring) and obstacles."""
 
     spec: LineLabWorld
-    # what a rendered line camera redraws cheaply (kartci.robots.line_tracker.render): the floor's
+    # what a rendered line camera redraws cheaply (the line tracker's `render`): the floor's
     # box (visual body id, x-y corners lo, hi), the ring's body, vertices and triangle indices
     # (None for a straight line), and the scene made from them on the first rendered frame
     floor_box: tuple[int, tuple[float, float], tuple[float, float]]
