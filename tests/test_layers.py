@@ -3,6 +3,8 @@ tools/layers.py (an import inside a function counts: it is a dependency all the 
 
 from __future__ import annotations
 
+import ast
+import re
 import sys
 from pathlib import Path
 
@@ -21,3 +23,106 @@ def test_the_metric_engine_imports_no_robot_kind() -> None:
     engine; the engine learns a robot's outline from its registered kind, never from its code."""
     assert [e.where for e in edges() if (e.source, e.target) == ("kartci.metrics",
                                                                  "kartci.robots")] == []
+
+
+ROOT = Path(__file__).resolve().parents[1] / "kartci"
+KINDS = ROOT / "robots"
+
+
+def kind_names() -> list[str]:
+    """kartci's own robot kinds: the packages in kartci/robots/ (each registers one kind)."""
+    return sorted(p.name for p in KINDS.iterdir() if (p / "__init__.py").is_file())
+
+
+def _is_shim(tree: ast.Module) -> bool:
+    """A declared deprecated re-export: its docstring says so and it holds nothing but imports
+    and `__all__` (so no code can hide behind the declaration)."""
+    doc = ast.get_docstring(tree) or ""
+    body = tree.body[1:] if ast.get_docstring(tree) is not None else tree.body
+    return doc.startswith("Deprecated:") and all(
+        isinstance(n, ast.Import | ast.ImportFrom)
+        or (isinstance(n, ast.Assign) and [ast.unparse(t) for t in n.targets] == ["__all__"])
+        for n in body)
+
+
+def _identifiers(tree: ast.Module) -> list[tuple[int, str]]:
+    """Every name a module defines or uses, with its line."""
+    out: list[tuple[int, str]] = []
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Name):
+            out.append((n.lineno, n.id))
+        elif isinstance(n, ast.Attribute):
+            out.append((n.lineno, n.attr))
+        elif isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            out.append((n.lineno, n.name))
+        elif isinstance(n, ast.arg | ast.keyword) and n.arg is not None:
+            out.append((n.lineno, n.arg))
+        elif isinstance(n, ast.alias):
+            out.append((n.lineno, n.asname or n.name))
+        elif isinstance(n, ast.ImportFrom) and n.module:
+            out.append((n.lineno, n.module))
+    return out
+
+
+def kind_mentions(kinds: list[str], root: Path = ROOT) -> list[str]:
+    """Every place outside kartci/robots/ (and the declared deprecated re-exports) that names
+    one of `kinds`: in a string (docstrings, help texts, module paths given as text) as a whole
+    word (`gokart`, `models/gokart/...`, not `kart_simreal`), or in an identifier
+    (`GokartModel`, `line_tracker_sweep`), with its file and line."""
+    word = re.compile("|".join(rf"(?<![A-Za-z0-9]){re.escape(k)}(?![A-Za-z0-9])" for k in kinds))
+    squashed = [k.replace("_", "") for k in kinds]
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root)
+        if rel.parts[0] in ("robots", "data"):  # the kinds themselves; shipped-asset scripts
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        if _is_shim(tree):
+            continue
+        where = f"kartci/{rel.as_posix()}"
+        for n in ast.walk(tree):
+            if isinstance(n, ast.Constant) and isinstance(n.value, str):
+                hit = word.search(n.value)
+                if hit:
+                    found.append(f"{where}:{n.lineno}: {hit[0]!r} in a string")
+        for line, name in _identifiers(tree):
+            if any(k in name.lower().replace("_", "") for k in squashed):
+                found.append(f"{where}:{line}: identifier {name}")
+    return found
+
+
+def test_no_module_outside_the_kinds_imports_one() -> None:
+    """Kind-neutral code learns what it needs of a robot from its registered `RobotKind`
+    (footprint, topics, wheel odometry, joystick, replay, sim-vs-real, commands), never from
+    the kind's code; only the declared deprecated re-exports import a kind."""
+    shims = {f"kartci/{p.relative_to(ROOT).as_posix()}" for p in ROOT.rglob("*.py")
+             if _is_shim(ast.parse(p.read_text(encoding="utf-8")))}
+    assert [e.where for e in edges() if e.target == "kartci.robots" and e.source != e.target
+            and e.where.rpartition(":")[0] not in shims] == []
+
+
+def test_no_module_outside_the_kinds_names_one() -> None:
+    """No string or identifier outside kartci/robots/ names a robot kind (issue 25)."""
+    assert kind_names() == ["gokart", "line_tracker"]  # the scan below knows what to look for
+    assert kind_mentions(kind_names()) == []
+
+
+def test_the_kind_scan_finds_what_it_looks_for(tmp_path: Path) -> None:
+    """The scan is not vacuous: an import, a string and an identifier are each caught; a
+    declared re-export and a word that merely contains a kind's name are not."""
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "mod.py").write_text(
+        '"""Drives any robot."""\n'
+        "from kartci.robots.gokart.params import GokartModel\n"
+        "DEFAULT = {'kind': 'line_tracker'}\n"
+        "SCENARIO = 'kart_simreal'\n"
+        "def drive(line_tracker_model: object) -> None: ...\n")
+    (tmp_path / "shim.py").write_text('"""Deprecated: import from `kartci.robots.gokart`."""\n'
+                                      "from kartci.robots.gokart import GokartModel\n"
+                                      '__all__ = ["GokartModel"]\n')
+    assert sorted(kind_mentions(["gokart", "line_tracker"], tmp_path)) == [
+        "kartci/mod.py:2: identifier GokartModel",
+        "kartci/mod.py:2: identifier kartci.robots.gokart.params",
+        "kartci/mod.py:3: 'line_tracker' in a string",
+        "kartci/mod.py:5: identifier line_tracker_model",
+    ]
