@@ -11,6 +11,8 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from kartci import project
+
 # In CI logs (no terminal) rich would wrap at 80 columns and cut metric names: use 160.
 out_console = Console(width=None if sys.stdout.isatty() else 160)
 err_console = Console(stderr=True, width=None if sys.stderr.isatty() else 160)
@@ -27,6 +29,4 @@ AllowOutsideOpt = Annotated[bool, typer.Option(
 
 def out_dir(out: Path | None, name: str) -> Path:
     """`--out`, or `<the project's reports folder>/<name>`."""
-    from kartci import project
-
     return out if out is not None else project.current().reports / name

@@ -34,6 +34,7 @@ def characterise(
 ) -> None:
     """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
     6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
+    # the simulator and the scenario loader load when the command runs, not when kartci starts
     from kartci.robots.line_tracker.characterise import sweep
     from kartci.scenario import load_scenario
 
@@ -114,6 +115,7 @@ def study(
     """Draw the seed's study figures (Figs. 7.1.2-7.1.4, Sec. 7.2) from the line tracker's grid
     runs in OUT (line_straight_grid, line_circle_grid, line_circle_edge_fast/slow):
     OUT/study.html, one SVG per figure."""
+    # matplotlib and the run folders' tables load when the command runs
     from kartci.robots.line_tracker import figures
     from kartci.robots.line_tracker import study as st
 
