@@ -1,5 +1,7 @@
 """What every `kartci` command is built from, kartci's own (`kartci.cli`) and those a robot
-kind brings (`RobotKind.cli`): the consoles, the options they share, the default output folder.
+kind or plugin brings (entry points `kartci.commands`): the consoles, the options they share,
+the default output folder.
+the default output folder.
 Below every package that brings commands, so a kind's commands import nothing above it."""
 
 from __future__ import annotations

@@ -4,15 +4,15 @@ the one way a command ends (reports written, exit code)."""
 from __future__ import annotations
 
 from functools import cache
+from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 from rich.table import Table
 from rich.text import Text
-from typer.core import TyperGroup
+from typer.core import TyperCommand, TyperGroup
 
-from kartci import core
 from kartci.commandline import AllowOutsideOpt as AllowOutsideOpt
 from kartci.commandline import OutOpt as OutOpt
 from kartci.commandline import SetOpt as SetOpt
@@ -23,35 +23,46 @@ from kartci.errors import KartciError, RunError, SpecError
 from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
 from kartci.verdict.result import ScenarioResult, exit_code, one_line
 
+COMMANDS_GROUP = "kartci.commands"  # entry points: name -> "module:attr", a typer.Typer
+
 
 class WithKindCommands(TyperGroup):
-    """kartci's own commands, then those the registered robot kinds bring (`RobotKind.cli`):
-    the registry loads only when a name is not kartci's own or the commands are listed."""
+    """kartci's own commands, then those robot kinds and plugins bring through the entry-point
+    group `kartci.commands`: their names come from the installed metadata, and a module is
+    imported only when its commands are listed or run, so `kartci --help` and shell completion
+    never load the plugin registry (the kinds' simulators, the MPCC)."""
 
     def list_commands(self, ctx: Any) -> list[str]:  # typer's own vendored click.Context
-        """kartci's commands in their order, then the kinds' (none while a plugin is broken:
-        the commands that use the registry name it), then the command groups."""
+        """kartci's commands in their order, then the plugins', then the command groups."""
         own = super().list_commands(ctx)
-        try:
-            extra = sorted(set(kind_commands()) - set(own))
-        except KartciError:
-            extra = []
+        extra = sorted(set(plugin_commands()) - set(own))
         groups = [n for n in own if isinstance(self.commands[n], TyperGroup)]  # listed last
         return [*(n for n in own if n not in groups), *extra, *groups]
 
     def get_command(self, ctx: Any, cmd_name: str) -> Any:
-        """kartci's own command of that name, else a robot kind's."""
-        return super().get_command(ctx, cmd_name) or kind_commands().get(cmd_name)
+        """kartci's own command of that name, else a plugin's."""
+        return super().get_command(ctx, cmd_name) or plugin_commands().get(cmd_name)
 
 
 @cache
-def kind_commands() -> dict[str, Any]:
-    """Every registered robot kind's own commands, by name."""
+def plugin_commands() -> dict[str, Any]:
+    """Every command the installed `kartci.commands` entry points bring, by name; a plugin
+    that fails to import is skipped here and named when its command is run."""
     found: dict[str, Any] = {}
-    for kind in core.ROBOTS.all():
-        if kind.cli is not None:
-            found.update(typer.main.get_group(kind.cli()).commands)
+    for ep in sorted(entry_points(group=COMMANDS_GROUP), key=lambda e: e.name):
+        try:
+            found.update(typer.main.get_group(ep.load()).commands)
+        except Exception as err:  # a broken plugin must not take kartci's own commands down
+            found.setdefault(ep.name, _broken(ep.name, err))
     return found
+
+
+def _broken(name: str, err: Exception) -> TyperCommand:
+    """A stand-in for a plugin's commands that failed to import: running it says why."""
+    def fail() -> None:
+        raise KartciError(f"the commands of plugin '{name}' ({COMMANDS_GROUP}) failed to "
+                          f"import: {type(err).__name__}: {err}")
+    return TyperCommand(name, callback=fail, help=f"(plugin '{name}' failed to import)")
 
 
 # Help text is shown as written (rich_markup_mode=None): rich markup would eat `kartci[ray]`

@@ -145,7 +145,6 @@ class RobotKind:
     # recorded input into a robot of this kind (`kartci replay`); checks the log first
     replay: Callable[[Path, str, str, str], ControllerParams] | None = None
     simreal: SimReal | None = None
-    cli: Callable[[], Any] | None = None  # () -> a typer.Typer: its own `kartci` commands
 
 
 @dataclass(frozen=True)

@@ -11,5 +11,4 @@ ROBOT = RobotKind("line_tracker", LineTrackerModel,
                   accepts=("wheel_cmd",),
                   simreal=SimReal("diffdrive_simreal", ("geometry_msgs/msg/Twist",
                                                         "geometry_msgs/msg/TwistStamped"),
-                                  wheel_speeds=True),
-                  cli=lazy("kartci.robots.line_tracker.cli:commands"))
+                                  wheel_speeds=True))

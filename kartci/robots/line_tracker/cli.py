@@ -1,5 +1,5 @@
-"""The line tracker's own commands (`RobotKind.cli`): `kartci characterise`, its sensor
-characterisation, and `kartci study`, the seed's study figures from its grid runs."""
+"""The line tracker's own commands (entry points `kartci.commands`): `kartci characterise`,
+its sensor characterisation, and `kartci study`, the seed's study figures from its grid runs."""
 
 from __future__ import annotations
 
@@ -14,11 +14,6 @@ from kartci.commandline import AllowOutsideOpt, OutOpt, SetOpt, out_console, out
 from kartci.errors import SpecError
 
 app = typer.Typer(rich_markup_mode=None)  # help shown as written, as kartci's own commands
-
-
-def commands() -> typer.Typer:
-    """What the line tracker's `RobotKind.cli` gives kartci's command line."""
-    return app
 
 
 @app.command()
