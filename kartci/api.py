@@ -13,7 +13,9 @@ print(result.table())
 it, judge it against the baseline and the scenario's criteria) and returns a `RunResult`
 instead of writing reports and an exit code. Agents may be handed in as objects
 (`agents={"kart0": MyController()}`) for a test of your own controller; see `kartci.Agent`.
-For a run you step yourself, see `kartci.Session`.
+`kartci.compare(base, head)` judges one run against another, `kartci.accept_baselines(result)`
+stores a run as its scenario's baseline (`kartci baseline update`). For a run you step
+yourself, see `kartci.Session`.
 """
 
 from __future__ import annotations
@@ -21,14 +23,19 @@ from __future__ import annotations
 import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from kartci import project
 from kartci.core import RunFolder
+from kartci.errors import SpecError
 from kartci.scenario.load import load_scenario as _load
 from kartci.scenario.load import with_overrides
 from kartci.scenario.models import Scenario
 from kartci.verdict import RunResult, read_baseline
 from kartci.verdict.judging import Stale, judge_folder
+
+if TYPE_CHECKING:
+    from kartci.app.accept import Accepted
 
 
 def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
@@ -101,4 +108,78 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     return judge_folder(RunFolder(folder), spec, baseline, Stale.SKIP)
 
 
-__all__ = ["RunResult", "load_scenario", "run"]
+def compare(base: RunResult, head: RunResult, *,
+            baselines: str | Path | None = None) -> RunResult:
+    """Judge one run against another, metric by metric: what to do when a run has no comparable
+    baseline (other overrides, an agent object), as `kartci compare BASE_OUT HEAD_OUT` does.
+
+    ```python
+    base = kartci.run("line_straight", overrides=QUICK)
+    head = kartci.run("line_straight", overrides=[*QUICK, "agents.lt0.controller.kp=80"])
+    print(kartci.compare(base, head).table())
+    ```
+
+    Args:
+        base: The run judged against (its metrics play the baseline).
+        head: The run judged.
+        baselines: Folder of baseline files whose hand-set tolerances and directions apply
+            (head's scenario's file, where it has the metric; else the metric's default).
+            Default: the project's.
+
+    Returns:
+        `head` with one verdict per metric (value: head's, baseline: base's), no criteria and
+        no warnings; `result.baseline` is base's metrics file.
+    """
+    # late, as in `run`: comparing loads the runner, which `import kartci.api` does not need
+    from kartci.app.compare import compare_results
+
+    return compare_results(base, head, None if baselines is None else Path(baselines))
+
+
+def accept_baselines(run: RunResult | str | Path, names: Sequence[str] = (), *,
+                     baselines: str | Path | None = None, replicas: int = 4,
+                     jobs: int = 1) -> list[Accepted]:
+    """Store runs as their scenarios' baselines: what `kartci baseline update` does (the same
+    function), from Python.
+
+    ```python
+    result = kartci.run("line_straight", out="reports/latest")
+    for accepted in kartci.accept_baselines(result):
+        print("\n".join(accepted.lines()))
+    ```
+
+    Args:
+        run: A result of `run` (its scenario is accepted), or an output folder of
+            `kartci run` / `run(out=...)`.
+        names: With a folder: the scenarios to accept (default: those of the last
+            `kartci run` there).
+        baselines: Folder the baseline files are written to. Default: the project's.
+        replicas: Conditioning replicas per scenario (the run itself and K-1 with every
+            robot's start moved k nm sideways; those missing are run now): each metric's
+            spread over them goes into the baseline. 0: record no spread (required for a run
+            driven by agent objects, which replicas cannot re-create).
+        jobs: Replicas run at once.
+
+    Returns:
+        Per scenario, what was written (`Accepted`: `changes`, `scenario_changes`, `lines()`,
+        `warnings` for ill-conditioned metrics).
+
+    Raises:
+        SpecError: A run that failed, did not finish, ran with unpinned kernels, or is not
+            there; nothing is written then, and no baseline is replaced.
+        BaselineError: An existing baseline file is malformed.
+    """
+    # late, as in `run`: accepting loads the runner, which `import kartci.api` does not need
+    from kartci.app.accept import accept
+
+    if isinstance(run, RunResult):
+        if names:
+            raise SpecError("accept_baselines: names go with an output folder, not a result")
+        out, names = run.folder.parent, (run.folder.name,)
+    else:
+        out = Path(run)
+    return accept(out, names, baselines=None if baselines is None else Path(baselines),
+                  replicas=replicas, jobs=jobs)
+
+
+__all__ = ["RunResult", "accept_baselines", "compare", "load_scenario", "run"]
