@@ -20,19 +20,14 @@ yourself, see `kartci.Session`.
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from kartci import project
-from kartci.core import RunFolder
 from kartci.errors import SpecError
 from kartci.scenario.load import load_scenario as _load
-from kartci.scenario.load import with_overrides
 from kartci.scenario.models import Scenario
-from kartci.verdict import RunResult, read_baseline
-from kartci.verdict.judging import Stale, judge_folder
+from kartci.verdict import RunResult
 
 if TYPE_CHECKING:
     from kartci.app.accept import Accepted
@@ -93,19 +88,11 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     """
     # late: the runner loads PyBullet and pandas, which `kartci.RunResult` and
     # `kartci.load_scenario` (this module) do not need
-    from kartci.runner.run import check_criteria_names, run_pinned
+    from kartci.app.run import run_scenario
 
-    if isinstance(scenario, Scenario):
-        spec = with_overrides(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
-    else:
-        spec = load_scenario(scenario, overrides, allow_outside_paths=allow_outside_paths)
-    check_criteria_names([spec])
-    root = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"kartci-{spec.name}-"))
-    folder = root / spec.name
-    run_pinned(spec, root, folder, agents)
-    base_dir = Path(baselines) if baselines is not None else project.current().baselines
-    baseline = read_baseline(base_dir / f"{spec.name}.json")
-    return judge_folder(RunFolder(folder), spec, baseline, Stale.SKIP)
+    return run_scenario(scenario, overrides, out=None if out is None else Path(out),
+                        agents=agents, baselines=None if baselines is None else Path(baselines),
+                        allow_outside_paths=allow_outside_paths)
 
 
 def compare(base: RunResult, head: RunResult, *,

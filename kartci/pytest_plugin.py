@@ -3,10 +3,12 @@
 - `pytest scenarios/` collects every kartci scenario file there as one test item, named after
   the file (`-k line_straight`), marked `kartci` and with the scenario's `tags:` as markers
   (`-m "not slow"`). The item runs the scenario into a temporary folder, judges it against the
-  project's baselines and fails with the verdict table when a metric regressed or a criterion
-  failed, as `kartci run` would exit 1. Scenario files are collected only under paths given on
-  the command line and in the project's own scenario folders (`[tool.kartci] scenarios`), and
-  only YAML with top-level `world:` and `agents:`: other YAML in a repository is left alone.
+  project's baselines as `kartci run` does (a baseline accepted from an earlier version of the
+  file is judged and called stale) and fails with the verdict table when a metric regressed or
+  a criterion failed, as `kartci run` would exit 1. Scenario files are collected only under
+  paths given on the command line and in the project's own scenario folders (`[tool.kartci]
+  scenarios`), and only YAML with top-level `world:` and `agents:`: other YAML in a repository
+  is left alone.
 - The `kartci_run` fixture runs a scenario with overrides (and agent objects) for a test of
   your own: `result = kartci_run("line_straight", "duration_s=3")` returns a
   `kartci.RunResult`.
@@ -181,13 +183,19 @@ class ScenarioItem(pytest.Item):
         """Run the scenario; raise `ScenarioFailedError` when it does not pass. With
         `--kartci-accept`, store the run as the scenario's baseline first and fail on its
         criteria only."""
-        from kartci import api  # late: the simulator, only when a scenario item runs
+        # late, these three: kartci (pydantic, the simulator) only when a scenario item runs
+        from kartci.app.accept import accept
+        from kartci.app.run import run_scenario
+        from kartci.verdict.judging import Stale
 
         given = self.config.getoption("kartci_baselines")
-        result = api.run(self.path, out=self._out(), baselines=given)
+        baselines = None if given is None else Path(given)
+        # the file as written, judged as `kartci run` judges it: a baseline accepted from an
+        # earlier version of the scenario is stale (a warning), not "not comparable"
+        result = run_scenario(self.path, out=self._out(), baselines=baselines, stale=Stale.WARN)
         self.user_properties.append(("kartci_log", str(result.log)))
         if self.config.getoption("kartci_accept"):
-            [accepted] = api.accept_baselines(result, baselines=given)
+            [accepted] = accept(result.folder.parent, [result.folder.name], baselines=baselines)
             text = "\n".join([*accepted.lines(), *(f"warning: {w}" for w in accepted.warnings)])
             self.user_properties.append((ACCEPTED, text))
             if not all(c.ok for c in result.criteria):

@@ -50,13 +50,7 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
     values = folder.read_metrics()
     record = folder.read_run_record()
     replaced = {str(k): str(v) for k, v in (record.get("replaced_agents") or {}).items()}
-    check = None if baseline is None else fingerprint.check(
-        baseline.doc, fingerprint.fields(scenario, replaced))
-    notes: list[str] = []
-    if check is not None and check.freshness is fingerprint.Freshness.STALE and (
-            stale is Stale.SKIP):
-        assert baseline is not None
-        notes, baseline, check = [not_comparable(baseline, check)], None, None
+    baseline, check, notes = _comparable(baseline, fingerprint.fields(scenario, replaced), stale)
     verdicts, doubts, strict = trusted(compare(values, None if baseline is None
                                                else baseline.metrics), baseline, check)
     platform = record.get("platform") or {}
@@ -72,6 +66,18 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
         strict_warnings=tuple(one_line(w) for w in strict), scenario=scenario,
         folder=folder.path, metrics=read_all_metrics(folder),
         baseline=None if baseline is None else baseline.path)
+
+
+def _comparable(baseline: Baseline | None, fields: Mapping[str, Any], stale: Stale
+                ) -> tuple[Baseline | None, fingerprint.Check | None, list[str]]:
+    """The baseline to judge against (None: none, or not comparable), its recorded scenario
+    checked against `fields` (the scenario that ran), and why it is not compared."""
+    if baseline is None:
+        return None, None, []
+    check = fingerprint.check(baseline.doc, fields)
+    if check.freshness is fingerprint.Freshness.STALE and stale is Stale.SKIP:
+        return None, None, [not_comparable(baseline, check)]
+    return baseline, check, []
 
 
 def not_comparable(baseline: Baseline, check: fingerprint.Check) -> str:

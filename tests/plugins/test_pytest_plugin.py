@@ -132,6 +132,11 @@ def test_kartci_accept_stores_each_scenario_items_baseline(project: pytest.Pytes
     result.assert_outcomes(passed=1)
     result.stdout.fnmatch_lines(["scenario line_straight: pass", "*completion*1*pass*"])
     assert "kartci baselines accepted" not in result.stdout.str()
+    # the file edited since: judged as `kartci run` judges it, the baseline called stale
+    (project.path / "scenarios" / "line_straight.yaml").write_text(_scenario(duration_s=3.5))
+    result = project.runpytest(*PLUGIN, "scenarios/", "-rA")
+    result.stdout.fnmatch_lines(["warning: baseline is stale: scenario changed since it was "
+                                 "accepted (fields: duration_s)*"])
 
 
 TEST_MINE = '''
