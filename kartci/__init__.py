@@ -4,6 +4,8 @@ The Python API, for a team's own scripts and tests:
 
 - `run(scenario, overrides=..., agents=...)`: simulate, record, score and judge one scenario;
   returns a `RunResult` (metrics with units, verdicts against the baseline, criteria, log).
+- `compare(base, head)`: one run judged against another (when no baseline is comparable).
+- `accept_baselines(result_or_out)`: store runs as baselines, as `kartci baseline update`.
 - `load_scenario(name_or_path, overrides)`: a validated `Scenario`.
 - `Session(scenario, log_path, agents)`: a run you step yourself (`reset()`, `step()`).
 - `Agent`: the protocol a controller satisfies (messages in, messages out).
@@ -27,7 +29,7 @@ if TYPE_CHECKING:
     from typing import Any
 
     from kartci import plugins
-    from kartci.api import RunResult, load_scenario, run
+    from kartci.api import RunResult, accept_baselines, compare, load_scenario, run
     from kartci.core import Agent, Direction, Metric
     from kartci.scenario.models import Scenario
     from kartci.sim.session import RunInfo, Session, StepResult
@@ -46,6 +48,8 @@ _LAZY = {
     "Session": "kartci.sim.session",
     "Status": "kartci.verdict",
     "StepResult": "kartci.sim.session",
+    "accept_baselines": "kartci.api",
+    "compare": "kartci.api",
     "load_scenario": "kartci.api",
     "run": "kartci.api",
 }
@@ -67,6 +71,8 @@ __all__ = [
     "SpecError",
     "Status",
     "StepResult",
+    "accept_baselines",
+    "compare",
     "load_scenario",
     "plugins",
     "run",

@@ -13,23 +13,24 @@ print(result.table())
 it, judge it against the baseline and the scenario's criteria) and returns a `RunResult`
 instead of writing reports and an exit code. Agents may be handed in as objects
 (`agents={"kart0": MyController()}`) for a test of your own controller; see `kartci.Agent`.
-For a run you step yourself, see `kartci.Session`.
+`kartci.compare(base, head)` judges one run against another, `kartci.accept_baselines(result)`
+stores a run as its scenario's baseline (`kartci baseline update`). For a run you step
+yourself, see `kartci.Session`.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from kartci.core.runfolder import RunFolder
+from kartci.errors import SpecError
+from kartci.scenario.load import load_scenario as _load
+from kartci.scenario.models import Scenario
+from kartci.verdict import RunResult
 
 if TYPE_CHECKING:
-    from kartci.core import Metric
-    from kartci.scenario.models import Scenario
-    from kartci.verdict import CriterionResult, MetricVerdict, Status
+    from kartci.app.accept import Accepted
 
 
 def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
@@ -51,120 +52,7 @@ def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
         SpecError: The file is missing or malformed, or a value is bad; the message names the
             file, the key and what was expected.
     """
-    from kartci.scenario.load import load_scenario as load
-
-    return load(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
-
-
-@dataclass(frozen=True)
-class RunResult:
-    """One run of one scenario: its metrics, their verdicts and where its log is.
-
-    Attributes:
-        scenario: The scenario as run (overrides applied).
-        folder: The run's folder: `run.mcap`, `metrics.json`, `run.json`.
-        metrics: Every metric by name (`agent.name` when the scenario has several agents),
-            each with its value (NaN where it cannot be computed) and unit; values are
-            rounded to 10 significant digits, as stored and judged.
-        verdicts: Each deterministic metric judged against the baseline (status `new` for a
-            metric, or a scenario, without one).
-        criteria: The scenario's pass criteria, each checked.
-        baseline: The baseline file judged against; None when the scenario has none.
-        sim_time_s: Sim time the run reached, s.
-        wall_s: Wall-clock time of the simulation and scoring, s.
-        messages: Messages recorded in the log.
-        finished_course: True when every robot finished its course before the duration ran out.
-        replaced_agents: Agents driven by an object handed in, by name: the object's class.
-        warnings: Worth a reader's attention, not failures: a baseline made on another
-            platform or from another scenario (stale), a tolerance loosened beyond the policy,
-            an ill-conditioned metric, a run in a process that is not pinned.
-    """
-
-    scenario: Scenario
-    folder: Path
-    metrics: Mapping[str, Metric]
-    verdicts: tuple[MetricVerdict, ...]
-    criteria: tuple[CriterionResult, ...]
-    baseline: Path | None
-    sim_time_s: float
-    wall_s: float
-    messages: int
-    finished_course: bool
-    replaced_agents: Mapping[str, str] = field(default_factory=dict)
-    warnings: tuple[str, ...] = ()
-
-    @property
-    def name(self) -> str:
-        """The scenario's name."""
-        return self.scenario.name
-
-    @property
-    def log(self) -> Path:
-        """The run's MCAP log (opens in Foxglove, plays with `ros2 bag play`)."""
-        return RunFolder(self.folder).log
-
-    @property
-    def status(self) -> Status:
-        """The worst of the verdicts and criteria (`failed` for an unmet criterion)."""
-        from kartci.verdict import Status, worst
-
-        statuses = [v.status for v in self.verdicts]
-        statuses += [Status.FAILED for c in self.criteria if not c.ok]
-        return worst(statuses)
-
-    @property
-    def passed(self) -> bool:
-        """True unless a metric regressed or went missing or a criterion failed (the CLI's
-        exit code 0)."""
-        return not self.status.bad
-
-    def value(self, name: str) -> float:
-        """A metric's value by name (NaN where it cannot be computed).
-
-        Raises:
-            KeyError: No such metric in this run; the message lists those there are.
-        """
-        metric = self.metrics.get(name)
-        if metric is None:
-            from kartci.project import did_you_mean
-
-            raise KeyError(f"no metric '{name}' in run {self.name}"
-                           f"{did_you_mean(name, self.metrics)}")
-        return metric.value
-
-    def table(self) -> str:
-        """The verdicts and criteria as a plain-text table (what a failing test shows)."""
-        rows = [("metric", "value", "baseline", "delta", "tolerance", "verdict")]
-        for v in self.verdicts:
-            d = v.delta
-            rows.append((v.name, _num(v.value, v.unit), _num(v.baseline, v.unit),
-                         "-" if d is None else f"{d:+.3g}",
-                         "-" if v.tolerance is None else
-                         f"±{v.tolerance:.3g} ({v.direction.value})", v.status.value))
-        for c in self.criteria:
-            rows.append((f"criterion {c.name}", _num(c.value, ""), c.bound, "", "",
-                         "pass" if c.ok else "FAILED"))
-        widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
-        lines = [f"scenario {self.name}: {self.status.value}"
-                 + ("" if self.baseline else " (no baseline)")]
-        lines += ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip()
-                  for r in rows]
-        lines += [f"agent {a}: controller replaced by {cls}"
-                  for a, cls in sorted(self.replaced_agents.items())]
-        lines += [f"warning: {w}" for w in self.warnings]
-        lines.append(f"log: {self.log}")
-        return "\n".join(lines)
-
-    def __str__(self) -> str:
-        """The verdict table."""
-        return self.table()
-
-
-def _num(x: float | None, unit: str) -> str:
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return "-"
-    text = f"{x:.4g}"
-    return f"{text} {unit}".strip() if unit and unit not in ("bool", "fraction") else text
+    return _load(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
 
 
 def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
@@ -186,7 +74,10 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
         allow_outside_paths: As for `load_scenario`.
 
     Returns:
-        The run's metrics, verdicts and criteria (`result.passed`, `result.table()`).
+        The run's metrics, verdicts and criteria (`result.passed`, `result.table()`). A
+        baseline accepted from another scenario than this run's (other overrides, an agent
+        object: the scenario hash it records differs) is not compared: every verdict is `new`,
+        `result.baseline` is None and `result.warnings` says "no comparable baseline".
 
     Raises:
         SpecError: Bad input (the scenario, an override, an agent object, criteria on
@@ -195,63 +86,87 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
         KartciError: Any other problem kartci reports; an exception raised by an agent object
             (your controller) propagates unchanged.
     """
-    import tempfile
-    import time
+    # late: the runner loads PyBullet and pandas, which `kartci.RunResult` and
+    # `kartci.load_scenario` (this module) do not need
+    from kartci.app.run import run_scenario
 
-    from kartci import portable, project
-    from kartci.runner.run import check_criteria_names, run_pinned, trusted
-    from kartci.scenario.load import with_overrides
-    from kartci.scenario.models import Scenario
-    from kartci.verdict import (
-        check_criteria,
-        compare,
-        ill_conditioned,
-        load,
-        made_where,
-        read_json,
-    )
+    return run_scenario(scenario, overrides, out=None if out is None else Path(out),
+                        agents=agents, baselines=None if baselines is None else Path(baselines),
+                        allow_outside_paths=allow_outside_paths)
 
-    if isinstance(scenario, Scenario):
-        spec = with_overrides(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
+
+def compare(base: RunResult, head: RunResult, *,
+            baselines: str | Path | None = None) -> RunResult:
+    """Judge one run against another, metric by metric: what to do when a run has no comparable
+    baseline (other overrides, an agent object), as `kartci compare BASE_OUT HEAD_OUT` does.
+
+    ```python
+    base = kartci.run("line_straight", overrides=QUICK)
+    head = kartci.run("line_straight", overrides=[*QUICK, "agents.lt0.controller.kp=80"])
+    print(kartci.compare(base, head).table())
+    ```
+
+    Args:
+        base: The run judged against (its metrics play the baseline).
+        head: The run judged.
+        baselines: Folder of baseline files whose hand-set tolerances and directions apply
+            (head's scenario's file, where it has the metric; else the metric's default).
+            Default: the project's.
+
+    Returns:
+        `head` with one verdict per metric (value: head's, baseline: base's), no criteria and
+        no warnings; `result.baseline` is base's metrics file.
+    """
+    # late, as in `run`: comparing loads the runner, which `import kartci.api` does not need
+    from kartci.app.compare import compare_results
+
+    return compare_results(base, head, None if baselines is None else Path(baselines))
+
+
+def accept_baselines(run: RunResult | str | Path, names: Sequence[str] = (), *,
+                     baselines: str | Path | None = None, replicas: int = 4,
+                     jobs: int = 1) -> list[Accepted]:
+    """Store runs as their scenarios' baselines: what `kartci baseline update` does (the same
+    function), from Python.
+
+    ```python
+    result = kartci.run("line_straight", out="reports/latest")
+    for accepted in kartci.accept_baselines(result):
+        print("\n".join(accepted.lines()))
+    ```
+
+    Args:
+        run: A result of `run` (its scenario is accepted), or an output folder of
+            `kartci run` / `run(out=...)`.
+        names: With a folder: the scenarios to accept (default: those of the last
+            `kartci run` there).
+        baselines: Folder the baseline files are written to. Default: the project's.
+        replicas: Conditioning replicas per scenario (the run itself and K-1 with every
+            robot's start moved k nm sideways; those missing are run now): each metric's
+            spread over them goes into the baseline. 0: record no spread (required for a run
+            driven by agent objects, which replicas cannot re-create).
+        jobs: Replicas run at once.
+
+    Returns:
+        Per scenario, what was written (`Accepted`: `changes`, `scenario_changes`, `lines()`,
+        `warnings` for ill-conditioned metrics).
+
+    Raises:
+        SpecError: A run that failed, did not finish, ran with unpinned kernels, or is not
+            there; nothing is written then, and no baseline is replaced.
+        BaselineError: An existing baseline file is malformed.
+    """
+    # late, as in `run`: accepting loads the runner, which `import kartci.api` does not need
+    from kartci.app.accept import accept
+
+    if isinstance(run, RunResult):
+        if names:
+            raise SpecError("accept_baselines: names go with an output folder, not a result")
+        out, names = run.folder.parent, (run.folder.name,)
     else:
-        spec = load_scenario(scenario, overrides, allow_outside_paths=allow_outside_paths)
-    check_criteria_names([spec])
-    root = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"kartci-{spec.name}-"))
-    folder = root / spec.name
-    t0 = time.perf_counter()
-    facts = run_pinned(spec, root, folder, agents)
-    wall = time.perf_counter() - t0
-    doc = read_json(RunFolder(folder).metrics)
-    values = RunFolder(folder).read_metrics()
-    base_dir = Path(baselines) if baselines is not None else project.current().baselines
-    base_file = base_dir / f"{spec.name}.json"
-    baseline = load(base_file)
-    verdicts, doubts, _ = trusted(compare(values, baseline), baseline, spec, base_file)
-    crit = check_criteria(values, spec.criteria)
-    note = portable.mismatch(made_where(base_file).get("platform"), facts.get("platform", {}))
-    unpinned = facts.get("platform", {}).get("simd") == portable.Pin.UNPINNED.value
-    warnings = ([note] if note else []) + ill_conditioned(verdicts) + (
-        ["this Python process was not started pinned (numpy or the process came before "
-         "`import kartci`) and agent objects run here: last bits may differ from `kartci run`; "
-         "see kartci.portable"] if unpinned else []) + doubts
-    return RunResult(
-        scenario=spec, folder=folder,
-        metrics={name: _metric(name, m)
-                 for part in ("metrics", "timing") for name, m in doc.get(part, {}).items()},
-        verdicts=tuple(verdicts), criteria=tuple(crit),
-        baseline=base_file if base_file.exists() else None,
-        sim_time_s=float(facts["sim_time_s"]), wall_s=wall, messages=int(facts["messages"]),
-        finished_course=bool(facts["finished_course"]),
-        replaced_agents=dict(facts.get("replaced_agents", {})), warnings=tuple(warnings))
+        out = Path(run)
+    return accept(out, names, baselines=None if baselines is None else Path(baselines),
+                  replicas=replicas, jobs=jobs)
 
 
-def _metric(name: str, entry: dict[str, Any]) -> Metric:
-    from kartci.core import Metric
-
-    value = entry.get("value")
-    extra = {k: v for k, v in entry.items() if k not in ("value", "unit")}
-    return Metric(name, math.nan if value is None else float(value), str(entry.get("unit", "")),
-                  extra)
-
-
-__all__ = ["RunResult", "load_scenario", "run"]
+__all__ = ["RunResult", "accept_baselines", "compare", "load_scenario", "run"]

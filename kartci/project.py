@@ -116,12 +116,12 @@ class Project:
         try:
             real = path.resolve()
         except (OSError, RuntimeError, ValueError) as err:  # a loop, a long name, a NUL
-            raise SpecError(f"{what}: {_shown(path)}: cannot be resolved ({err})") from err
+            raise SpecError(f"{what}: {shown(path)}: cannot be resolved ({err})") from err
         if allow_outside or any(real.is_relative_to(root) for root in self.data_roots):
             return real
         plain = str(real) == os.path.normpath(path.absolute())  # only `..` and `.` in it
-        link = "" if plain else f" (a link to {_shown(real)})"
-        raise SpecError(f"{what}: {_shown(path)}{link} is outside the project and kartci's data "
+        link = "" if plain else f" (a link to {shown(real)})"
+        raise SpecError(f"{what}: {shown(path)}{link} is outside the project and kartci's data "
                         "(pass --allow-outside-paths to use it)")
 
     def own_scenarios(self) -> list[Path]:
@@ -144,8 +144,8 @@ class Project:
         known = self.all_scenarios()
         if name in known:
             return known[name]
-        shown = name if len(name) <= 80 else name[:77] + "..."
-        raise SpecError(f"unknown scenario '{shown}'{did_you_mean(name, known)}; "
+        short = name if len(name) <= 80 else name[:77] + "..."
+        raise SpecError(f"unknown scenario '{short}'{did_you_mean(name, known)}; "
                         "see `kartci list`")
 
     def find_world(self, name: str, allow_outside: bool = False) -> Path:
@@ -184,8 +184,9 @@ class Project:
         raise SpecError(f"{what} not found (searched {where})")
 
 
-def _shown(path: Path, limit_chars: int = 200) -> str:
-    """A path for a message: one printable line, cut (a `--set` path may be 64 KB)."""
+def shown(path: Path, limit_chars: int = 200) -> str:
+    """A path for a message: one printable line (non-printable characters escaped), cut to
+    `limit_chars` (a world or model name from a `--set`, up to 64 KB, becomes part of a path)."""
     text = str(path) if str(path).isprintable() else repr(str(path))[1:-1]
     return text if len(text) <= limit_chars else text[: limit_chars - 1] + "…"
 
@@ -213,8 +214,8 @@ def did_you_mean(name: str, known: object) -> str:
     close = difflib.get_close_matches(name, names, n=1)
     if close:
         return f" (did you mean '{close[0]}'?)"
-    shown = ", ".join(names[:20]) + (", ..." if len(names) > 20 else "")
-    return f" (known: {shown or 'none'})"
+    listed = ", ".join(names[:20]) + (", ..." if len(names) > 20 else "")
+    return f" (known: {listed or 'none'})"
 
 
 def _config_in(folder: Path) -> tuple[Path, dict[str, object]] | None:

@@ -3,17 +3,30 @@
 - `pytest scenarios/` collects every kartci scenario file there as one test item, named after
   the file (`-k line_straight`), marked `kartci` and with the scenario's `tags:` as markers
   (`-m "not slow"`). The item runs the scenario into a temporary folder, judges it against the
-  project's baselines and fails with the verdict table when a metric regressed or a criterion
-  failed, as `kartci run` would exit 1. Scenario files are collected only under paths given on
-  the command line and in the project's own scenario folders (`[tool.kartci] scenarios`), and
-  only YAML with top-level `world:` and `agents:`: other YAML in a repository is left alone.
+  project's baselines as `kartci run` does (a baseline accepted from an earlier version of the
+  file is judged and called stale) and fails with the verdict table when a metric regressed or
+  a criterion failed, as `kartci run` would exit 1. Scenario files are collected only under
+  paths given on the command line and in the project's own scenario folders (`[tool.kartci]
+  scenarios`), and only YAML with top-level `world:` and `agents:`: other YAML in a repository
+  is left alone.
 - The `kartci_run` fixture runs a scenario with overrides (and agent objects) for a test of
   your own: `result = kartci_run("line_straight", "duration_s=3")` returns a
   `kartci.RunResult`.
 
 Options: `--kartci-out DIR` keeps the scenario items' runs in DIR/<scenario>/ (default: pytest's
 temporary folders), `--kartci-baselines DIR` judges them against DIR (default: the project's
-baselines). Works with pytest-xdist (`-n 2`): every run has its own folder.
+baselines), `--kartci-accept` stores each scenario item's run as its scenario's baseline instead
+of judging it (`kartci.app.accept`, the function behind `kartci baseline update`; its criteria
+still apply) and lists what changed at the end of the session. Works with pytest-xdist (`-n 2`):
+every run has its own folder.
+
+Accepting is an option on the scenario items, not a method of the `kartci_run` fixture: it is a
+decision about the scenario files as written, taken for a whole session as `kartci baseline
+update` is after `kartci run`; a test's own runs carry overrides and agent objects, so they are
+not the scenario's (a test that means to accept one calls `kartci.accept_baselines(result)`).
+
+The plugin loads in every pytest session of an environment with kartci installed, so kartci
+itself (pydantic, the simulator) is imported inside the hooks that need it, not here.
 """
 
 from __future__ import annotations
@@ -35,10 +48,11 @@ if TYPE_CHECKING:
 
 SCENARIO_KEYS = re.compile(r"^(world|agents)\s*:", re.MULTILINE)
 _ROOTS = pytest.StashKey[tuple[Path, ...]]()
+ACCEPTED = "kartci_accepted"  # user property: what --kartci-accept wrote, for the summary
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    """`--kartci-out` and `--kartci-baselines`."""
+    """`--kartci-out`, `--kartci-baselines` and `--kartci-accept`."""
     group = parser.getgroup("kartci", "kartci scenarios")
     group.addoption("--kartci-out", metavar="DIR", default=None,
                     help="keep the scenario items' runs in DIR/<scenario>/ (default: pytest's "
@@ -46,11 +60,26 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group.addoption("--kartci-baselines", metavar="DIR", default=None,
                     help="judge scenario items against the baselines in DIR (default: the "
                          "project's baselines folder)")
+    group.addoption("--kartci-accept", action="store_true", default=False,
+                    help="store each scenario item's run as its baseline (as `kartci baseline "
+                         "update`) instead of judging it; criteria still apply")
 
 
 def pytest_configure(config: pytest.Config) -> None:
     """Register the `kartci` marker every scenario item carries."""
     config.addinivalue_line("markers", "kartci: a kartci scenario file run as a test")
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """With `--kartci-accept`: what each scenario item wrote into its baseline (the reports
+    carry it, so xdist workers' items are listed too)."""
+    texts = [value for reports in terminalreporter.stats.values() for r in reports
+             if getattr(r, "when", None) == "call"
+             for name, value in getattr(r, "user_properties", ()) if name == ACCEPTED]
+    if texts:
+        terminalreporter.write_sep("-", "kartci baselines accepted")
+        for text in texts:
+            terminalreporter.write_line(str(text))
 
 
 def _roots(config: pytest.Config) -> tuple[Path, ...]:
@@ -65,7 +94,7 @@ def _roots(config: pytest.Config) -> tuple[Path, ...]:
         for arg in config.args:
             found.append((here / arg.split("::", 1)[0]).resolve())
     try:
-        from kartci import project
+        from kartci import project  # late: pydantic, once a session meets a YAML file
 
         found += [p.resolve() for p in project.current().scenarios]
     except KartciError:
@@ -99,7 +128,7 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> ScenarioFi
 def _tags(path: Path) -> list[str]:
     """The scenario's `tags:` as marker names (anything but letters, digits and _ becomes _);
     a file that does not parse has none (its item reports the problem when it runs)."""
-    from kartci.scenario.yamlio import read_yaml
+    from kartci.scenario.yamlio import read_yaml  # late: PyYAML, once a scenario file is found
 
     try:
         data = read_yaml(path)
@@ -151,13 +180,27 @@ class ScenarioItem(pytest.Item):
         return Path(tempfile.mkdtemp(prefix=f"kartci-{self.name}-"))
 
     def runtest(self) -> None:
-        """Run the scenario; raise `ScenarioFailedError` when it does not pass."""
-        from kartci import api, project
+        """Run the scenario; raise `ScenarioFailedError` when it does not pass. With
+        `--kartci-accept`, store the run as the scenario's baseline first and fail on its
+        criteria only."""
+        # late, these three: kartci (pydantic, the simulator) only when a scenario item runs
+        from kartci.app.accept import accept
+        from kartci.app.run import run_scenario
+        from kartci.verdict.judging import Stale
 
         given = self.config.getoption("kartci_baselines")
-        baselines = Path(given) if given else project.current().baselines
-        result = api.run(self.path, out=self._out(), baselines=baselines)
+        baselines = None if given is None else Path(given)
+        # the file as written, judged as `kartci run` judges it: a baseline accepted from an
+        # earlier version of the scenario is stale (a warning), not "not comparable"
+        result = run_scenario(self.path, out=self._out(), baselines=baselines, stale=Stale.WARN)
         self.user_properties.append(("kartci_log", str(result.log)))
+        if self.config.getoption("kartci_accept"):
+            [accepted] = accept(result.folder.parent, [result.folder.name], baselines=baselines)
+            text = "\n".join([*accepted.lines(), *(f"warning: {w}" for w in accepted.warnings)])
+            self.user_properties.append((ACCEPTED, text))
+            if not all(c.ok for c in result.criteria):
+                raise ScenarioFailedError(result)
+            return
         if not result.passed:
             raise ScenarioFailedError(result)  # the table is the failure text
         self.add_report_section("call", "kartci", result.table())  # shown with -rP
@@ -192,7 +235,7 @@ def kartci_run(tmp_path: Path) -> KartciRun:
     """Run a scenario for your own asserts: `kartci_run("line_straight", "duration_s=3",
     agents={"lt0": MyController()})` returns a `kartci.RunResult`. Each call runs into its own
     folder under the test's `tmp_path`; baselines default to the project's."""
-    from kartci import api
+    from kartci import api  # late: the simulator, only when a test asks for the fixture
 
     calls = 0
 

@@ -33,19 +33,8 @@ from kartci.scenario import Scenario
 from kartci.scenario.models import LogSource
 from kartci.sim import simulate
 from kartci.sim.session import describe
-from kartci.verdict import (
-    MetricVerdict,
-    check_criteria,
-    compare,
-    fingerprint,
-    ill_conditioned,
-    load,
-    loosened,
-    made_where,
-    police,
-    read_json,
-    write_json_atomic,
-)
+from kartci.verdict import Baseline, read_baseline, write_json_atomic
+from kartci.verdict.judging import judge_folder
 from kartci.verdict.result import ScenarioResult, one_line
 from kartci.verdict.trace import load_trace, trace_path
 
@@ -258,12 +247,12 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
     if reason is not None:
         return ScenarioResult(name, "", error=reason)
     try:
-        baseline = load(baselines / f"{name}.json")
+        baseline = read_baseline(baselines / f"{name}.json")
         reference = load_trace(trace_path(baselines, name)) if with_plots else {}
     except KartciError as err:
         return ScenarioResult(name, "", error=str(err))
     try:
-        return _judge(folder, baseline, baselines, with_plots, reference)
+        return _judge(folder, baseline, with_plots, reference)
     except Exception as err:  # this scenario only: the others are still judged
         error = str(err) if isinstance(err, KartciError) else (
             f"cannot judge {name}: {type(err).__name__}: {err}")
@@ -272,49 +261,14 @@ def evaluate(folder: Path, baselines: Path, with_plots: bool = True) -> Scenario
         return ScenarioResult(name, "", error=one_line(error))
 
 
-def _judge(folder: Path, baseline: dict[str, dict[str, Any]] | None, baselines: Path,
-           with_plots: bool, reference: dict[str, pd.DataFrame]) -> ScenarioResult:
+def _judge(folder: Path, baseline: Baseline | None, with_plots: bool,
+           reference: dict[str, pd.DataFrame]) -> ScenarioResult:
     scenario, _ = _recorded(folder)
-    values = RunFolder(folder).read_metrics()
-    verdicts, doubts, strict = trusted(compare(values, baseline), baseline, scenario,
-                                       baselines / f"{folder.name}.json")
-    crit = check_criteria(values, scenario.criteria)
-    run = RunFolder(folder).read_run_record()
-    warnings = [str(w) for w in run.get("warnings") or [] if isinstance(w, str)]
-    made = made_where(baselines / f"{folder.name}.json").get("platform")
-    note = portable.mismatch(made, run.get("platform") or {}) if made else None
-    warnings += [note] if note else []
-    warnings += ill_conditioned(verdicts)
+    result = judge_folder(RunFolder(folder), scenario, baseline)
     drawn = plots(folder, scenario) if with_plots else None
     if drawn is not None:
         drawn = replace(drawn, reference=reference)
-    return ScenarioResult(folder.name, scenario.description, verdicts, crit, None, run, drawn,
-                          warnings=tuple(one_line(w) for w in [*warnings, *doubts]),
-                          strict_warnings=tuple(one_line(w) for w in strict))
-
-
-def trusted(verdicts: list[MetricVerdict], baseline: dict[str, dict[str, Any]] | None,
-            scenario: Scenario, path: Path) -> tuple[list[MetricVerdict], list[str], list[str]]:
-    """How far the baseline at `path` can be trusted for a run of `scenario`: the verdicts with
-    each stored tolerance checked against the policy bound, the warnings a reader must see, and
-    those of them a strict run fails on (a stale baseline, a loosened tolerance not allowed by
-    the project's configuration)."""
-    if baseline is None:
-        return verdicts, [], []
-    proj, label = project.current(), path.stem
-    allowed = dict(proj.allow_loose_tolerances)  # "scenario:metric" -> reason
-    verdicts = police(verdicts, baseline, proj.loosen_factor,
-                      {name for name in baseline if f"{label}:{name}" in allowed})
-    loose = loosened(verdicts, label, proj.loosen_factor)
-    try:
-        doc = read_json(path)
-    except (OSError, ValueError, UnicodeDecodeError):  # load() read it a moment ago
-        doc = None
-    check = fingerprint.check(doc, fingerprint.fields(scenario))
-    note = check.message(path)
-    stale = [] if note is None else [note]
-    strict = [*(stale if check.freshness is fingerprint.Freshness.STALE else []), *loose]
-    return verdicts, [*stale, *loose], strict
+    return replace(result, plots=drawn)
 
 
 def recorded_scenario(folder: Path) -> Scenario:

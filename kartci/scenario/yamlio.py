@@ -21,6 +21,7 @@ from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from kartci.boundedio import RefusedFileError, read_bytes, size_text
 from kartci.errors import SpecError
+from kartci.project import shown
 
 SPEC_MAX_BYTES = 1 << 20  # a scenario, world or model file; the real ones are 2 KB or less
 OVERRIDE_MAX_BYTES = 64 << 10  # one `--set` value
@@ -35,15 +36,6 @@ def clip(text: str, limit_chars: int = PROBLEM_MAX_CHARS) -> str:
     """`text` on one line, cut to `limit_chars` (cut first, so a huge text costs nothing)."""
     one = " ".join(text[: limit_chars + 1].split())
     return one if len(one) <= limit_chars else one[: limit_chars - 1] + "…"
-
-
-def shown(path: Path, limit_chars: int = 300) -> str:
-    """A path for a message: non-printable characters escaped, cut to `limit_chars` (a world
-    or model name from a `--set` becomes part of a path)."""
-    text = str(path)
-    if not text.isprintable():
-        text = repr(text)[1:-1]
-    return text if len(text) <= limit_chars else text[: limit_chars - 1] + "…"
 
 
 def read_bytes_bounded(path: Path, limit_bytes: int) -> bytes:

@@ -1,9 +1,10 @@
-"""Verdicts: baselines (load, compare, update), pass criteria, and the one result of a
-scenario."""
+"""Verdicts: baselines (read, compare, update), pass criteria, judging a run folder
+(`judging`), and the one result of a scenario (`ScenarioResult`, alias `RunResult`)."""
 
 from kartci.verdict.baseline import (
     SEVERITY,
     SPREAD_MULTIPLE,
+    Baseline,
     Change,
     Conditioning,
     CriterionResult,
@@ -15,17 +16,17 @@ from kartci.verdict.baseline import (
     ill_conditioned,
     load,
     loosened,
-    made_where,
     police,
+    read_baseline,
     read_json,
     spread,
     update,
     worst,
     write_json_atomic,
 )
-from kartci.verdict.result import ScenarioResult, exit_code, one_line
+from kartci.verdict.result import RunResult, ScenarioResult, exit_code, one_line
 
-__all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Change", "Conditioning", "CriterionResult",
-           "MetricVerdict", "Policy", "ScenarioResult", "Status", "check_criteria", "compare",
-           "exit_code", "ill_conditioned", "load", "loosened", "made_where", "one_line", "police",
-           "read_json", "spread", "update", "worst", "write_json_atomic"]
+__all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Baseline", "Change", "Conditioning", "CriterionResult",
+           "MetricVerdict", "Policy", "RunResult", "ScenarioResult", "Status", "check_criteria",
+           "compare", "exit_code", "ill_conditioned", "load", "loosened", "one_line", "police",
+           "read_baseline", "read_json", "spread", "update", "worst", "write_json_atomic"]

@@ -197,8 +197,24 @@ def definition(name: str) -> MetricDef | None:
     return registered(name)
 
 
-def load(path: Path) -> dict[str, dict[str, Any]] | None:
-    """The baseline's metrics by name, or None when there is no baseline file. A dangling
+@dataclass(frozen=True)
+class Baseline:
+    """A baseline file as read once: its checked metrics and the whole document, whose other
+    entries (where it was made, the scenario it was accepted from) judging reads too."""
+
+    path: Path
+    metrics: dict[str, dict[str, Any]]
+    doc: dict[str, Any]
+
+    @property
+    def made(self) -> dict[str, Any]:
+        """Where it was made (`platform`, `conditioning`); {} for none."""
+        return {k: self.doc[k] for k in ("platform", "conditioning")
+                if isinstance(self.doc.get(k), dict)}
+
+
+def read_baseline(path: Path) -> Baseline | None:
+    """The baseline at `path`, checked, or None when there is no baseline file. A dangling
     symlink is a broken baseline, not a missing one (that would pass everything as NEW)."""
     if not path.exists():
         if path.is_symlink():
@@ -224,7 +240,13 @@ def load(path: Path) -> dict[str, dict[str, Any]] | None:
     except (OSError, ValueError, UnicodeDecodeError) as err:
         why = err if isinstance(err, RefusedFileError) else f"malformed baseline ({err})"
         raise BaselineError(f"{path}: {why}") from None
-    return dict(metrics)
+    return Baseline(path, dict(metrics), data)
+
+
+def load(path: Path) -> dict[str, dict[str, Any]] | None:
+    """The baseline's metrics by name (`read_baseline`), or None when there is no file."""
+    baseline = read_baseline(path)
+    return None if baseline is None else baseline.metrics
 
 
 def judge(value: float | None, unit: str, name: str,
@@ -345,14 +367,3 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
                                         "scenario_fields": dict(fields)}
     write_json_atomic(path, {"scenario": scenario, **(made or {}), **record, "metrics": new})
     return changes
-
-
-def made_where(path: Path) -> dict[str, Any]:
-    """A baseline's record of where it was made (`platform`, `conditioning`); {} for none."""
-    try:
-        data = read_json(path)
-    except (OSError, ValueError, UnicodeDecodeError):
-        return {}
-    if not isinstance(data, dict):
-        return {}
-    return {k: data[k] for k in ("platform", "conditioning") if isinstance(data.get(k), dict)}

@@ -40,12 +40,13 @@ class Freshness(StrEnum):
     UNHASHED = "unhashed"  # accepted before baselines recorded their scenario: a warning
 
 
-def fields(scenario: Scenario) -> dict[str, Any]:
+def fields(scenario: Scenario, replaced: Mapping[str, str] | None = None) -> dict[str, Any]:
     """The scenario as `kartci show` prints it (world and model files inlined), flat, with data
     file paths relative to the world, model or scenario folder they were found in (else to the
     project, or `<kartci>/...` for kartci's data), so the same scenario gives the same fields on
     every machine and checkout, and when a data folder moves; the file's bytes are hashed
-    beside its path."""
+    beside its path. `replaced`: agents driven by an object handed to the Python API (agent
+    name -> class), as `replaced_agents.NAME`: their controller is not the scenario's."""
     proj = project.current()
     folders = (*proj.world_path, *proj.model_path, *proj.scenario_path)  # the most specific first
     roots = (*(("", f) for f in folders), ("", proj.root), ("<kartci>", project.BUILTIN))
@@ -55,6 +56,7 @@ def fields(scenario: Scenario) -> dict[str, Any]:
     files = {f"{k}#sha256": content_hash(Path(v)) for k, v in _flat_raw(dumped)
              if isinstance(v, str) and Path(v).is_absolute()}
     out.update({k: v for k, v in files.items() if v is not None})
+    out.update({f"replaced_agents.{name}": cls for name, cls in (replaced or {}).items()})
     return dict(sorted(out.items()))
 
 

@@ -117,6 +117,28 @@ def test_a_run_shorter_than_its_transient_fails_with_both_times(
                                  "3 s (duration_s 3 s)*"])
 
 
+def test_kartci_accept_stores_each_scenario_items_baseline(project: pytest.Pytester) -> None:
+    """`--kartci-accept` calls what `kartci baseline update` calls: conditioning replicas,
+    scenario hash, what changed listed once at the end; the next session is judged against it."""
+    result = project.runpytest(*PLUGIN, "--kartci-accept", "scenarios/")
+    result.assert_outcomes(passed=1)
+    result.stdout.fnmatch_lines(["*kartci baselines accepted*",
+                                 "line_straight: * of * metrics changed",
+                                 "  added    completion: — -> *",
+                                 "  worst-conditioned: *"])
+    stored = json.loads((project.path / "baselines" / "line_straight.json").read_text())
+    assert stored["conditioning"]["replicas"] == 4 and stored["scenario_hash"]
+    result = project.runpytest(*PLUGIN, "scenarios/", "-rP")
+    result.assert_outcomes(passed=1)
+    result.stdout.fnmatch_lines(["scenario line_straight: pass", "*completion*1*pass*"])
+    assert "kartci baselines accepted" not in result.stdout.str()
+    # the file edited since: judged as `kartci run` judges it, the baseline called stale
+    (project.path / "scenarios" / "line_straight.yaml").write_text(_scenario(duration_s=3.5))
+    result = project.runpytest(*PLUGIN, "scenarios/", "-rA")
+    result.stdout.fnmatch_lines(["warning: baseline is stale: scenario changed since it was "
+                                 "accepted (fields: duration_s)*"])
+
+
 TEST_MINE = '''
 from typing import Any
 
