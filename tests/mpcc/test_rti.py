@@ -22,7 +22,7 @@ from kartci.mpcc.cache import solver_key
 from kartci.mpcc.model import SingleTrack
 from kartci.mpcc.params import MpccController, MpccMethod, QpSolver
 from kartci.mpcc.rti import RtiStatus
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SIMS
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
@@ -73,7 +73,7 @@ def test_hpipm_solves_the_structured_qp_as_a_general_solver_does(
     same QP handed to OSQP as a plain sparse QP must give the same step."""
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
     spec = MpccController(method=MpccMethod.RTI, horizon_steps=8)
-    track = load_track(BUILTIN / "worlds" / "winti" / "track.csv")
+    track = load_track(BUILTIN_SIMS / "winti" / "track.csv")
     mpcc = Mpcc(spec, GokartModel(), track)
     assert mpcc.built.rti is not None and mpcc.built.compiled
     seen: list[dict[str, ca.DM]] = []
