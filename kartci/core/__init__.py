@@ -5,7 +5,9 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Direction`, `Metric`, `MetricDef`: a metric's value and its definition.
 - `Frozen` and the parameter bases (`ControllerParams`, `NodeParams`, `RobotParams`,
   `WorldParams`, `MetricParams`) that each plugin's own pydantic model extends.
-- `Controller`, `Node`, `RobotKind`, `WorldKind`, `MetricSet` and their registries.
+- `Controller`, `Node`, `RobotKind`, `WorldKind`, `MetricSet` and their registries;
+  `Registries`, the five passed explicitly to what validates a scenario
+  (`DEFAULT_REGISTRIES`: the process-wide ones).
 - `RunFolder`: the one owner of a run folder's file names.
 """
 
@@ -21,6 +23,7 @@ from kartci.core.params import (
 )
 from kartci.core.registry import (
     CONTROLLERS,
+    DEFAULT_REGISTRIES,
     METRICS,
     NODES,
     REGISTRIES,
@@ -31,6 +34,7 @@ from kartci.core.registry import (
     MetricSet,
     Node,
     PluginInfo,
+    Registries,
     Registry,
     RobotKind,
     WorldKind,
@@ -45,6 +49,7 @@ from kartci.core.runfolder import UNFINISHED, RunFolder
 
 __all__ = [
     "CONTROLLERS",
+    "DEFAULT_REGISTRIES",
     "METRICS",
     "NODES",
     "REGISTRIES",
@@ -65,6 +70,7 @@ __all__ = [
     "NodeParams",
     "Outbox",
     "PluginInfo",
+    "Registries",
     "Registry",
     "RobotKind",
     "RobotParams",

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from kartci import core
 from kartci.errors import SpecError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, open_log
 from kartci.logs.types import for_writing
@@ -21,6 +22,7 @@ from kartci.realdata.importer import _odom, import_log, imported_scenario
 from kartci.realdata.plant import Converter, Plant, as_recorded, diff_drive
 from kartci.realdata.profile import Profile
 from kartci.scenario import Scenario, load_scenario
+from kartci.scenario.dispatch import context
 
 DEFAULT_SCENARIO = {"gokart": "kart_simreal", "line_tracker": "diffdrive_simreal"}
 DIFF_DRIVE_KINDS = ("line_tracker",)  # robot kinds that take wheel speeds, not Twist
@@ -107,7 +109,7 @@ def _scenario(profile: Profile, drive: Drive, setup: SimSetup, window_s: float) 
     data["description"] = f"sim vs log: {setup.scenario.name} driven by {profile.name}'s commands"
     data["metrics"]["simreal"] = {"window_s": window_s, "scenario": setup.scenario.name,
                                   "overrides": list(setup.overrides)}
-    return Scenario.model_validate(data)
+    return Scenario.model_validate(data, context=context(core.DEFAULT_REGISTRIES))
 
 
 def _write(imported: Path, dst: Path, scenario: Scenario, agent: str, drive: Drive,
