@@ -4,8 +4,9 @@ kartci finds its project the way pytest finds its rootdir: the nearest folder, f
 directory up, holding a `kartci.toml` or a `pyproject.toml` with a `[tool.kartci]` table.
 `KARTCI_ROOT` names the folder directly. Without either, the working directory is the project
 (with the default folder names). Data files are looked up in the project's folders first, then
-in the built-in data shipped inside the package (`kartci/data/`), so an empty project can still
-run the built-in line tracker and go-kart.
+in kartci's built-in ones (`SHIPPED`: the `scenarios/`, `models/` and `sims/` of kartci's own
+repository, which is a kartci project like any team's, packaged into the wheel), so an empty
+project can still run the built-in line tracker and go-kart.
 """
 
 from __future__ import annotations
@@ -24,7 +25,21 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from kartci.boundedio import RefusedFileError, read_bytes
 from kartci.errors import SpecError
 
-BUILTIN = Path(__file__).resolve().parent / "data"
+BUILTIN = Path(__file__).resolve().parent / "data"  # kartci's own files: init templates, report
+PACKAGED = BUILTIN / "builtin"  # where the wheel carries the built-in folders (pyproject.toml)
+
+
+def shipped_root() -> Path:
+    """The folder holding the built-in `scenarios/`, `models/` and `sims/`: inside an installed
+    wheel, else the top level of the source checkout kartci runs from (an editable install,
+    PYTHONPATH), where kartci's repository keeps them as a team's project does."""
+    return PACKAGED if PACKAGED.is_dir() else BUILTIN.parents[1]
+
+
+SHIPPED = shipped_root()
+BUILTIN_SCENARIOS = SHIPPED / "scenarios"  # the default suite
+BUILTIN_MODELS = SHIPPED / "models"
+BUILTIN_SIMS = SHIPPED / "sims"  # worlds
 CONFIG_NAMES = ("kartci.toml", "pyproject.toml")
 CONFIG_MAX_BYTES = 4 << 20  # a pyproject.toml; large real ones (with lock-like tables) are < 100 KB
 # A baseline tolerance may be this many times its metric's default before it counts as loosened:
@@ -91,24 +106,25 @@ class Project:
     @property
     def scenario_path(self) -> tuple[Path, ...]:
         """Scenario folders in search order: the project's own, then the built-in ones."""
-        return _unique((*self.scenarios, BUILTIN / "scenarios"))
+        return _unique((*self.scenarios, BUILTIN_SCENARIOS))
 
     @property
     def world_path(self) -> tuple[Path, ...]:
         """World folders in search order: the project's own, then the built-in ones."""
-        return _unique((*self.worlds, BUILTIN / "worlds"))
+        return _unique((*self.worlds, BUILTIN_SIMS))
 
     @property
     def model_path(self) -> tuple[Path, ...]:
         """Robot model folders in search order: the project's own, then the built-in ones."""
-        return _unique((*self.models, BUILTIN / "models"))
+        return _unique((*self.models, BUILTIN_MODELS))
 
     @property
     def data_roots(self) -> tuple[Path, ...]:
         """The folders a data file may come from: the project's own and kartci's built-in data.
         A file outside them (an absolute path, a `..`, a symlink leaving them) could be any file
         on the machine, and a file that fails to parse ends up named in CI artifacts."""
-        return _unique((self.root, *self.scenarios, *self.worlds, *self.models, BUILTIN))
+        return _unique((self.root, *self.scenario_path, *self.world_path, *self.model_path,
+                        BUILTIN))
 
     def contained(self, path: Path, what: str, allow_outside: bool = False) -> Path:
         """`path` with symlinks resolved; a SpecError when that leaves `data_roots`, unless

@@ -1,7 +1,7 @@
 """kartci as a user gets it: its wheel, installed into a fresh virtual environment.
 
-No network: the wheel is built from this checkout without build isolation (setuptools and
-wheel from the test environment), and the fresh venv sees the test environment's packages
+No network: the wheel is built from this checkout without build isolation (hatchling from the
+test environment), and the fresh venv sees the test environment's packages
 (numpy, pybullet, ...) through a `.pth` file instead of installing them again. kartci itself
 comes from the wheel only: a `.pth` line adds a folder to sys.path but runs none of the `.pth`
 files in it, so the test environment's editable kartci is never imported (and pip leaves
@@ -15,12 +15,15 @@ import shutil
 import site
 import subprocess
 import sys
+import tomllib
 from importlib import metadata
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+WHEEL = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["hatch"]["build"]["targets"][
+    "wheel"]  # what the wheel is built from: kartci/ and the built-in folders (only-include)
 # What must not leak from the test process into a user's shell.
 SCRUBBED = ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV", "KARTCI_ROOT", "CI", "GITHUB_ACTIONS",
             "GITHUB_STEP_SUMMARY", "__PYVENV_LAUNCHER__")
@@ -40,17 +43,16 @@ def offline_env(bin_dir: Path | None = None) -> dict[str, str]:
 def build_wheel(out: Path) -> Path:
     """kartci's wheel from a copy of this checkout (the source tree stays free of build/)."""
     try:
-        tools = {name: metadata.version(name) for name in ("setuptools", "wheel")}
+        metadata.version("hatchling")
     except metadata.PackageNotFoundError as err:
         pytest.skip(f'{err} not installed: pip install -e ".[dev]"')
-    if int(tools["setuptools"].split(".")[0]) < 68:
-        pytest.skip(f'setuptools {tools["setuptools"]} < 68: pip install -e ".[dev]"')
     src = out / "src"
     src.mkdir(parents=True)
     for name in ("pyproject.toml", "README.md"):
         shutil.copy2(ROOT / name, src / name)
-    shutil.copytree(ROOT / "kartci", src / "kartci",
-                    ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    for name in WHEEL["only-include"]:
+        shutil.copytree(ROOT / name, src / name,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     dist = out / "dist"
     p = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps",
                         "--no-build-isolation", "-w", str(dist), str(src)],

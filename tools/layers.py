@@ -72,8 +72,6 @@ def edges(root: Path = ROOT) -> list[Edge]:
     """Every import of one kartci package by another (not within a package)."""
     out = []
     for path in sorted(root.rglob("*.py")):
-        if "data" in path.relative_to(root).parts[:1]:
-            continue  # generator scripts of shipped assets, not the package's code
         module = _module_name(path)
         source = package_of(module)
         tree = ast.parse(path.read_text(encoding="utf-8"))

@@ -6,7 +6,9 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Frozen` and the parameter bases (`ControllerParams`, `NodeParams`, `RobotParams`,
   `WorldParams`, `MetricParams`) that each plugin's own pydantic model extends.
 - `Controller`, `Node`, `RobotKind` (with what kind-neutral code asks of a kind:
-  `WheelOdometry`, `JoyCommand`, `SimReal`), `WorldKind`, `MetricSet` and their registries.
+  `WheelOdometry`, `JoyCommand`, `SimReal`), `WorldKind`, `MetricSet` and their registries;
+  `Registries`, the five passed explicitly to what validates a scenario
+  (`DEFAULT_REGISTRIES`: the process-wide ones).
 - `RunFolder`: the one owner of a run folder's file names.
 """
 
@@ -22,6 +24,7 @@ from kartci.core.params import (
 )
 from kartci.core.registry import (
     CONTROLLERS,
+    DEFAULT_REGISTRIES,
     METRICS,
     NODES,
     REGISTRIES,
@@ -33,6 +36,7 @@ from kartci.core.registry import (
     MetricSet,
     Node,
     PluginInfo,
+    Registries,
     Registry,
     RobotKind,
     SimReal,
@@ -49,6 +53,7 @@ from kartci.core.runfolder import UNFINISHED, RunFolder
 
 __all__ = [
     "CONTROLLERS",
+    "DEFAULT_REGISTRIES",
     "METRICS",
     "NODES",
     "REGISTRIES",
@@ -70,6 +75,7 @@ __all__ = [
     "NodeParams",
     "Outbox",
     "PluginInfo",
+    "Registries",
     "Registry",
     "RobotKind",
     "RobotParams",

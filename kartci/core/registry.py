@@ -237,6 +237,24 @@ METRICS: Registry[MetricSet] = Registry("kartci.metrics", "metric set", MetricSe
 REGISTRIES: tuple[Registry[Any], ...] = (CONTROLLERS, NODES, ROBOTS, WORLDS, METRICS)
 
 
+@dataclass(frozen=True)
+class Registries:
+    """The registries a scenario is validated against, handed to its validators in pydantic's
+    validation context (`kartci.scenario.dispatch.context`), never looked up by them: a caller
+    may validate against others (a subset, a test's) while the process-wide ones stay as
+    they are."""
+
+    controllers: Registry[Controller]
+    nodes: Registry[Node]
+    robots: Registry[RobotKind]
+    worlds: Registry[WorldKind]
+    metrics: Registry[MetricSet]
+
+
+# the process-wide registries, filled from entry points and the project's plugins
+DEFAULT_REGISTRIES = Registries(CONTROLLERS, NODES, ROBOTS, WORLDS, METRICS)
+
+
 def register(item: Controller | Node | RobotKind | WorldKind | MetricSet) -> None:
     """Register a plugin from Python (a project plugin module, a test)."""
     for reg in REGISTRIES:
@@ -312,10 +330,10 @@ def load(project: Project | None = None) -> None:
                             f"({err})") from err
 
 
-def definitions() -> dict[str, MetricDef]:
+def definitions(metrics: Registry[MetricSet] = METRICS) -> dict[str, MetricDef]:
     """Every registered metric's definition by name."""
     out: dict[str, MetricDef] = {}
-    for mset in METRICS.all():
+    for mset in metrics.all():
         for name, d in mset.defs.items():
             out.setdefault(name, d)
     return out

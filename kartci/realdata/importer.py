@@ -12,11 +12,13 @@ from typing import Any
 
 import numpy as np
 
+from kartci import core
 from kartci.errors import LogError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, header, msg, open_log, stamp_ns
 from kartci.logs.types import for_writing, yaw_of
 from kartci.realdata.profile import Profile
 from kartci.scenario import Scenario
+from kartci.scenario.dispatch import context
 from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
 from kartci.track import TRACK_TOPIC
 
@@ -45,7 +47,8 @@ def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
         "agents": {profile.agent: {"model": {"kind": "recorded"},
                                    "controller": {"type": "recorded"}}},
         "duration_s": min(max(duration_s, 1e-3), MAX_DURATION_S), "metrics": metrics,
-        "criteria": {k: c.model_dump() for k, c in profile.criteria.items()}})
+        "criteria": {k: c.model_dump() for k, c in profile.criteria.items()}},
+        context=context(core.DEFAULT_REGISTRIES))
 
 
 def _xyzq(m: Any) -> tuple[float, float, float, Any]:

@@ -23,6 +23,7 @@ from kartci.realdata.importer import _odom, import_log, imported_scenario
 from kartci.realdata.plant import Converter, Plant, as_recorded, diff_drive
 from kartci.realdata.profile import Profile
 from kartci.scenario import Scenario, load_scenario
+from kartci.scenario.dispatch import context
 
 TWIST = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
 # what a log's commands may be when the robot's kind says nothing (`RobotKind.simreal`): the
@@ -119,7 +120,7 @@ def _scenario(profile: Profile, drive: Drive, setup: SimSetup, window_s: float) 
     data["description"] = f"sim vs log: {setup.scenario.name} driven by {profile.name}'s commands"
     data["metrics"]["simreal"] = {"window_s": window_s, "scenario": setup.scenario.name,
                                   "overrides": list(setup.overrides)}
-    return Scenario.model_validate(data)
+    return Scenario.model_validate(data, context=context(core.DEFAULT_REGISTRIES))
 
 
 def _write(imported: Path, dst: Path, scenario: Scenario, agent: str, drive: Drive,

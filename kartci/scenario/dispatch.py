@@ -1,12 +1,15 @@
 """Step one of scenario validation: the registered type names (`world.kind`, `model.kind`,
 `controller.type`, the keys of `nodes` and of `metrics`) pick each part's own parameter model,
-which then validates that part. A problem is a `ParamsError` that knows where in the file it is."""
+which then validates that part. A problem is a `ParamsError` that knows where in the file it is.
+
+The registries are an argument, reaching the scenario's validator through pydantic's validation
+context (`Scenario.model_validate(data, context=context(registries))`), not module globals."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel, ValidationError, ValidationInfo
 
 from kartci import core
 from kartci.errors import SpecError
@@ -70,27 +73,47 @@ def _named(registry: Any, tag: str, loc: tuple[str | int, ...]) -> Any:
                                  "input": tag}]) from err
 
 
-def dispatch(data: Any) -> Any:
+CONTEXT_KEY = "registries"
+
+
+def context(registries: core.Registries) -> dict[str, Any]:
+    """The validation context a Scenario is validated with."""
+    return {CONTEXT_KEY: registries}
+
+
+def registries_of(info: ValidationInfo) -> core.Registries:
+    """The registries a validator was handed; a TypeError (a caller's bug, not bad input)
+    when it was handed none."""
+    found = info.context.get(CONTEXT_KEY) if isinstance(info.context, dict) else None
+    if not isinstance(found, core.Registries):
+        raise TypeError("a Scenario is validated against registries in its validation context: "
+                        "Scenario.model_validate(data, context=kartci.scenario.dispatch."
+                        "context(kartci.core.DEFAULT_REGISTRIES)), or load it with "
+                        "kartci.scenario.load_scenario")
+    return found
+
+
+def dispatch(data: Any, registries: core.Registries) -> Any:
     """A copy of raw scenario data with plugin-typed parts replaced by their parameter models
-    (already-built parts are kept as they are)."""
+    (already-built parts are kept as they are), each type looked up in `registries`."""
     if not isinstance(data, dict):
         return data
     data = dict(data)
     world = data.get("world")
     tag = _tag(world, "kind", ("world",), "world kind") if "world" in data else None
     if tag is not None:
-        kind = _named(core.WORLDS, tag, ("world", "kind"))
+        kind = _named(registries.worlds, tag, ("world", "kind"))
         data["world"] = _validate(kind.params, world, ("world",))
     agents = data.get("agents")
     if isinstance(agents, dict):
-        data["agents"] = {name: _agent(agent, ("agents", name)) for name, agent in
-                          agents.items()}
+        data["agents"] = {name: _agent(agent, ("agents", name), registries)
+                          for name, agent in agents.items()}
     metrics = data.get("metrics")
     if isinstance(metrics, dict):
         built = {}
         for name, params in metrics.items():
             loc = ("metrics", str(name))
-            mset = _named(core.METRICS, str(name), loc)
+            mset = _named(registries.metrics, str(name), loc)
             if mset.params is None:
                 if params not in (None, {}):
                     raise ParamsError(loc, [{"loc": (), "msg": f"metric set {name} takes no "
@@ -102,7 +125,7 @@ def dispatch(data: Any) -> Any:
     return data
 
 
-def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
+def _agent(agent: Any, loc: tuple[str | int, ...], registries: core.Registries) -> Any:
     if not isinstance(agent, dict):
         return agent
     agent = dict(agent)
@@ -110,7 +133,7 @@ def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
     if "model" in agent:
         tag = _tag(model, "kind", (*loc, "model"), "robot kind")
         if tag is not None:
-            kind = _named(core.ROBOTS, tag, (*loc, "model", "kind"))
+            kind = _named(registries.robots, tag, (*loc, "model", "kind"))
             agent["model"] = _validate(kind.params, model, (*loc, "model"))
             sensors = agent.get("sensors") or {}
             if kind.sensors is not None:
@@ -122,10 +145,10 @@ def _agent(agent: Any, loc: tuple[str | int, ...]) -> Any:
     if "controller" in agent:
         tag = _tag(controller, "type", (*loc, "controller"), "controller")
         if tag is not None:
-            ctl = _named(core.CONTROLLERS, tag, (*loc, "controller", "type"))
+            ctl = _named(registries.controllers, tag, (*loc, "controller", "type"))
             agent["controller"] = _validate(ctl.params, controller, (*loc, "controller"))
     if isinstance(agent.get("nodes"), dict):
-        agent["nodes"] = {str(name): _validate(_named(core.NODES, str(name),
+        agent["nodes"] = {str(name): _validate(_named(registries.nodes, str(name),
                                                       (*loc, "nodes", str(name))).params,
                                                params or {}, (*loc, "nodes", str(name)))
                           for name, params in agent["nodes"].items()}

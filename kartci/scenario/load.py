@@ -16,7 +16,7 @@ from pydantic import ValidationError
 from kartci import core, project
 from kartci.errors import KartciError, SpecError
 from kartci.project import Origin, did_you_mean
-from kartci.scenario.dispatch import ParamsError, dispatch, with_allowed_keys
+from kartci.scenario.dispatch import ParamsError, context, dispatch, with_allowed_keys
 from kartci.scenario.models import Scenario, WorldParams, unit_of
 from kartci.scenario.schema import scenario_schema
 from kartci.scenario.yamlio import Mark, clip, parse_value, preview, read_yaml_marked
@@ -135,14 +135,15 @@ def _resolve_world(data: dict[str, Any], proj: project.Project, allow_outside: b
                 world["track"] = str(proj.world_file(track, allow_outside))
 
 
-def load_world(name: str) -> tuple[WorldParams, Path]:
+def load_world(name: str, registries: core.Registries = core.DEFAULT_REGISTRIES
+               ) -> tuple[WorldParams, Path]:
     """A world file by name on the project's search path (`winti/hall`), validated by its
-    world kind, and where the file is."""
+    world kind (looked up in `registries`), and where the file is."""
     proj = project.current()
     path = proj.find_world(name)
     data: dict[str, Any] = {"world": name}
     _resolve_world(data, proj, allow_outside=False, marks={})
-    world = dispatch(data)["world"]
+    world = dispatch(data, registries)["world"]
     assert isinstance(world, WorldParams)  # dispatch validated it by its kind
     return world, path
 
@@ -328,7 +329,8 @@ def _did_you_mean_key(error: dict[str, Any]) -> str:
 
 
 def load_scenario(name: str | Path, overrides: Sequence[str] | None = None, *,
-                  allow_outside_paths: bool = False) -> Scenario:
+                  allow_outside_paths: bool = False,
+                  registries: core.Registries = core.DEFAULT_REGISTRIES) -> Scenario:
     """Load and validate a scenario; every problem becomes one SpecError line.
 
     Args:
@@ -337,11 +339,15 @@ def load_scenario(name: str | Path, overrides: Sequence[str] | None = None, *,
         overrides: `dotted.key=value` assignments applied before validation, as `--set`.
         allow_outside_paths: Let track, world and model files (and the scenario's file when
             found by name) lie outside the project and kartci's data (`--allow-outside-paths`).
+        registries: The controllers, robot kinds, world kinds, nodes and metric sets its names
+            are looked up in (default: the process-wide ones, with every installed plugin).
     """
-    return scenario_loader(name, allow_outside_paths=allow_outside_paths)(overrides or ())
+    return scenario_loader(name, allow_outside_paths=allow_outside_paths,
+                           registries=registries)(overrides or ())
 
 
-def scenario_loader(name: str | Path, *, allow_outside_paths: bool = False
+def scenario_loader(name: str | Path, *, allow_outside_paths: bool = False,
+                    registries: core.Registries = core.DEFAULT_REGISTRIES
                     ) -> Callable[[Sequence[str]], Scenario]:
     """`load_scenario(name, overrides)` for many override sets (a sweep's points): the file
     and the world and model files it names are read once, not once per point."""
@@ -357,24 +363,25 @@ def scenario_loader(name: str | Path, *, allow_outside_paths: bool = False
 
     def load(overrides: Sequence[str]) -> Scenario:
         return _validated(copy.deepcopy(data), path, list(overrides), allow_outside_paths,
-                          dict(marks))
+                          dict(marks), registries)
 
     return load
 
 
 def with_overrides(scenario: Scenario, overrides: Sequence[str], *,
-                   allow_outside_paths: bool = False) -> Scenario:
+                   allow_outside_paths: bool = False,
+                   registries: core.Registries = core.DEFAULT_REGISTRIES) -> Scenario:
     """A validated scenario with `dotted.key=value` overrides applied (validated again);
     a relative log path in an override is relative to the working directory."""
     if not overrides:
         return scenario
     data = json.loads(scenario.model_dump_json())
     return _validated(data, Path(f"scenario {scenario.name}"), list(overrides),
-                      allow_outside_paths, {})
+                      allow_outside_paths, {}, registries)
 
 
 def _validated(data: dict[str, Any], path: Path, overrides: list[str],
-               allow_outside: bool, marks: Marks) -> Scenario:
+               allow_outside: bool, marks: Marks, registries: core.Registries) -> Scenario:
     """`data` with the overrides applied, validated; `marks` (where each key was written) name
     the file and line of a bad value."""
     _resolve_refs(data, path, allow_outside, marks)
@@ -385,7 +392,7 @@ def _validated(data: dict[str, Any], path: Path, overrides: list[str],
         _resolve_refs(data, path, allow_outside, marks)
     _resolve_command_line_paths(data, overrides, allow_outside)
     try:
-        return Scenario.model_validate(data)
+        return Scenario.model_validate(data, context=context(registries))
     except ParamsError as err:
         raise SpecError(_one_line(err.errors, path, overrides, marks, err.loc)) from err
     except ValidationError as err:
@@ -395,10 +402,11 @@ def _validated(data: dict[str, Any], path: Path, overrides: list[str],
         raise SpecError(f"{path}: a value is out of range ({clip(str(err))})") from err
 
 
-def scenario_from_json(text: str) -> Scenario:
+def scenario_from_json(text: str, registries: core.Registries = core.DEFAULT_REGISTRIES
+                       ) -> Scenario:
     """Rebuild a resolved scenario from the JSON recorded in a run log."""
     try:
-        return Scenario.model_validate_json(text)
+        return Scenario.model_validate_json(text, context=context(registries))
     except ValidationError as err:
         raise SpecError(f"recorded scenario: {err.errors()[0]['msg']}") from err
 

@@ -9,6 +9,7 @@ from typing import Annotated, Any, Literal
 from pydantic import (
     Field,
     SerializeAsAny,
+    ValidationInfo,
     field_validator,
     model_validator,
 )
@@ -19,7 +20,7 @@ from kartci.core.params import MetricParams as MetricParams
 from kartci.core.params import NodeParams as NodeParams
 from kartci.core.params import RobotParams as RobotParams
 from kartci.core.params import WorldParams as WorldParams
-from kartci.scenario.dispatch import dispatch
+from kartci.scenario.dispatch import dispatch, registries_of
 from kartci.scenario.yamlio import preview
 
 # --- physical bounds: every numeric key is bounded by what its unit (the key's suffix) can mean
@@ -344,9 +345,10 @@ class Scenario(Frozen):
 
     @model_validator(mode="before")
     @classmethod
-    def _registered_types(cls, data: Any) -> Any:
-        """Step one of validation: registered type names pick each part's parameter model."""
-        return dispatch(data)
+    def _registered_types(cls, data: Any, info: ValidationInfo) -> Any:
+        """Step one of validation: registered type names pick each part's parameter model, in
+        the registries the caller handed over (`dispatch.context`)."""
+        return dispatch(data, registries_of(info))
 
     @model_validator(mode="after")
     def _rates_are_multiples_of_the_physics_step(self) -> Scenario:

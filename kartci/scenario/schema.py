@@ -36,11 +36,11 @@ ID_TEMPLATE = "https://kartci.invalid/schema/scenario-{version}.json"
 DEFS = "#/$defs/"
 
 
-def scenario_schema() -> dict[str, Any]:
-    """The JSON Schema (draft 2020-12) of a scenario file with every registered plugin."""
-    worlds, robots = core.WORLDS.all(), core.ROBOTS.all()
-    controllers, metric_sets = core.CONTROLLERS.all(), core.METRICS.all()
-    nodes = core.NODES.all()
+def scenario_schema(registries: core.Registries = core.DEFAULT_REGISTRIES) -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of a scenario file with every plugin in `registries`."""
+    worlds, robots = registries.worlds.all(), registries.robots.all()
+    controllers, metric_sets = registries.controllers.all(), registries.metrics.all()
+    nodes = registries.nodes.all()
     models: list[type[BaseModel]] = [Scenario]
     models += [w.params for w in worlds]
     models += [r.params for r in robots]
@@ -67,7 +67,7 @@ def scenario_schema() -> dict[str, Any]:
     props["metrics"] = _metrics(props["metrics"]["description"], metric_sets, ref)
     criteria = props["criteria"]
     props["criteria"] = _criteria(criteria["description"],
-                                  criteria["additionalProperties"]["$ref"])
+                                  criteria["additionalProperties"]["$ref"], registries.metrics)
     root["required"] = [r for r in root.get("required", []) if r != "name"]  # default: stem
     root["title"] = "kartci scenario"
     schema = {"$schema": DIALECT, "$id": ID_TEMPLATE.format(version=kartci.__version__),
@@ -201,11 +201,12 @@ def _nodes(description: str, nodes: list[core.Node], ref: Any) -> dict[str, Any]
             "additionalProperties": False}
 
 
-def _criteria(description: str, criterion: str) -> dict[str, Any]:
+def _criteria(description: str, criterion: str,
+              metrics: core.Registry[core.MetricSet]) -> dict[str, Any]:
     """Known metric names as keys, each described with its unit and meaning; `agent.metric`
     for one agent of several."""
     props: dict[str, Any] = {}
-    for name, d in sorted(core.definitions().items()):
+    for name, d in sorted(core.definitions(metrics).items()):
         better = {"lower": "lower is better", "higher": "higher is better",
                   "equal": "must equal its baseline"}[d.direction.value]
         timing = "; wall-clock, machine-dependent" if d.timing else ""

@@ -16,7 +16,7 @@ import pytest
 import yaml
 from helpers import ROOT, kartci
 
-SCENARIOS = ROOT / "kartci" / "data" / "scenarios"
+SCENARIOS = ROOT / "scenarios"
 LISTENER = Path(__file__).with_name("zenoh_listener.py")
 DRIVER = ROOT / "examples" / "zenoh_stack" / "kart_driver.py"
 

@@ -12,9 +12,9 @@ from typing import Any
 import pytest
 from helpers import ROOT, kartci
 
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 
-SCENARIOS = BUILTIN / "scenarios"
+SCENARIOS = BUILTIN_SCENARIOS
 
 SHORT = ["--set", "duration_s=6", "--set", "criteria={}",
          "--set", "metrics.line_tracking.transient_s=2"]
@@ -93,7 +93,7 @@ def test_shell_completion_of_scenario_names(tmp_path: Path) -> None:
                                       "COMP_WORDS": f"kartci {cmd} line_", "COMP_CWORD": "2"})
         assert p.returncode == 0, p.stderr
         words = p.stdout.split()
-        builtin = sorted(f.stem for f in (ROOT / "kartci/data/scenarios").glob("line_*.yaml"))
+        builtin = sorted(f.stem for f in (ROOT / "scenarios").glob("line_*.yaml"))
         assert words == sorted([*builtin, "line_team"]) and "line_circle" in words
     p = kartci(cwd=tmp_path, env={"_KARTCI_COMPLETE": "complete_zsh",
                                   "_TYPER_COMPLETE_ARGS": "kartci run line_t"})
@@ -299,7 +299,7 @@ def test_list_without_any_scenario_is_one_line(tmp_path: Path,
     from kartci import project
     from kartci.cli import main
 
-    monkeypatch.setattr(project, "BUILTIN", tmp_path / "no_builtins")
+    monkeypatch.setattr(project, "BUILTIN_SCENARIOS", tmp_path / "no_builtins")
     monkeypatch.setenv("KARTCI_ROOT", str(tmp_path))
     monkeypatch.setattr(sys, "argv", ["kartci", "list"])
     with pytest.raises(SystemExit) as exit_:

@@ -199,7 +199,7 @@ def _run_gate(doc: dict[str, Any], work: Path, env: dict[str, str], values: dict
 def _short_pair(scenarios: Path) -> None:
     """Two 3 s line scenarios beside the project's own; worlds and models are built in."""
     for name in PAIR:
-        spec = yaml.safe_load((ROOT / "kartci" / "data" / "scenarios" / f"{name}.yaml")
+        spec = yaml.safe_load((ROOT / "scenarios" / f"{name}.yaml")
                               .read_text())
         spec.update(duration_s=3.0, criteria={}, metrics={"line_tracking": {"transient_s": 1.0}})
         (scenarios / f"{name}.yaml").write_text(yaml.safe_dump(spec))

@@ -13,11 +13,11 @@ from pathlib import Path
 import pytest
 from helpers import ROOT, kartci
 
-LOGS = ROOT / "kartci" / "data" / "scenarios" / "logs"
-HALL = (ROOT / "kartci" / "data" / "worlds" / "winti" / "hall.yaml").read_text(encoding="utf-8")
-PARAMS = (ROOT / "kartci" / "data" / "models" / "gokart" / "params.yaml").read_text(
+LOGS = ROOT / "scenarios" / "logs"
+HALL = (ROOT / "sims" / "winti" / "hall.yaml").read_text(encoding="utf-8")
+PARAMS = (ROOT / "models" / "gokart" / "params.yaml").read_text(
     encoding="utf-8")
-PS4 = (ROOT / "kartci" / "data" / "models" / "gokart" / "joy" / "ps4.yaml").read_text(
+PS4 = (ROOT / "models" / "gokart" / "joy" / "ps4.yaml").read_text(
     encoding="utf-8")
 
 Case = tuple[list[str | Path], str]  # CLI arguments, a regular expression the error line matches
@@ -255,7 +255,7 @@ def _bad_model(tmp: Path) -> tuple[list[str | Path], str]:
     (tmp / "models" / "mykart").mkdir(parents=True)
     params = re.sub(r"(?m)^mass_kg:.*$", "mass_kg: -5", PARAMS)
     (tmp / "models" / "mykart" / "params.yaml").write_text(params, encoding="utf-8")
-    urdf = ROOT / "kartci" / "data" / "models" / "gokart" / "bumblebee.urdf"
+    urdf = ROOT / "models" / "gokart" / "bumblebee.urdf"
     (tmp / "models" / "mykart" / "bumblebee.urdf").write_bytes(urdf.read_bytes())
     return (["show", "q", "--set", "agents.kart0.model=mykart"],
             f"{tmp}/models/mykart/params.yaml:{_line_of(params, 'mass_kg:')}:1: mass_kg: must "

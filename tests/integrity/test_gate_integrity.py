@@ -163,7 +163,7 @@ def test_a_data_file_edited_in_place_makes_the_fields_differ(
     from kartci.verdict import fingerprint
 
     world = tmp_path / "worlds" / "my"
-    shutil.copytree(ROOT / "kartci" / "data" / "worlds" / "winti", world)
+    shutil.copytree(ROOT / "sims" / "winti", world)
     hall = world / "hall.yaml"
     hall.write_text(hall.read_text().replace("track: winti/track.csv", "track: my/track.csv"))
     (tmp_path / "pyproject.toml").write_text('[tool.kartci]\nworlds = ["worlds"]\n')

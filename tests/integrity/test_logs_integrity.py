@@ -10,7 +10,7 @@ import pytest
 from helpers import ROOT, kartci
 from mcap.reader import make_reader
 
-SHIPPED = ROOT / "kartci" / "data" / "scenarios" / "logs" / "kart_manual_ps4.mcap"
+SHIPPED = ROOT / "scenarios" / "logs" / "kart_manual_ps4.mcap"
 FIXTURES = ROOT.parent / "shared" / "fixtures" / "bags"
 DAMAGED = "0 messages on 1 topic; 1 damaged chunk not fully read"
 

@@ -16,14 +16,14 @@ import yaml
 from helpers import kartci
 
 from kartci.errors import SpecError
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 from kartci.report import FILES, write_all
 from kartci.runner import expand, run_jobs
 from kartci.runner.outdir import clear_reports, write_manifest
 from kartci.runner.run import check_finished
 from kartci.verdict import Status
 
-SCENARIOS = BUILTIN / "scenarios"
+SCENARIOS = BUILTIN_SCENARIOS
 QUICK_S = 1.0  # s of sim: the short runs q and q2
 SLOW_S = 900.0  # s of sim: the run that is interrupted (it never gets near its end)
 

@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 from helpers import kartci
 
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_MODELS, BUILTIN_SCENARIOS, BUILTIN_SIMS
 
 SECRET = "SECRET_TOKEN_4711"
 OUTSIDE = "is outside the project and kartci's data (pass --allow-outside-paths to use it)"
@@ -95,14 +95,14 @@ def test_a_symlink_out_of_worlds_is_refused(proj: Path) -> None:
 def test_allow_outside_paths_lets_an_outside_track_through(proj: Path) -> None:
     """With the flag, a valid track outside the project is run like any other."""
     track = proj.parent / "outside" / "hall_track.csv"
-    shutil.copy(BUILTIN / "worlds" / "winti" / "track.csv", track)
+    shutil.copy(BUILTIN_SIMS / "winti" / "track.csv", track)
     p = kartci("run", "kart_manual", *QUICK, "--set", "criteria={}", "--set",
                f"world.track={track}", "--out", "out", "--allow-outside-paths", cwd=proj)
     assert p.returncode == 0, p.stderr
     assert (proj / "out" / "kart_manual@track=hall_track" / "run.mcap").is_file()
 
 
-GOKART = BUILTIN / "models" / "gokart"
+GOKART = BUILTIN_MODELS / "gokart"
 MASS_LINE = (GOKART / "params.yaml").read_text().splitlines().index(
     next(x for x in (GOKART / "params.yaml").read_text().splitlines()
          if x.startswith("mass_kg:"))) + 1
@@ -151,7 +151,7 @@ def test_file_contents_never_reach_an_artifact(proj: Path, case: str) -> None:
     assert _leaks(proj / "out", p) == []
 
 
-LOG = BUILTIN / "scenarios" / "logs" / "kart_manual_ps4.mcap"
+LOG = BUILTIN_SCENARIOS / "logs" / "kart_manual_ps4.mcap"
 SCENARIO_WITH_LOG = """description: q
 world: winti/hall
 duration_s: 1.0

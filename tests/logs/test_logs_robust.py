@@ -46,7 +46,7 @@ from kartci.logs import (
 from kartci.logs.damage import describe
 
 ROOT = Path(__file__).resolve().parents[2]
-SHIPPED = sorted((ROOT / "kartci" / "data" / "scenarios" / "logs").glob("*.mcap"))
+SHIPPED = sorted((ROOT / "scenarios" / "logs").glob("*.mcap"))
 FIXTURES = ROOT.parent / "shared" / "fixtures" / "bags"
 POSE = "float32 x\nfloat32 y\nfloat32 theta\nfloat32 linear_velocity\nfloat32 angular_velocity\n"
 

@@ -14,9 +14,9 @@ from rosbags.rosbag2 import Writer as Ros2Writer
 from rosbags.typesys import Stores, get_typestore
 
 from kartci.logs import messages, tables
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_MODELS
 
-BUILTIN_JOY = BUILTIN / "models" / "gokart" / "joy"
+BUILTIN_JOY = BUILTIN_MODELS / "gokart" / "joy"
 
 
 def kartci(*args: str | Path) -> subprocess.CompletedProcess[str]:

@@ -11,7 +11,7 @@ import pytest
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.metrics.progress import kart_track
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SIMS
 from kartci.robots.gokart import race
 from kartci.robots.gokart.mpcc.cache import get_solver, solver_key
 from kartci.robots.gokart.mpcc.model import SingleTrack
@@ -61,7 +61,7 @@ def test_a_lower_speed_limit_lowers_the_top_speed(tmp_path: Path) -> None:
 def test_an_obstacle_moved_by_set_moves_the_path(tmp_path: Path, lateral: float,
                                                   side: int) -> None:
     """One box on the main straight (s = 7 m): the kart passes on the side with more room."""
-    track = load_track(BUILTIN / "worlds" / "winti" / "track.csv")
+    track = load_track(BUILTIN_SIMS / "winti" / "track.csv")
     x, y, _ = track.pose_at(7.0, lateral)
     log, m = _run(tmp_path, "mpcc_lap", "duration_s=4",
                   f"world.obstacles=[{{center_m: [{x}, {y}], size_m: [0.5, 0.5, 0.5]}}]")

@@ -17,7 +17,7 @@ import pytest
 from kartci.errors import SpecError
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SIMS
 from kartci.robots.gokart.mpcc import Mpcc
 from kartci.robots.gokart.mpcc.cache import solver_key
 from kartci.robots.gokart.mpcc.model import SingleTrack
@@ -73,7 +73,7 @@ def test_hpipm_solves_the_structured_qp_as_a_general_solver_does(
     same QP handed to OSQP as a plain sparse QP must give the same step."""
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
     spec = MpccController(method=MpccMethod.RTI, horizon_steps=8)
-    track = load_track(BUILTIN / "worlds" / "winti" / "track.csv")
+    track = load_track(BUILTIN_SIMS / "winti" / "track.csv")
     mpcc = Mpcc(spec, GokartModel(), track)
     assert mpcc.built.rti is not None and mpcc.built.compiled
     seen: list[dict[str, ca.DM]] = []

@@ -15,7 +15,7 @@ from kartci.errors import SpecError
 from kartci.metrics import compute, definitions
 from kartci.metrics.base import MetricDef
 from kartci.plugins import Controller, MetricSet
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 from kartci.scenario import load_scenario
 from kartci.scenario.models import ControllerParams
 from kartci.sim import simulate
@@ -133,7 +133,7 @@ def test_a_metric_set_registered_from_python_is_computed(tmp_path: Path) -> None
         plugins.METRICS.items.pop("test_extent")
 
 
-SHIPPED = sorted(p.stem for p in (BUILTIN / "scenarios").glob("*.yaml")
+SHIPPED = sorted(p.stem for p in BUILTIN_SCENARIOS.glob("*.yaml")
                  if (ROOT / "baselines" / f"{p.stem}.json").exists())
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 
 pytest_plugins = ["pytester"]
 
@@ -24,7 +24,7 @@ PLUGIN = ("-p", "kartci.pytest_plugin", "-W", "ignore::pytest.PytestAssertRewrit
 
 def _scenario(**changes: object) -> str:
     """The built-in straight-line scenario, short: 3 s, a 1 s transient, one criterion."""
-    data = yaml.safe_load((BUILTIN / "scenarios" / "line_straight.yaml").read_text())
+    data = yaml.safe_load((BUILTIN_SCENARIOS / "line_straight.yaml").read_text())
     data.update(duration_s=3.0, metrics={"line_tracking": {"transient_s": 1.0}},
                 criteria={"line_lost": {"equal": 0}}, tags=["line", "quick-check"])
     data.update(changes)

@@ -158,7 +158,7 @@ def test_a_run_log_scored_through_a_profile_gets_the_runs_own_track_metrics(
     run = tmp_path / "run"
     kartci_api.run("kart_wall", out=run, baselines=tmp_path)
     profile = tmp_path / "hall.yaml"
-    track = ROOT / "kartci" / "data" / "worlds" / "winti" / "track.csv"
+    track = ROOT / "sims" / "winti" / "track.csv"
     profile.write_text(f"name: hall\npose: {{topic: /kart0/odom}}\ntrack: {track}\n"
                        "collisions: {topic: /kart0/collision}\n", encoding="utf-8")
     out = tmp_path / "out"

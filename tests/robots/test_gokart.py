@@ -19,7 +19,7 @@ from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
 from kartci.vehicle import KartInput, wheel_angles
 
-MODELS = project_root() / "kartci" / "data" / "models" / "gokart"
+MODELS = project_root() / "models" / "gokart"
 TABLE_3_2 = {  # joint: (type, axis, parent, child, translation)
     "cog_joint": ("fixed", None, "base_link", "cog_link", (0.36, 0.0, 0.0)),
     "rear_left_wheel_joint": ("continuous", "y", "base_link", "rear_left_wheel_link",

@@ -23,7 +23,7 @@ from kartci.scenario import load_scenario, project_root
 from kartci.sim.circuit import Circuit
 from kartci.vehicle import KartInput, wheel_angles
 
-MODELS = project_root() / "kartci" / "data" / "models" / "gokart"
+MODELS = project_root() / "models" / "gokart"
 DT = 0.002
 ODOM_EVERY = 10  # the robot re-reads the floor friction and its pedals at 50 Hz, as here
 SLIPPERY = "[{name: coated, min_m: [-30, -20], max_m: [100, 60], friction: 0.6}]"

@@ -21,7 +21,7 @@ def _robot() -> tuple[World, LineTracker]:
     spec = load_scenario("line_straight")
     world = World(spec.world, DT)
     robot = LineTracker(world.client, spec.agents["lt0"], spec.world,  # type: ignore[arg-type]
-                        project_root() / "kartci" / "data" / "models" / "line_tracker", DT)
+                        project_root() / "models" / "line_tracker", DT)
     return world, robot
 
 

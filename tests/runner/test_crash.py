@@ -10,14 +10,14 @@ import yaml
 from helpers import PAIR, QUICK, kartci
 
 from kartci.agents.base import Outbox
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 from kartci.report import write_all
 from kartci.robots.line_tracker.line_pid import LinePid
 from kartci.runner import expand, run_jobs
 from kartci.verdict import Status
 from kartci.verdict.result import exit_code
 
-SCENARIOS = BUILTIN / "scenarios"
+SCENARIOS = BUILTIN_SCENARIOS
 
 
 def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baselines: Path,

@@ -28,7 +28,7 @@ from kartci.cli.common import finish
 from kartci.errors import BaselineError, RunError
 from kartci.figures import Plots
 from kartci.logs import McapLogWriter, messages, msg
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 from kartci.report import write_all
 from kartci.robots.line_tracker.line_pid import LinePid
 from kartci.runner import expand, run_jobs
@@ -170,7 +170,7 @@ def _doomed_project(root: Path) -> Path:
     (root / "doomed_plugin.py").write_text(DOOMED_PLUGIN)
     for name, src, changes in (("long", "line_circle", {"duration_s": 3.0}),
                                ("doomed", "line_straight", {"duration_s": 2.0})):
-        spec = yaml.safe_load((BUILTIN / "scenarios" / f"{src}.yaml").read_text())
+        spec = yaml.safe_load((BUILTIN_SCENARIOS / f"{src}.yaml").read_text())
         spec.update(changes, criteria={})
         spec["metrics"]["line_tracking"]["transient_s"] = 0.5
         if name == "doomed":

@@ -3,7 +3,7 @@ and grids kept out of the default suite."""
 
 from __future__ import annotations
 
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 from kartci.runner import expand
 from kartci.runner.jobs import default_suite
 
@@ -27,6 +27,6 @@ def test_sweep_on_the_command_line_replaces_the_scenarios_own() -> None:
 def test_the_default_suite_leaves_the_grids_out() -> None:
     """The default suite stays fast: `kartci run` with no names skips every scenario with a
     sweep (and `tool` ones); they run by name."""
-    suite = default_suite(sorted((BUILTIN / "scenarios").glob("*.yaml")))
+    suite = default_suite(sorted(BUILTIN_SCENARIOS.glob("*.yaml")))
     assert "line_circle" in suite and "line_circle_pi" in suite
     assert not [n for n in suite if n.endswith("_grid") or n.startswith("line_circle_edge")]

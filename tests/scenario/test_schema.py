@@ -17,7 +17,7 @@ from pydantic import Field
 
 from kartci import plugins
 from kartci.agents.base import Agent
-from kartci.project import BUILTIN
+from kartci.project import BUILTIN_SCENARIOS
 from kartci.scenario import json_schema, load_scenario
 from kartci.scenario.models import ControllerParams
 from kartci.scenario.schema import scenario_schema
@@ -26,7 +26,7 @@ jsonschema = pytest.importorskip("jsonschema", reason="pip install jsonschema (t
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "pure_pursuit"
-SHIPPED = sorted((BUILTIN / "scenarios").glob("*.yaml"))
+SHIPPED = sorted(BUILTIN_SCENARIOS.glob("*.yaml"))
 MODELINE = "# yaml-language-server: $schema="
 
 
@@ -95,7 +95,7 @@ def test_scenarios_name_the_generated_schema_in_their_first_line(path: Path) -> 
     target = first.removeprefix(MODELINE)
     assert target.endswith(".kartci/scenario.schema.json"), target
     # relative to the scenario file, it lands in the project root's .kartci/ folder
-    project_root = ROOT if path.is_relative_to(BUILTIN) else EXAMPLE
+    project_root = ROOT if path.is_relative_to(BUILTIN_SCENARIOS) else EXAMPLE
     assert (path.parent / target).resolve() == project_root / ".kartci" / "scenario.schema.json"
 
 
@@ -190,7 +190,7 @@ def test_a_plugin_with_an_untyped_name_does_not_swallow_the_others() -> None:
     plugins.register(plugins.Controller("schema_test_loose", LooseParams, _not_run))
     try:
         check = validator(scenario_schema())
-        doc = yaml.safe_load((BUILTIN / "scenarios" / "mpcc_lap.yaml").read_text("utf-8"))
+        doc = yaml.safe_load((BUILTIN_SCENARIOS / "mpcc_lap.yaml").read_text("utf-8"))
         check.validate(doc)  # `type: mpcc` matches the MPCC alone, not LooseParams too
         doc["agents"]["kart0"]["controller"] = {"type": "schema_test_loose", "gain": 2.0}
         check.validate(doc)
@@ -209,7 +209,7 @@ def test_a_plugin_with_an_untyped_name_does_not_swallow_the_others() -> None:
 ])
 def test_what_loading_rejects_the_schema_rejects(path: str, value: Any,
                                                  schema: dict[str, Any]) -> None:
-    doc = yaml.safe_load((BUILTIN / "scenarios" / "line_straight.yaml").read_text("utf-8"))
+    doc = yaml.safe_load((BUILTIN_SCENARIOS / "line_straight.yaml").read_text("utf-8"))
     check = validator(schema)
     check.validate(doc)
     node = doc

@@ -24,6 +24,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from kartci.errors import KartciError, SpecError
+from kartci.project import BUILTIN_SCENARIOS, BUILTIN_SIMS
 from kartci.scenario import load_scenario
 from kartci.scenario.yamlio import (
     SPEC_MAX_BYTES,
@@ -35,13 +36,11 @@ from kartci.scenario.yamlio import (
 )
 from kartci.track import load_track
 
-ROOT = Path(__file__).resolve().parents[2]
-DATA = ROOT / "kartci" / "data"
 # the scenario's body, without its editor modeline (the tests splice text after the first key)
-STRAIGHT = "".join(line for line in (DATA / "scenarios" / "line_straight.yaml").read_text(
+STRAIGHT = "".join(line for line in (BUILTIN_SCENARIOS / "line_straight.yaml").read_text(
     encoding="utf-8").splitlines(keepends=True) if not line.startswith("# yaml-language-server"))
 SCENARIOS = tuple(p.read_text(encoding="utf-8")
-                  for p in sorted((DATA / "scenarios").glob("*.yaml")))
+                  for p in sorted(BUILTIN_SCENARIOS.glob("*.yaml")))
 MESSAGE_MAX_CHARS = 1000  # a path, a key, a short problem and a 60-character preview fit
 
 
@@ -242,7 +241,7 @@ def test_set_values_that_are_not_yaml_stay_strings() -> None:
 
 
 def test_track_reader_keeps_the_csv_and_its_limits(tmp_path: Path) -> None:
-    csv = DATA / "worlds" / "tracks" / "chicane.csv"
+    csv = BUILTIN_SIMS / "tracks" / "chicane.csv"
     assert read_text_bounded(csv, 1 << 20) == csv.read_text(encoding="utf-8")
     assert load_track(csv).length_m > 10.0
     assert "more than the 1 KiB allowed" in _spec_error(lambda: read_text_bounded(csv, 1 << 10))

@@ -72,7 +72,7 @@ def test_a_worse_head_exits_1_and_every_output_names_the_regression(runs: Path) 
         assert sorted((f.message or "").split()[0] for f in c.result) == regressed
     assert all(any(metric in (f.text or "") for f in c.result) for c in cases)
     assert f"report: {out / 'report.html'}" in (cases[0].system_out or "")
-    notes = [line for line in p.stdout.splitlines() if line.startswith("::error file=kartci/")]
+    notes = [line for line in p.stdout.splitlines() if line.startswith("::error file=scenarios/")]
     assert 0 < len(notes) <= 10 and any(metric in n for n in notes)
 
 
@@ -91,9 +91,9 @@ def test_annotations_stop_at_ten_and_say_how_many_more() -> None:
 def test_annotations_are_anchored_to_the_scenario_file() -> None:
     r = ScenarioResult("line_circle@kp=20", "", [_v("m", 2.0, 0.0, 1.0)])
     files = scenario_files([r], ROOT)
-    assert files == {"line_circle@kp=20": "kartci/data/scenarios/line_circle.yaml"}
+    assert files == {"line_circle@kp=20": "scenarios/line_circle.yaml"}
     [line] = annotation_lines([r], files=files)
-    assert line.startswith("::error file=kartci/data/scenarios/line_circle.yaml,line=1,title=")
+    assert line.startswith("::error file=scenarios/line_circle.yaml,line=1,title=")
     assert scenario_files([r], ROOT / "tests") == {}  # not in that repository: no anchor
     assert scenario_files([ScenarioResult("no_such", "")], ROOT) == {}
 

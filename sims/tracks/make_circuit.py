@@ -1,6 +1,6 @@
 """A club circuit larger than the Winti hall (about 95 x 45 m, 6 m wide), in the TUMFTM format,
 for the `circuit` world kind. Run once; the CSV is the data
-(`.venv/bin/python kartci/data/worlds/tracks/make_circuit.py`). A closed polygon through
+(`.venv/bin/python sims/tracks/make_circuit.py`). A closed polygon through
 hand-placed waypoints, smoothed by a periodic Gaussian; corner radii above 8 m."""
 
 from __future__ import annotations
