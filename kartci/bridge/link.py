@@ -2,8 +2,11 @@
 attachments and liveliness tokens.
 
 Isolation: the session is a peer that listens on a free loopback port of its own, with multicast
-and gossip scouting off and no router, so nothing but the run's own stack (told the port) can
-reach it; `-j N` runs are separate networks.
+scouting off and no router, so nothing but the run's own stack (told the port) can reach it;
+`-j N` runs are separate networks. Gossip is on (single hop, as in rmw_zenoh's default session
+config): the session tells each process of the stack where the others listen, so a stack of
+several processes all connected to kartci connect to each other too (peers route nothing for
+others; without gossip they never meet).
 """
 
 from __future__ import annotations
@@ -31,13 +34,15 @@ def free_port() -> int:
 
 
 def peer_config(listen: list[str], connect: list[str]) -> zenoh.Config:
-    """A peer on loopback endpoints only: no multicast, no gossip, no router, no timestamps."""
+    """A peer on loopback endpoints only: no multicast, no router, no timestamps; gossip on so
+    the processes connected to it learn each other's (loopback) endpoints."""
     conf = zenoh.Config()
     conf.insert_json5("mode", '"peer"')
     conf.insert_json5("listen/endpoints", json.dumps(listen))
     conf.insert_json5("connect/endpoints", json.dumps(connect))
     conf.insert_json5("scouting/multicast/enabled", "false")
-    conf.insert_json5("scouting/gossip/enabled", "false")
+    conf.insert_json5("scouting/gossip/enabled", "true")
+    conf.insert_json5("scouting/gossip/multihop", "false")
     return conf
 
 

@@ -224,3 +224,18 @@ def test_a_stack_started_by_hand_connects_to_a_fixed_port(tmp_path: Path,
     assert p.returncode == 0, p.stdout + p.stderr
     stamps = [c["stamp"] for c in json.loads(seen.read_text())["clock"]]
     assert stamps == [k * 20_000_000 for k in range(26)]
+
+
+def test_a_stack_of_two_processes_meets_through_kartci(tmp_path: Path, baselines: Path) -> None:
+    """Planner and driver both connect to kartci only; kartci's gossip tells each where the
+    other listens, so the plan reaches the driver and every tick is answered on time."""
+    stack = ["{python}", str(Path(__file__).with_name("zenoh_two_stage.py")), "{namespace}"]
+    proj = project(tmp_path, {"two": external(0.5, stack, startup_timeout_s=10.0)})
+    out = tmp_path / "out"
+    p = kartci("run", "--out", out, "--baselines", baselines, "--no-strict", cwd=proj)
+    assert p.returncode == 0, p.stdout + p.stderr
+    cmds = messages(out / "two" / "run.mcap", "/kart0/ackermann_cmd")
+    stamps = [c.header.stamp.sec * 10**9 + c.header.stamp.nanosec for c in cmds]
+    assert stamps == [k * 20_000_000 for k in range(26)]
+    timing = json.loads((out / "two" / "metrics.json").read_text())["timing"]
+    assert timing["late_commands"]["value"] == 0
