@@ -26,7 +26,7 @@ from kartci.bridge.link import Inbox, Node, Publisher, open_listening
 from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
 from kartci.core import ROBOTS, AgentContext, JoyCommand, Outbox, RobotParams
 from kartci.errors import RunError, SpecError
-from kartci.logs.types import base_link, msg, stamp_ns, typestore
+from kartci.logs.types import base_link, msg, stamp_ns
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 LATE_TOPIC = "bridge/late_commands"  # std_msgs/UInt32: the count so far, at each late tick
@@ -80,7 +80,7 @@ class ExternalAgent:
         session, self.endpoint = open_listening(
             spec.port, connect=spec.connect, router=spec.zenoh_mode == "router",
             allow_remote=spec.allow_remote)
-        self.node = Node(session, spec.domain_id, spec.node_name)
+        self.node = Node(session, spec.domain_id, spec.node_name, spec.ros_distro)
         try:
             self.clock = self.node.publisher("/clock", CLOCK)
             for topic, typename in self.commands.items():
@@ -159,18 +159,17 @@ class ExternalAgent:
         return {(topic, typename) for topic, typename in
                 {(t, type(m).__msgtype__) for t, m in self._pending} | set(self._pubs)
                 if ("MS", ros2.mangle(topic), ros2.dds_type_name(typename),
-                    ros2.type_hash(typename)) in have}
+                    ros2.type_hash(typename, self.spec.ros_distro)) in have}
 
     def _publish(self, t_ns: int) -> None:
         self._declare()
-        store = typestore()
+        distro = self.spec.ros_distro
         for topic, m in self._pending:
-            typename = type(m).__msgtype__
-            self._pubs[(topic, typename)].put(bytes(store.serialize_cdr(m, typename)))
+            self._pubs[(topic, type(m).__msgtype__)].put(ros2.serialize(m, distro))
         self._pending.clear()
         sec, nanosec = divmod(t_ns, 1_000_000_000)
-        self.clock.put(bytes(store.serialize_cdr(msg(CLOCK, clock=msg(
-            "builtin_interfaces/msg/Time", sec=sec, nanosec=nanosec)), CLOCK)))
+        self.clock.put(ros2.serialize(msg(CLOCK, clock=msg(
+            "builtin_interfaces/msg/Time", sec=sec, nanosec=nanosec)), distro))
 
     def _pace(self, t_ns: int) -> None:
         now = time.perf_counter()
@@ -187,7 +186,7 @@ class ExternalAgent:
         for topic, payload in items:
             typename = self.commands[topic]
             try:
-                m = typestore().deserialize_cdr(payload, typename)
+                m = ros2.deserialize(payload, typename, self.spec.ros_distro)
             except Exception as err:  # a malformed payload is the stack's error, named
                 raise RunError(f"external controller of {self.name}: a {typename} on {topic} "
                                f"does not decode ({type(err).__name__}: {err})") from err
@@ -242,7 +241,7 @@ class ExternalAgent:
         return [f"{'subscription to' if kind == 'MS' else 'publisher of'} {topic} ({typename})"
                 for kind, topic, typename in want
                 if (kind, ros2.mangle(topic), ros2.dds_type_name(typename),
-                    ros2.type_hash(typename)) not in have]
+                    ros2.type_hash(typename, self.spec.ros_distro)) not in have]
 
     def _wait_ready(self) -> None:
         deadline = time.perf_counter() + self.spec.startup_timeout_s

@@ -133,7 +133,8 @@ class Publisher:
     """A ROS 2 publisher: CDR payloads with rmw_zenoh's attachment, and its `MP` token."""
 
     def __init__(self, node: Node, topic: str, typename: str, entity_id: int) -> None:
-        self.typename, self.key = typename, ros2.topic_key(node.name.domain_id, topic, typename)
+        self.typename = typename
+        self.key = ros2.topic_key(node.name.domain_id, topic, typename, node.name.distro)
         # express: sent at once rather than batched (a batch waits up to a millisecond); one
         # priority for all, so a tick's messages still arrive in the order they were put;
         # BLOCK, not zenoh's default DROP: under load a full queue dropped a /clock or a
@@ -142,10 +143,11 @@ class Publisher:
         self._pub = node.session.declare_publisher(
             self.key, express=True, congestion_control=zenoh.CongestionControl.BLOCK,
             reliability=zenoh.Reliability.RELIABLE)
-        self._gid = ros2.gid(node.name.session_id, entity_id)
+        token = ros2.entity_token(node.name, entity_id, ros2.EntityKind.PUBLISHER, topic,
+                                  typename)
+        self._gid = ros2.gid(token)
         self._seq = 0
-        self._token = node.session.liveliness().declare_token(ros2.entity_token(
-            node.name, entity_id, ros2.EntityKind.PUBLISHER, topic, typename))
+        self._token = node.session.liveliness().declare_token(token)
 
     def matched(self) -> bool:
         """Whether a subscriber's declaration has reached this publisher (until then a put
@@ -160,11 +162,13 @@ class Publisher:
 
 
 class Node:
-    """A ROS 2 node named `name` on its own Zenoh session (closed with `close()`)."""
+    """A ROS 2 node named `name` on its own Zenoh session (closed with `close()`), speaking
+    `distro`'s key format."""
 
-    def __init__(self, session: zenoh.Session, domain_id: int, name: str) -> None:
+    def __init__(self, session: zenoh.Session, domain_id: int, name: str,
+                 distro: ros2.Distro = ros2.DEFAULT_DISTRO) -> None:
         self.session = session
-        self.name = ros2.NodeName(domain_id, str(session.zid()), 0, name)
+        self.name = ros2.NodeName(domain_id, str(session.zid()), 0, name, distro=distro)
         self._entities: list[Any] = [session.liveliness().declare_token(
             ros2.node_token(self.name))]
         self._next_id = 10  # rmw_zenoh numbers a node's entities after its own id
@@ -183,7 +187,7 @@ class Node:
                      on_payload: Callable[[bytes], None]) -> None:
         """Declare a subscription (and its token); `on_payload` gets each CDR payload, on a
         Zenoh thread."""
-        key = ros2.topic_key(self.name.domain_id, topic, typename)
+        key = ros2.topic_key(self.name.domain_id, topic, typename, self.name.distro)
         def take(sample: zenoh.Sample) -> None:
             on_payload(sample.payload.to_bytes())
 

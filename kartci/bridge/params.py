@@ -7,6 +7,7 @@ from typing import Literal
 
 from pydantic import Field
 
+from kartci.bridge.ros2 import DEFAULT_DISTRO, Distro
 from kartci.core import ControllerParams, Frozen
 from kartci.core.params import Count, Period_s
 
@@ -85,6 +86,12 @@ class ExternalController(ControllerParams):
         False, exclude_if=lambda v: v is False,
         description="allow endpoints beyond this host (in `connect` or "
         "$ZENOH_CONFIG_OVERRIDE) and multicast scouting; off, they are an error")
+    # left out of a dump at its default too: baselines accepted before it existed stay current
+    ros_distro: Distro = Field(
+        DEFAULT_DISTRO, exclude_if=lambda v: v is DEFAULT_DISTRO,
+        description="the stack's ROS 2 distribution: its message definitions (Range has "
+        "`variance` from Jazzy on) and type hashes in keys and tokens (humble: "
+        "TypeHashNotSupported, as rmw_zenoh on Humble writes); rolling uses Lyrical's definitions")
     command: tuple[str, ...] = Field((), description="program kartci starts for the run "
                                      "(empty: start the stack yourself, connecting to "
                                      "`port`); `{python}` is kartci's Python, "

@@ -1,23 +1,109 @@
 """rmw_zenoh's wire conventions: key expressions, DDS type names, RIHS01 type hashes, the
-attachment and liveliness tokens (ros2/rmw_zenoh `docs/design.md`, see the README's bridge
-section for the commit they were taken from).
+attachment, GIDs and liveliness tokens (ros2/rmw_zenoh `docs/design.md`, see the README's bridge
+section for the commit they were taken from), and the message definitions of the ROS 2
+distribution the stack runs.
 
-Pure functions of names and numbers, no Zenoh import: the conventions are tested on their own.
+Pure functions of names, numbers and messages, no Zenoh import: the conventions are tested on
+their own.
 """
 
 from __future__ import annotations
 
-import hashlib
 import struct
 from dataclasses import dataclass
 from enum import Enum
 from functools import cache
+from typing import Any
 
-from kartci.logs.types import typestore
+import xxhash
+from rosbags.interfaces import Nodetype
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+
+from kartci.logs.types import typestore as kartci_store
 
 LIVELINESS_PREFIX = "@ros2_lv"
 DEFAULT_QOS = "::,10:,:,:,,"  # default reliability and durability, KEEP_LAST 10, the rest default
 _ATTACHMENT = struct.Struct("<qqB16s")  # sequence number, source timestamp (ns), GID length, GID
+_GID = struct.Struct("<QQ")  # XXH128_hash_t {low64, high64} as memcpy'd on a little-endian host
+NO_TYPE_HASH = "TypeHashNotSupported"  # rmw_zenoh on Humble (no REP 2011 there), keys and tokens
+
+
+class Distro(Enum):
+    """The ROS 2 distribution of the stack: its message definitions and rmw_zenoh's key format."""
+
+    HUMBLE = "humble"
+    JAZZY = "jazzy"
+    KILTED = "kilted"
+    LYRICAL = "lyrical"
+    ROLLING = "rolling"
+
+
+DEFAULT_DISTRO = Distro.JAZZY
+# rosbags' store of each distribution's standard messages. rosbags has no Rolling store:
+# Lyrical's, the release last branched from Rolling, is the nearest (a type changed in Rolling
+# since then is not known to kartci)
+_STORES = {Distro.HUMBLE: Stores.ROS2_HUMBLE, Distro.JAZZY: Stores.ROS2_JAZZY,
+           Distro.KILTED: Stores.ROS2_KILTED, Distro.LYRICAL: Stores.ROS2_LYRICAL,
+           Distro.ROLLING: Stores.ROS2_LYRICAL}
+
+
+@cache
+def typestore(distro: Distro) -> Typestore:
+    """The message definitions a stack on `distro` uses: rosbags' store of that distribution,
+    plus the types it lacks from kartci's own store (ackermann_msgs, vision_msgs, kartci_msgs)."""
+    store = get_typestore(_STORES[distro])
+    store.register({k: v for k, v in kartci_store().fielddefs.items()
+                    if k not in store.fielddefs})
+    return store
+
+
+@cache
+def _differs(typename: str, distro: Distro) -> bool:
+    """Whether `distro` defines a type otherwise than kartci's store (logs and the loop)."""
+    return bool(kartci_store().hash_rihs01(typename) != typestore(distro).hash_rihs01(typename))
+
+
+def _zero(node: tuple[Nodetype, Any], into: Typestore) -> Any:
+    """The value of a field the other definition lacks: 0, "", or a message of them."""
+    kind, detail = node
+    if kind is Nodetype.NAME:
+        return into.types[detail](**{name: _zero(sub, into)
+                                     for name, sub in into.fielddefs[detail][1]})
+    if kind is Nodetype.BASE:
+        return "" if detail[0] in ("string", "wstring") else 0
+    raise ValueError(f"no zero value for a missing field of kind {kind.name}")
+
+
+def _convert(message: Any, into: Typestore, distro: Distro) -> Any:
+    """`message` as a message of `into`'s definition of its type, field by field where the
+    definitions differ (a field `into` lacks is dropped, one it adds is zero)."""
+    typename = message.__msgtype__
+    if not _differs(typename, distro):
+        return message
+    fields = {}
+    for name, node in into.fielddefs[typename][1]:
+        if not hasattr(message, name):
+            fields[name] = _zero(node, into)
+        elif node[0] is Nodetype.NAME:
+            fields[name] = _convert(getattr(message, name), into, distro)
+        elif node[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE) and node[1][0][0] is Nodetype.NAME:
+            fields[name] = [_convert(m, into, distro) for m in getattr(message, name)]
+        else:
+            fields[name] = getattr(message, name)
+    return into.types[typename](**fields)
+
+
+def serialize(message: Any, distro: Distro) -> bytes:
+    """CDR of a message of kartci's store as `distro` defines its type (Range on Jazzy and
+    later: `variance` 0, "unknown")."""
+    store = typestore(distro)
+    return bytes(store.serialize_cdr(_convert(message, store, distro), message.__msgtype__))
+
+
+def deserialize(payload: bytes, typename: str, distro: Distro) -> Any:
+    """A CDR payload of `distro`'s `typename` as a message of kartci's store."""
+    return _convert(typestore(distro).deserialize_cdr(payload, typename), kartci_store(), distro)
 
 
 class EntityKind(Enum):
@@ -36,9 +122,11 @@ def dds_type_name(typename: str) -> str:
 
 
 @cache
-def type_hash(typename: str) -> str:
-    """The RIHS01 hash (REP 2011) of a message definition in kartci's type store."""
-    return str(typestore().hash_rihs01(typename))
+def type_hash(typename: str, distro: Distro = DEFAULT_DISTRO) -> str:
+    """The RIHS01 hash (REP 2011) of `distro`'s definition of a type (Humble: no hash)."""
+    if distro is Distro.HUMBLE:
+        return NO_TYPE_HASH
+    return str(typestore(distro).hash_rihs01(typename))
 
 
 def fully_qualified(topic: str) -> str:
@@ -51,10 +139,11 @@ def mangle(name: str) -> str:
     return name.replace("/", "%") or "%"
 
 
-def topic_key(domain_id: int, topic: str, typename: str) -> str:
+def topic_key(domain_id: int, topic: str, typename: str,
+              distro: Distro = DEFAULT_DISTRO) -> str:
     """`<domain_id>/<fully_qualified_name without its leading slash>/<type_name>/<type_hash>`."""
     return (f"{domain_id}/{fully_qualified(topic)[1:]}/{dds_type_name(typename)}/"
-            f"{type_hash(typename)}")
+            f"{type_hash(typename, distro)}")
 
 
 @dataclass(frozen=True)
@@ -67,6 +156,7 @@ class NodeName:
     name: str
     namespace: str = ""  # "" or "/ns"
     enclave: str = ""
+    distro: Distro = DEFAULT_DISTRO  # the type hashes its tokens carry
 
 
 def node_token(node: NodeName) -> str:
@@ -82,12 +172,15 @@ def entity_token(node: NodeName, entity_id: int, kind: EntityKind, topic: str, t
     return (f"{LIVELINESS_PREFIX}/{node.domain_id}/{node.session_id}/{node.node_id}/"
             f"{entity_id}/{kind.value}/{mangle(node.enclave)}/{mangle(node.namespace)}/"
             f"{node.name}/{mangle(fully_qualified(topic))}/{dds_type_name(typename)}/"
-            f"{type_hash(typename)}/{qos}")
+            f"{type_hash(typename, node.distro)}/{qos}")
 
 
-def gid(session_id: str, entity_id: int) -> bytes:
-    """A publisher's 16-byte GID: unique per session and entity (as rmw_zenoh's are)."""
-    return hashlib.sha256(f"{session_id}/{entity_id}".encode()).digest()[:16]
+def gid(token: str) -> bytes:
+    """An entity's 16-byte GID as rmw_zenoh computes it (liveliness_utils.cpp, `Entity`): the
+    XXH3-128 of its liveliness token, the low 64 bits then the high 64, little endian, so it
+    equals what `ros2 topic info -v` shows for it."""
+    h = xxhash.xxh3_128_intdigest(token.encode())
+    return _GID.pack(h & 0xFFFF_FFFF_FFFF_FFFF, h >> 64)
 
 
 def attachment(sequence: int, source_ns: int, publisher_gid: bytes) -> bytes:

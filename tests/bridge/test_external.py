@@ -9,11 +9,13 @@ import json
 import os
 import shutil
 import signal
+import struct
 import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
+import xxhash
 import yaml
 from helpers import ROOT, kartci
 
@@ -41,8 +43,8 @@ def project(tmp_path: Path, specs: dict[str, dict[str, Any]]) -> Path:
     return proj
 
 
-def listener(out: Path) -> list[str]:
-    return ["{python}", str(LISTENER), str(out), "{namespace}"]
+def listener(out: Path, *distro: str) -> list[str]:
+    return ["{python}", str(LISTENER), str(out), "{namespace}", *distro]
 
 
 @pytest.fixture(scope="module")
@@ -78,8 +80,13 @@ def test_independent_subscriber_sees_clock_odometry_and_tokens(two_at_once: Any)
     bridge = [t for t in tokens if t.endswith("/NN/%/%/kartci")]
     assert len(bridge) == 1
     zid = bridge[0].split("/")[2]
-    assert (f"@ros2_lv/0/{zid}/0/11/MP/%/%/kartci/%clock/rosgraph_msgs::msg::dds_::Clock_/"
-            f"{clock_key.rsplit('/', 1)[1]}/::,10:,:,:,,") in tokens
+    clock_token = (f"@ros2_lv/0/{zid}/0/11/MP/%/%/kartci/%clock/rosgraph_msgs::msg::dds_::"
+                   f"Clock_/{clock_key.rsplit('/', 1)[1]}/::,10:,:,:,,")
+    assert clock_token in tokens
+    # the GID as rmw_zenoh's: XXH3-128 of the publisher's token, low then high 64 bits, LE
+    h = xxhash.xxh3_128_intdigest(clock_token.encode())
+    assert {c["gid"] for c in s["clock"]} == {
+        struct.pack("<QQ", h & (2**64 - 1), h >> 64).hex()}
     assert any(t.startswith(f"@ros2_lv/0/{zid}/0/") and "/MP/%/%/kartci/%kart0%odom/"
                "nav_msgs::msg::dds_::Odometry_/" + odom_key.rsplit("/", 1)[1] in t
                for t in tokens)
@@ -292,3 +299,33 @@ def test_joining_a_remote_endpoint_is_refused_unless_allowed(tmp_path: Path) -> 
     assert "Traceback" not in p.stdout + p.stderr
     assert ("bridge: tcp/192.0.2.1:7447 reaches beyond this host; set allow_remote: true in "
             "the external controller to allow it") in p.stdout + p.stderr
+
+
+def test_a_humble_stack_drives_with_humbles_keys(tmp_path: Path) -> None:
+    """`ros_distro: humble`: keys and tokens carry `TypeHashNotSupported` (rmw_zenoh on Humble);
+    the independent stack, speaking Humble's keys, answers every tick."""
+    seen = tmp_path / "seen.json"
+    proj = project(tmp_path, {"humble": external(0.5, listener(seen, "humble"),
+                                                 ros_distro="humble")})
+    p = kartci("run", "--out", tmp_path / "out", "--no-strict", cwd=proj)
+    assert p.returncode == 0, p.stdout + p.stderr
+    s = json.loads(seen.read_text())
+    assert {c["key"] for c in s["clock"]} == {
+        "0/clock/rosgraph_msgs::msg::dds_::Clock_/TypeHashNotSupported"}
+    assert {o["key"] for o in s["odom"]} == {
+        "0/kart0/odom/nav_msgs::msg::dds_::Odometry_/TypeHashNotSupported"}
+    assert any(t.endswith("/MP/%/%/kartci/%clock/rosgraph_msgs::msg::dds_::Clock_/"
+                          "TypeHashNotSupported/::,10:,:,:,,") for t in s["tokens"])
+    cmds = messages(tmp_path / "out" / "humble" / "run.mcap", "/kart0/ackermann_cmd")
+    assert [c.header.stamp.sec * 10**9 + c.header.stamp.nanosec for c in cmds] == [
+        k * 20_000_000 for k in range(26)]
+
+
+def test_an_unknown_ros_distro_is_one_line(tmp_path: Path) -> None:
+    proj = project(tmp_path, {"iron": external(0.5, [], ros_distro="iron")})
+    p = kartci("run", "--out", tmp_path / "out", "--no-strict", cwd=proj)
+    assert p.returncode == 2
+    assert "Traceback" not in p.stdout + p.stderr
+    assert p.stderr.count("\n") == 1 and p.stderr.endswith(
+        "agents.kart0.controller.ros_distro: Input should be 'humble', 'jazzy', 'kilted', "
+        "'lyrical' or 'rolling'\n")

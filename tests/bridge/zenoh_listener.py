@@ -6,7 +6,9 @@ attachment, stamp) and every liveliness token it sees, and answers each /clock w
 AckermannDriveStamped (zero speed) stamped with the clock's time, CDR-encoded by hand. On SIGTERM
 it writes what it saw as JSON to argv[1].
 
-    python zenoh_listener.py OUT.json NAMESPACE
+    python zenoh_listener.py OUT.json NAMESPACE [humble]
+
+With `humble` it speaks as rmw_zenoh on Humble does: `TypeHashNotSupported` where the hash goes.
 """
 
 import json
@@ -22,12 +24,19 @@ from typing import Any
 import zenoh
 
 OUT, NS = sys.argv[1], sys.argv[2]
+HUMBLE = sys.argv[3:] == ["humble"]
+
+
+def hashed(rihs01: str) -> str:
+    return "TypeHashNotSupported" if HUMBLE else rihs01
+
+
 CLOCK_KEY = ("0/clock/rosgraph_msgs::msg::dds_::Clock_/"
-             "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564")
+             + hashed("RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564"))
 ODOM_KEY = (f"0/{NS}/odom/nav_msgs::msg::dds_::Odometry_/"
-            "RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0")
+            + hashed("RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0"))
 ACK_TYPE = "ackermann_msgs::msg::dds_::AckermannDriveStamped_"
-ACK_HASH = "RIHS01_48ca7612a08d3bb72744fd98b71b7cf2ea24c6ad50fa4e1aa0bbad963c90d8cf"
+ACK_HASH = hashed("RIHS01_48ca7612a08d3bb72744fd98b71b7cf2ea24c6ad50fa4e1aa0bbad963c90d8cf")
 CMD_KEY = f"0/{NS}/ackermann_cmd/{ACK_TYPE}/{ACK_HASH}"
 QOS = "::,10:,:,:,,"
 
@@ -38,7 +47,8 @@ lock = threading.Lock()
 def attachment(sample: zenoh.Sample) -> dict[str, int]:
     raw = sample.attachment.to_bytes() if sample.attachment is not None else b""
     seq, source_ns, n = struct.unpack_from("<qqB", raw) if len(raw) == 33 else (-1, -1, -1)
-    return {"len": len(raw), "seq": seq, "source_ns": source_ns, "gid_len": n}
+    return {"len": len(raw), "seq": seq, "source_ns": source_ns, "gid_len": n,
+            "gid": raw[17:33].hex()}
 
 
 def stamp(payload: bytes, offset: int = 4) -> int:  # after the 4-byte CDR encapsulation header
