@@ -389,6 +389,19 @@ class Session:
             self._fail()
             raise
 
+    def command(self, agent: str, topic: str, message: Any) -> None:
+        """Publish a command for `agent`'s robot at the current step, as its controller would
+        on a control tick: recorded, handed to the topic's readers, applied to the robot. For a
+        caller that decides between steps (a Gymnasium env's action, see kartci.gym)."""
+        if not self._started or self._closed or self.done:
+            raise KartciError("Session.command: only between reset() and the end of the run")
+        names = [r.name for r in self.world.robots]
+        if agent not in names:
+            raise SpecError(f"Session.command: no agent '{agent}'{did_you_mean(agent, names)}")
+        i = names.index(agent)
+        self._puts[i](topic, message, self.t_ns)
+        self.world.robots[i].apply(topic, message)
+
     def _tick(self) -> StepResult:
         """Sense and control at the current step; ends the run when it is over."""
         k, t_ns = self.k, self.t_ns
