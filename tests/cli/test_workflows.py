@@ -46,7 +46,9 @@ PINS = {
     "actions/cache": ("9255dc7a253b0ccc959486e2bca901246202afeb", "v5.0.1"),
     "actions/upload-artifact": ("b7c566a772e6b6bfb58ed0dc250532a479d7789f", "v6.0.0"),
     "actions/download-artifact": ("37930b1c2abaa49bbe596cd826c3c89aef350131", "v7.0.0"),
+    "pypa/gh-action-pypi-publish": ("ed0c53931b1dc9bd32cbe73a98c7f6766f8a527e", "v1.13.0"),
 }
+RELEASE = "release.yml"
 
 
 def _load(text: str) -> dict[Any, Any]:
@@ -87,6 +89,13 @@ def test_least_privilege_pinned_actions_and_overwritable_uploads(name: str) -> N
     else:  # what runs a pull request's code can read, never write
         assert "pull_request" in triggers and doc["permissions"] == {"contents": "read"}
         for job in doc["jobs"].values():  # a job that may write runs on pushes to main only
+            if name == RELEASE and "permissions" in job:  # or publishes, on a version tag only
+                assert job["permissions"] == {"id-token": "write"}
+                assert job["if"] == ("${{ github.event_name == 'push' && "
+                                     "startsWith(github.ref, 'refs/tags/v') }}")
+                assert [s["uses"].split("@")[0] for s in job["steps"]] == [
+                    "actions/download-artifact", "pypa/gh-action-pypi-publish"]
+                continue
             assert "permissions" not in job or (
                 job["permissions"] == {"contents": "write"}
                 and "github.event_name == 'push' && github.ref == 'refs/heads/main'"
@@ -262,7 +271,7 @@ def test_every_install_uses_the_constraints() -> None:
     readme = (ROOT / "README.md").read_text().splitlines()
     runners = [ln for ln in [*readme[:2], *(ROOT / ".ci" / "run").read_text().splitlines()]
                if "pip install" in ln]
-    for text in (TEXTS["ci.yml"], TEXTS["kartci-compare.yml"], TEXTS[GATE],
+    for text in (TEXTS["ci.yml"], TEXTS["kartci-compare.yml"], TEXTS[GATE], TEXTS[RELEASE],
                  (ROOT / "action.yml").read_text()):
         runners += [ln for ln in text.splitlines() if "pip install" in ln]
     assert len(runners) >= 8
