@@ -150,8 +150,11 @@ class KartciEnv(gym.Env[Observation, Observation]):
         s = self._session
         if s is None or self._obs is None or s.done:
             raise SpecError("kartci.gym: step() before reset() or after the episode ended")
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), self.action_box.low,
-                    self.action_box.high)
+        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        if a.shape != self.action_box.shape:
+            raise SpecError(f"kartci.gym: an action is {self.action_box.shape[0]} numbers "
+                            f"({', '.join(self.action_names)}), not {a.size}")
+        a = np.clip(a, self.action_box.low, self.action_box.high)
         s.command(self.agent, self.space.topic,
                   self.space.build(tuple(float(v) for v in a), s.t_ns, self.agent))
         r = s.step()

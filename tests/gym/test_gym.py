@@ -4,6 +4,7 @@ scores the same commands, and the example run as a user runs it."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import subprocess
 import sys
@@ -20,6 +21,7 @@ from gymnasium.utils.env_checker import check_env  # noqa: E402
 
 import kartci  # noqa: E402
 import kartci.gym  # noqa: E402
+from kartci import core  # noqa: E402
 from kartci._bullet import pb  # noqa: E402
 from kartci.errors import KartciError, SpecError  # noqa: E402
 from kartci.logs import header, msg  # noqa: E402
@@ -150,6 +152,9 @@ def test_bad_input_is_one_line() -> None:
     with pytest.raises(SpecError, match="before reset"):
         env.step(np.zeros(2, dtype=np.float32))
     env.reset()
+    with pytest.raises(SpecError, match=r"an action is 2 numbers \(left_wheel_radps, "
+                                        r"right_wheel_radps\), not 3"):
+        env.step(np.zeros(3, dtype=np.float32))
     assert env._session is not None
     with pytest.raises(SpecError, match="no agent 'lt1'"):
         env._session.command("lt1", "wheel_cmd", None)
@@ -177,3 +182,27 @@ def test_the_example_runs_as_a_user_runs_it(tmp_path: Path) -> None:
     assert all("cross_track_max_m" in ln for ln in lines) and "Warning" not in p.stderr
     assert sorted(f.name for f in tmp_path.iterdir()) == ["episode-000001.mcap",
                                                           "episode-000002.mcap"]
+
+
+@pytest.mark.parametrize("kind", [k.name for k in core.ROBOTS.all() if k.control is not None])
+def test_every_kinds_control_space_is_consistent(kind: str) -> None:
+    """Each registered kind that declares vectors: distinct names with units, ranges, a
+    command message from any in-range values, an observation read before any message."""
+    robot = core.ROBOTS.get(kind)
+    assert robot.control is not None
+    space = robot.control(robot.params.model_validate({"kind": kind}))
+    assert space.topic in robot.accepts and set(space.inputs) <= set(robot.publishes)
+    for channels in (space.command, space.observation):
+        names = [c.name for c in channels]
+        assert len(set(names)) == len(names) and all(c.low < c.high for c in channels)
+    message = space.build(tuple(c.high for c in space.command), 0, "bot0")
+    assert message.header.frame_id == "bot0/base_link"
+    assert len(space.read({})) == len(space.observation)
+
+
+def test_a_kind_without_vectors_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    line = core.ROBOTS.get("line_tracker")
+    monkeypatch.setattr(core.ROBOTS, "get", lambda name: dataclasses.replace(line, control=None))
+    with pytest.raises(SpecError, match=r"robot kind line_tracker declares no command and "
+                                        r"observation vectors \(RobotKind.control\)"):
+        kartci.gym.make("line_straight")
