@@ -277,3 +277,22 @@ if [[ "$*" == *--paginate* && -f {tmp_path}/posted.md ]]; then echo 4242; fi
     posted = (tmp_path / "posted.md").read_text()
     assert posted.startswith("<!-- kartci-report -->\n## kartci: all scenarios pass\n")
     assert "https://github.com/team/robot/actions/runs/7" in posted
+
+
+def test_a_comment_that_cannot_be_posted_is_a_warning(tmp_path: Path) -> None:
+    """A fork's pull request gets a read-only token: the comment fails, the step does not."""
+    report = tmp_path / "report"
+    report.mkdir()
+    (report / "summary.md").write_text("## kartci: 1 regression\n")
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    (fake / "gh").write_text("#!/usr/bin/env bash\necho 'HTTP 403: Resource not accessible' >&2\n"
+                             "exit 1\n")
+    (fake / "gh").chmod(0o755)
+    step = _step("Post or update the kartci comment")
+    action = {**ACTION, "runs": {"steps": [{**step, "if": "true", "env": {
+        **step["env"], "PR": "12", "REPORT": str(report)}}]}}
+    ran = run_action(action, {"comment": "true"}, GITHUB, tmp_path,
+                     {**os.environ, "PATH": os.pathsep.join([str(fake), os.environ["PATH"]])})
+    assert ran.code == 0
+    assert "::warning::kartci: no pull-request comment (needs pull-requests: write" in ran.stdout
