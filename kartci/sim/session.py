@@ -7,7 +7,9 @@ then the robots sense at k + 1 and every agent whose control tick falls on k + 1
 message of a step is stamped with the step's sim time, and a control tick is simply a step on
 which the agents' commands appear (step `period_s / dt_s` times to go one control period on).
 `reset()` publishes the messages at t = 0: the recorded scenario, the world's description, the
-static transforms, then the first sensing and control tick.
+static transforms, then the first sensing and control tick. `command(agent, topic, message)`
+publishes a command between steps as that agent's controller would at the current step (how
+`kartci.gym` applies an action).
 
 Agents can be handed in as objects (`agents={"kart0": MyController()}`): such an object replaces
 the scenario's controller of that agent. The log still records the scenario as written, and a
