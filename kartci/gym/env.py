@@ -64,7 +64,8 @@ class KartciEnv(gym.Env[Observation, Observation]):
     controlled agent (its scenario controller's `period_s`), the action its robot kind's command,
     the observation its kind's numbers at the control tick (clipped to the space).
 
-    The other agents keep their scenario controllers. An episode ends as the scenario's run
+    The other agents keep their scenario controllers. The last step of an episode is shorter
+    when `duration_s` is not a whole number of periods. An episode ends as the scenario's run
     does: `terminated` when every robot finished its course, `truncated` when `duration_s` ran
     out. `reset(seed=s)` runs the scenario with `seed: s` (its noise); `reset()` runs the
     scenario's own seed first, then seeds drawn from the env's generator. Each episode is a new
