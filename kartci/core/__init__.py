@@ -9,10 +9,12 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
   `WheelOdometry`, `JoyCommand`, `SimReal`), `WorldKind`, `MetricSet` and their registries;
   `Registries`, the five passed explicitly to what validates a scenario
   (`DEFAULT_REGISTRIES`: the process-wide ones).
+- `Channel`, `ControlSpace`: a robot kind's command and observation as vectors (`kartci.gym`).
 - `RunFolder`: the one owner of a run folder's file names.
 """
 
 from kartci.core.agent import Agent, Outbox
+from kartci.core.control import Channel, ControlSpace, odometry_channels, odometry_values
 from kartci.core.metric import Direction, Metric, MetricDef
 from kartci.core.params import (
     ControllerParams,
@@ -62,6 +64,8 @@ __all__ = [
     "WORLDS",
     "Agent",
     "AgentContext",
+    "Channel",
+    "ControlSpace",
     "Controller",
     "ControllerParams",
     "Direction",
@@ -89,5 +93,7 @@ __all__ = [
     "definitions",
     "lazy",
     "load",
+    "odometry_channels",
+    "odometry_values",
     "register",
 ]

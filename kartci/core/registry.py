@@ -22,6 +22,7 @@ from typing import Any, ClassVar, Generic, TypeVar
 
 from kartci import project as project_mod
 from kartci.core.agent import Agent
+from kartci.core.control import ControlSpace
 from kartci.core.metric import Metric, MetricDef
 from kartci.core.params import (
     ControllerParams,
@@ -145,6 +146,8 @@ class RobotKind:
     # recorded input into a robot of this kind (`kartci replay`); checks the log first
     replay: Callable[[Path, str, str, str], ControllerParams] | None = None
     simreal: SimReal | None = None
+    # (params) -> its command and observation as vectors, for a learning loop (kartci.gym)
+    control: Callable[[Any], ControlSpace] | None = None
 
 
 @dataclass(frozen=True)

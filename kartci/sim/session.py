@@ -7,7 +7,9 @@ then the robots sense at k + 1 and every agent whose control tick falls on k + 1
 message of a step is stamped with the step's sim time, and a control tick is simply a step on
 which the agents' commands appear (step `period_s / dt_s` times to go one control period on).
 `reset()` publishes the messages at t = 0: the recorded scenario, the world's description, the
-static transforms, then the first sensing and control tick.
+static transforms, then the first sensing and control tick. `command(agent, topic, message)`
+publishes a command between steps as that agent's controller would at the current step (how
+`kartci.gym` applies an action).
 
 Agents can be handed in as objects (`agents={"kart0": MyController()}`): such an object replaces
 the scenario's controller of that agent. The log still records the scenario as written, and a
@@ -388,6 +390,19 @@ class Session:
         except BaseException:
             self._fail()
             raise
+
+    def command(self, agent: str, topic: str, message: Any) -> None:
+        """Publish a command for `agent`'s robot at the current step, as its controller would
+        on a control tick: recorded, handed to the topic's readers, applied to the robot. For a
+        caller that decides between steps (a Gymnasium env's action, see kartci.gym)."""
+        if not self._started or self._closed or self.done:
+            raise KartciError("Session.command: only between reset() and the end of the run")
+        names = [r.name for r in self.world.robots]
+        if agent not in names:
+            raise SpecError(f"Session.command: no agent '{agent}'{did_you_mean(agent, names)}")
+        i = names.index(agent)
+        self._puts[i](topic, message, self.t_ns)
+        self.world.robots[i].apply(topic, message)
 
     def _tick(self) -> StepResult:
         """Sense and control at the current step; ends the run when it is over."""

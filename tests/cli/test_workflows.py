@@ -6,7 +6,8 @@ jobs, in workflow order, with the matrix values and expressions substituted. The
 workflow `kartci init` writes into a team's repository; it runs in a temporary project that is
 not kartci, with kartci installed from its wheel into a fresh venv (its own install steps run
 too, offline, against the project's constraints.txt). kartci's own CI (ci.yml) runs its shard
-and merge steps on a small project with this checkout's kartci. The artifact hand-over is
+and merge jobs through the root action.yml (`uses: ./`): tests/action runs those. The artifact
+hand-over is
 checked to be a plain copy of `shards/` (same path uploaded and downloaded, merge-multiple),
 which running in one folder reproduces.
 """
@@ -45,7 +46,9 @@ PINS = {
     "actions/cache": ("9255dc7a253b0ccc959486e2bca901246202afeb", "v5.0.1"),
     "actions/upload-artifact": ("b7c566a772e6b6bfb58ed0dc250532a479d7789f", "v6.0.0"),
     "actions/download-artifact": ("37930b1c2abaa49bbe596cd826c3c89aef350131", "v7.0.0"),
+    "pypa/gh-action-pypi-publish": ("ed0c53931b1dc9bd32cbe73a98c7f6766f8a527e", "v1.13.0"),
 }
+RELEASE = "release.yml"
 
 
 def _load(text: str) -> dict[Any, Any]:
@@ -86,6 +89,13 @@ def test_least_privilege_pinned_actions_and_overwritable_uploads(name: str) -> N
     else:  # what runs a pull request's code can read, never write
         assert "pull_request" in triggers and doc["permissions"] == {"contents": "read"}
         for job in doc["jobs"].values():  # a job that may write runs on pushes to main only
+            if name == RELEASE and "permissions" in job:  # or publishes, on a version tag only
+                assert job["permissions"] == {"id-token": "write"}
+                assert job["if"] == ("${{ github.event_name == 'push' && "
+                                     "startsWith(github.ref, 'refs/tags/v') }}")
+                assert [s["uses"].split("@")[0] for s in job["steps"]] == [
+                    "actions/download-artifact", "pypa/gh-action-pypi-publish"]
+                continue
             assert "permissions" not in job or (
                 job["permissions"] == {"contents": "write"}
                 and "github.event_name == 'push' && github.ref == 'refs/heads/main'"
@@ -100,7 +110,7 @@ def test_least_privilege_pinned_actions_and_overwritable_uploads(name: str) -> N
                if s.get("uses", "").startswith("actions/upload-artifact@"))
     uses = re.findall(r"^\s*(?:- )?uses: (.*)$", TEXTS[name], re.MULTILINE)
     assert uses and len(uses) == sum("uses" in s for s in steps)
-    for line in uses:
+    for line in (u for u in uses if u != "./"):  # ./: the root action.yml (tests/action)
         m = re.fullmatch(r"([\w-]+/[\w-]+)@([0-9a-f]{40}) # (v\d+\.\d+\.\d+)", line)
         assert m is not None, f"not pinned by commit with the version in a comment: {line}"
         assert PINS[m.group(1)] == (m.group(2), m.group(3)), line
@@ -119,6 +129,8 @@ def test_the_comment_workflow_never_runs_the_pull_requests_code() -> None:
     assert uses == ["actions/download-artifact"]
     [down] = [s for s in job["steps"] if "uses" in s]
     merge = _load(TEXTS["ci.yml"])["jobs"]["merge"]["steps"]
+    if any(s.get("uses") == "./" for s in merge):  # the root action.yml uploads the report
+        merge = [*merge, *_load((ROOT / "action.yml").read_text())["runs"]["steps"]]
     uploaded = {s["with"]["name"] for s in merge if "upload-artifact" in s.get("uses", "")}
     assert down["with"]["name"] in uploaded
     assert down["with"]["run-id"] == "${{ github.event.workflow_run.id }}"
@@ -247,33 +259,6 @@ def test_the_gate_runs_in_a_project_that_is_not_kartci(fresh_venv: Path, kartci_
         "pass"}
 
 
-def test_kartci_own_ci_runs_its_shard_and_merge_steps_in_order(tmp_path: Path) -> None:
-    """ci.yml tests kartci itself: its shard and merge steps, with this checkout's kartci
-    (its install steps are what the test environment already did)."""
-    proj = tmp_path / "project"
-    (proj / "scenarios").mkdir(parents=True)
-    (proj / "baselines").mkdir()
-    _short_pair(proj / "scenarios")
-    local = {**os.environ, "KARTCI_ROOT": str(proj)}  # the baselines a developer committed
-    for cmd in (["run", "--no-strict", "--out", str(tmp_path / "first")],
-                ["baseline", "update", str(tmp_path / "first")]):
-        p = subprocess.run([sys.executable, "-m", "kartci.cli", *cmd], env=local,
-                           capture_output=True, text=True, timeout=300)
-        assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
-    work = tmp_path / "work"
-    work.mkdir()
-    summary = tmp_path / "step_summary.md"
-    env = {**os.environ, "PATH": os.pathsep.join([BIN, os.environ.get("PATH", "")]),
-           "KARTCI_ROOT": str(proj), "CI": "true", "GITHUB_ACTIONS": "true",
-           "GITHUB_STEP_SUMMARY": str(summary)}
-    doc = _load(TEXTS["ci.yml"])
-    ran = _run_gate(doc, work, env, {}, install=lambda cmd: False)
-    assert ran == [["kartci", "run"]] * 2 + [["kartci", "merge"]]
-    merged = json.loads((work / "reports" / "merged" / "summary.json").read_text())
-    assert sorted(merged["scenarios"]) == sorted(PAIR) and merged["exit_code"] == 0
-    assert summary.read_text().count("## kartci: all scenarios pass") == 1
-
-
 def test_every_install_uses_the_constraints() -> None:
     """The lock: constraints.txt pins the installed versions of what moves the numbers, and
     every documented or automated install of kartci's checkout uses it."""
@@ -286,8 +271,10 @@ def test_every_install_uses_the_constraints() -> None:
     readme = (ROOT / "README.md").read_text().splitlines()
     runners = [ln for ln in [*readme[:2], *(ROOT / ".ci" / "run").read_text().splitlines()]
                if "pip install" in ln]
-    for text in (TEXTS["ci.yml"], TEXTS["kartci-compare.yml"], TEXTS[GATE]):
+    for text in (TEXTS["ci.yml"], TEXTS["kartci-compare.yml"], TEXTS[GATE], TEXTS[RELEASE],
+                 (ROOT / "action.yml").read_text()):
         runners += [ln for ln in text.splitlines() if "pip install" in ln]
     assert len(runners) >= 8
-    pinned = r"pip install -q -c (\S*constraints\.txt|\"\$pins\") "  # $pins: compare's base side
+    # $pins: compare's base side; $CONSTRAINTS: the action's input (default constraints.txt)
+    pinned = r"pip install -q -c (\S*constraints\.txt|\"\$pins\"|\"\$CONSTRAINTS\") "
     assert all(re.search(pinned, ln) for ln in runners), runners

@@ -33,7 +33,8 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                   replay=lazy("kartci.robots.gokart.drivers:replay"),
                   simreal=SimReal("kart_simreal", (
                       "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped",
-                      "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")))
+                      "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")),
+                  control=lazy("kartci.robots.gokart.control:control"))
 
 __all__ = ["FOOTPRINT_M", "ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",
            "axle_distance_m", "column_for_wheel_angle", "speed_to_pedals", "steer_for_turn_rate",

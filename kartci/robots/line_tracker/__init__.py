@@ -11,4 +11,5 @@ ROBOT = RobotKind("line_tracker", LineTrackerModel,
                   accepts=("wheel_cmd",),
                   simreal=SimReal("diffdrive_simreal", ("geometry_msgs/msg/Twist",
                                                         "geometry_msgs/msg/TwistStamped"),
-                                  wheel_speeds=True))
+                                  wheel_speeds=True),
+                  control=lazy("kartci.robots.line_tracker.control:control"))
