@@ -8,7 +8,7 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Controller`, `Node`, `RobotKind` (with what kind-neutral code asks of a kind:
   `WheelOdometry`, `JoyCommand`, `SimReal`), `WorldKind`, `MetricSet` and their registries;
   `Registries`, the five passed explicitly to what validates a scenario
-  (`DEFAULT_REGISTRIES`: the process-wide ones).
+  (`DEFAULT_REGISTRIES`: the process-wide ones); `broken()`: the plugins that failed to load.
 - `RunFolder`: the one owner of a run folder's file names.
 """
 
@@ -31,6 +31,7 @@ from kartci.core.registry import (
     ROBOTS,
     WORLDS,
     AgentContext,
+    BrokenPlugin,
     Controller,
     JoyCommand,
     MetricSet,
@@ -42,6 +43,7 @@ from kartci.core.registry import (
     SimReal,
     WheelOdometry,
     WorldKind,
+    broken,
     catalogue,
     definition,
     definitions,
@@ -62,6 +64,7 @@ __all__ = [
     "WORLDS",
     "Agent",
     "AgentContext",
+    "BrokenPlugin",
     "Controller",
     "ControllerParams",
     "Direction",
@@ -84,6 +87,7 @@ __all__ = [
     "WheelOdometry",
     "WorldKind",
     "WorldParams",
+    "broken",
     "catalogue",
     "definition",
     "definitions",
