@@ -50,6 +50,7 @@ Grid = list[tuple[str, list[str]]]  # a sweep: (dotted key, its values) per axis
 # baseline of their own: 10,000 is already hours of CI and a minute of validation; a larger
 # grid is a mistake or belongs split over several commands (`--shard` splits the runs, not this).
 MAX_SWEEP_POINTS = 10_000
+REPORT_EVERY_S = 1.0  # sim time between a job's progress reports, s
 
 
 class Vary(StrEnum):
@@ -324,16 +325,17 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
     """Simulate, score and (for the judged run) evaluate one job; never raises for a failed run,
     so one crashing scenario cannot take the others down. Runs in any process."""
     start = time.perf_counter()
-    sim_t = [0.0]
+    sim_t = [0.0, 0.0]  # the sim time reached, and when it was last reported, s
 
     def where() -> str:
-        return f"at sim time {sim_t[0]:.1f} s"
+        return f"at sim time {sim_t[0]:.3g} s"
 
     def progress(t: float) -> None:
         sim_t[0] = t
         if ctx.timeout_s is not None and time.perf_counter() - start > ctx.timeout_s:
             raise RunError(f"time limit: over {ctx.timeout_s:g} s wall clock ({where()})")
-        if report is not None:
+        if report is not None and t - sim_t[1] >= REPORT_EVERY_S:
+            sim_t[1] = t
             report(job.folder, t)
 
     try:
