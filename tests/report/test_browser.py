@@ -10,21 +10,18 @@ import base64
 import io
 import json
 import os
-import re
 import shutil
 from pathlib import Path
 
 import pytest
 from cdp import Browser, find_browser
-from helpers import PAIR, ROOT, KartLap
+from helpers import EMOJI, PAIR, ROOT, KartLap, glance_results
 from PIL import Image
 
-from kartci.core import Direction
 from kartci.report import COMPARE, write_all
 from kartci.report.history import write_history
 from kartci.runner import expand, run_jobs
 from kartci.runner.compare import compare_outs
-from kartci.verdict import MetricVerdict, ScenarioResult, Status
 
 QUICK = ["duration_s=3", "criteria={}", "metrics.line_tracking.transient_s=1"]
 ARTIFACTS = Path(os.environ.get("KARTCI_ARTIFACTS", ROOT / "reports" / "browser"))
@@ -158,20 +155,6 @@ GLANCE = """JSON.stringify({
   first: (() => { const r = document.querySelector('table svg.icon').getBoundingClientRect();
                   return [r.left, r.top, r.width, r.height]; })(),
 })"""
-EMOJI = re.compile("[\U0001F000-\U0001FAFF\u2600-\u27BF\u2B00-\u2BFF\uFE0F]")
-
-
-def glance_results() -> list[ScenarioResult]:
-    """Thirteen scenarios, alphabetically the failures in the middle: eleven pass, one
-    regressed, one errored."""
-    def verdict(status: Status, value: float) -> MetricVerdict:
-        return MetricVerdict("lap_time_s", value, "s", 12.0, 0.1, Direction.LOWER, status)
-
-    results = [ScenarioResult(f"scenario_{i:02d}", "passes", [verdict(Status.PASS, 12.0)])
-               for i in range(13)]
-    results[6] = ScenarioResult("scenario_06", "slower", [verdict(Status.REGRESSED, 12.5)])
-    results[9] = ScenarioResult("scenario_09", "crashed", error="run crashed: boom")
-    return results
 
 
 def test_report_reads_at_a_glance_without_an_emoji_font(tmp_path: Path) -> None:
