@@ -19,3 +19,13 @@ class RunError(KartciError):
 
 class BaselineError(KartciError):
     """A baseline file is malformed or cannot be written."""
+
+
+class PluginError(SpecError):
+    """A plugin a scenario needs failed to load (an installed entry point or a project plugin
+    module): the scenarios that need it fail with this, the others run. `trace`: the plugin's
+    own traceback, for the failed scenario's folder (never a user's terminal)."""
+
+    def __init__(self, message: str, trace: str = "") -> None:
+        super().__init__(message)
+        self.trace = trace

@@ -14,7 +14,7 @@ from __future__ import annotations
 import difflib
 import os
 import tomllib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from enum import Enum
@@ -166,12 +166,13 @@ class Project:
 
     def find_world(self, name: str, allow_outside: bool = False) -> Path:
         """`winti/hall` -> the first `<world folder>/winti/hall.yaml` on the search path."""
-        return self._find(self.world_path, f"{name}.yaml", f"world {name!r}", allow_outside)
+        return self._find(self.world_path, f"{name}.yaml", f"world {name!r}", allow_outside,
+                          (name, "*/*.yaml", lambda p: p.with_suffix("")))
 
     def find_model(self, name: str, allow_outside: bool = False) -> Path:
         """`NAME` -> the first `<model folder>/NAME/params.yaml` on the search path."""
         return self._find(self.model_path, f"{name}/params.yaml", f"robot model {name!r}",
-                          allow_outside)
+                          allow_outside, (name, "*/params.yaml", lambda p: p.parent))
 
     def world_file(self, rel: str, allow_outside: bool = False) -> Path:
         """A data file named relative to the world folders (a track CSV, a mesh)."""
@@ -181,9 +182,10 @@ class Project:
         """A data file named relative to the model folders (a URDF, a joystick mapping)."""
         return self._find(self.model_path, rel, f"model data file {rel!r}", allow_outside)
 
-    def _find(self, path: tuple[Path, ...], rel: str, what: str, allow_outside: bool) -> Path:
+    def _find(self, path: tuple[Path, ...], rel: str, what: str, allow_outside: bool,
+              near: Near | None = None) -> Path:
         """The first `<folder>/rel` on `path` that is a file; a symlink found there must stay
-        within `data_roots` (unless `allow_outside`)."""
+        within `data_roots` (unless `allow_outside`); `near`: how to name a close match."""
         what = what if len(what) <= 120 else what[:117] + "..."  # never echo a huge name
         if Path(rel).is_absolute() or ".." in Path(rel).parts:
             raise SpecError(f"{what}: expected a name relative to the search path "
@@ -197,7 +199,22 @@ class Project:
             except OSError as err:  # a name too long for the file system, say
                 raise SpecError(f"{what}: cannot be a file name ({err.strerror})") from err
         where = ", ".join(str(p) for p in path)
-        raise SpecError(f"{what} not found (searched {where})")
+        raise SpecError(f"{what} not found{_near(path, near)} (searched {where})")
+
+
+# (the name looked up, the glob of every known one in a search folder, that file -> its name)
+Near = tuple[str, str, Callable[[Path], Path]]
+
+
+def _near(path: tuple[Path, ...], near: Near | None) -> str:
+    """' (did you mean 'x'?)' when a name on the search path is close to the one not found."""
+    if near is None:
+        return ""
+    name, pattern, name_of = near
+    known = {name_of(p.relative_to(folder)).as_posix() for folder in path if folder.is_dir()
+             for p in folder.glob(pattern)}
+    hint = did_you_mean(name, known)
+    return hint if hint.startswith(" (did you mean") else ""
 
 
 def shown(path: Path, limit_chars: int = 200) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -13,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from kartci.core import Direction
+from kartci.verdict import MetricVerdict, Status
 from kartci.verdict.result import ScenarioResult
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout
@@ -63,3 +66,20 @@ class KartLap:
     update: subprocess.CompletedProcess[str]
     result: ScenarioResult
 
+
+
+# an emoji (pictographs, dingbats, arrows and shapes, the emoji presentation selector)
+EMOJI = re.compile("[\U0001F000-\U0001FAFF\u2600-\u27BF\u2B00-\u2BFF\uFE0F]")
+
+
+def glance_results() -> list[ScenarioResult]:
+    """Thirteen scenarios, alphabetically the failures in the middle: eleven pass, one
+    regressed, one errored."""
+    def verdict(status: Status, value: float) -> MetricVerdict:
+        return MetricVerdict("lap_time_s", value, "s", 12.0, 0.1, Direction.LOWER, status)
+
+    results = [ScenarioResult(f"scenario_{i:02d}", "passes", [verdict(Status.PASS, 12.0)])
+               for i in range(13)]
+    results[6] = ScenarioResult("scenario_06", "slower", [verdict(Status.REGRESSED, 12.5)])
+    results[9] = ScenarioResult("scenario_09", "crashed", error="run crashed: boom")
+    return results

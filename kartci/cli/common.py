@@ -28,8 +28,9 @@ from kartci.report.ci import (
     in_github_actions,
     scenario_files,
 )
-from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
+from kartci.report.tables import RUN, Wording, conditioning, delta, marked, num, tolerance
 from kartci.runner.gate import strict_default
+from kartci.verdict import Status
 from kartci.verdict.result import ScenarioResult, exit_code, one_line
 
 COMMANDS_GROUP = "kartci.commands"  # entry points: name -> "module:attr", a typer.Typer
@@ -136,21 +137,21 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
     rich would read `[...]` in it as markup and fail on `[/oops]`."""
     for r in results:
         if r.error:
-            line = Text.assemble((r.name, "bold"), f": {MARK[r.status]} error: {r.error}")
+            line = Text.assemble((r.name, "bold"), f": {marked(r.status)}: {r.error}")
             out_console.print(line, highlight=False)
             continue
         table = Table("metric", "value", words.base, "delta", "tolerance", "conditioning",
-                      "verdict", title=Text(f"{r.name}: {MARK[r.status]} {r.status.value}"),
+                      "verdict", title=Text(f"{r.name}: {marked(r.status)}"),
                       title_justify="left")
         for v in r.verdicts:
             table.add_row(Text(v.name), num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
-                          tolerance(v), conditioning(v), f"{MARK[v.status]} {v.status.value}")
+                          tolerance(v), conditioning(v), marked(v.status))
         for c in r.criteria:
             table.add_row(Text(f"criterion {c.name}"), num(c.value), Text(c.bound), "", "", "",
-                          "✅ pass" if c.ok else "❌ failed")
+                          marked(Status.PASS if c.ok else Status.FAILED))
         out_console.print(table)
         for problem in r.problems:
-            out_console.print(Text(f"{r.name}: ❌ {problem}"), highlight=False)
+            out_console.print(Text(f"{r.name}: FAILED: {problem}"), highlight=False)
         for warning in r.warnings:
             err_console.print(Text(f"kartci: warning: {r.name}: {warning}"), highlight=False)
 

@@ -158,7 +158,7 @@ def _open_loop(log: Path, agent: str | None, ns: str | None, reference: Path | N
         worst = ", ".join(f"{k} by {v:.3g}" for k, v in sorted(r.worst.items()))
         ok = r.differing == 0 and not r.note
         bad += not ok
-        text = (f"{'✅' if ok else '❌'} {r.topic}: {r.compared} messages compared, "
+        text = (f"{'same' if ok else 'DIFFERS'} {r.topic}: {r.compared} messages compared, "
                 f"{r.differing} differ" + (f" ({worst})" if worst else "")
                 + (f"; {r.note}" if r.note else ""))
         out_console.print(text, highlight=False, markup=False)

@@ -25,6 +25,7 @@ from kartci.cli.common import (
     out_dir,
     strict_mode,
 )
+from kartci.core import broken
 from kartci.errors import SpecError
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
@@ -113,8 +114,7 @@ def run(
     # CLI start-up: the runner, the simulator and the report's figures (+0.9 s)
     from kartci.report.progress import ProgressView
     from kartci.report.static import scenario_svgs
-    from kartci.runner import expand, parse_shard, run_jobs
-    from kartci.runner import shard as share
+    from kartci.runner import dealt, expand, parse_shard, refused_results, run_jobs, runnable
     from kartci.runner.jobs import Vary, default_suite
     from kartci.runner.merge import write_marker
 
@@ -140,13 +140,17 @@ def run(
         raise SpecError(f"--conditioning {conditioning}: expected 0 (off) or 2 or more")
     live = err_console.is_terminal and not os.environ.get("CI")
     replicas, vary = (conditioning, Vary.START) if conditioning else (repeat, Vary.SEED)
+    selected, refused = runnable(selected, set_ or [], allow_outside_paths=allow_outside_paths)
+    warn_broken_plugins()
     with validating(live) as progress:
         todo = expand(selected, set_ or [], sweep, replicas, vary, progress,
-                      allow_outside_paths=allow_outside_paths)
+                      allow_outside_paths=allow_outside_paths) if selected else []
     if part is not None:
-        todo = share(todo, *part)
+        mine = dealt({j.label for j in todo} | {r.label for r in refused}, *part)
+        todo = [j for j in todo if j.label in mine]
+        refused = [r for r in refused if r.label in mine]
     index, total = part or (None, None)
-    labels = [j.label for j in todo if j.repeat == 0]
+    labels = [*(r.label for r in refused), *(j.label for j in todo if j.repeat == 0)]
     workers = jobs or (os.cpu_count() or 1 if executor is ExecutorKind.RAY else 1)
     with locked(out):  # an unusable or busy --out fails here, before any run
         check_inside(out, labels)
@@ -158,4 +162,12 @@ def run(
             results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
                                executor=executor, ray_address=ray_address, timeout_s=timeout_s,
                                strict=strict_mode(strict), on_event=view, draw=scenario_svgs)
-        finish(results, out, ci=part is None)
+        finish([*refused_results(refused, out), *results], out, ci=part is None)
+
+
+def warn_broken_plugins() -> None:
+    """Each plugin that failed to load, once, before the scenarios that do not need it run."""
+    for plugin in broken():
+        err_console.print(f"kartci: warning: {plugin.message}; the scenarios that name it fail "
+                          "(its traceback: traceback.txt in their folders)", highlight=False,
+                          markup=False, soft_wrap=True)

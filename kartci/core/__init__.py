@@ -8,7 +8,7 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Controller`, `Node`, `RobotKind` (with what kind-neutral code asks of a kind:
   `WheelOdometry`, `JoyCommand`, `SimReal`), `WorldKind`, `MetricSet` and their registries;
   `Registries`, the five passed explicitly to what validates a scenario
-  (`DEFAULT_REGISTRIES`: the process-wide ones).
+  (`DEFAULT_REGISTRIES`: the process-wide ones); `broken()`: the plugins that failed to load.
 - `Channel`, `ControlSpace`: a robot kind's command and observation as vectors (`kartci.gym`).
 - `RunFolder`: the one owner of a run folder's file names.
 """
@@ -33,6 +33,7 @@ from kartci.core.registry import (
     ROBOTS,
     WORLDS,
     AgentContext,
+    BrokenPlugin,
     Controller,
     JoyCommand,
     MetricSet,
@@ -44,6 +45,7 @@ from kartci.core.registry import (
     SimReal,
     WheelOdometry,
     WorldKind,
+    broken,
     catalogue,
     definition,
     definitions,
@@ -64,6 +66,7 @@ __all__ = [
     "WORLDS",
     "Agent",
     "AgentContext",
+    "BrokenPlugin",
     "Channel",
     "ControlSpace",
     "Controller",
@@ -88,6 +91,7 @@ __all__ = [
     "WheelOdometry",
     "WorldKind",
     "WorldParams",
+    "broken",
     "catalogue",
     "definition",
     "definitions",

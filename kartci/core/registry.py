@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -32,7 +33,7 @@ from kartci.core.params import (
     RobotParams,
     WorldParams,
 )
-from kartci.errors import SpecError
+from kartci.errors import PluginError, SpecError
 from kartci.project import Project, did_you_mean
 
 
@@ -190,6 +191,32 @@ def lazy(target: str) -> Callable[..., Any]:
 T = TypeVar("T", Controller, Node, RobotKind, WorldKind, MetricSet)
 
 
+@dataclass(frozen=True)
+class BrokenPlugin:
+    """A plugin that failed to load: reported once by its name, and only what names it fails
+    (pluggy's way: the rest of the run goes on)."""
+
+    name: str  # the entry point's name, or the project's plugin module
+    where: str  # "entry point module:attr of dist 1.0, group kartci.controllers" or the config
+    error: str  # "ValueError: boom": the plugin's own exception, one line
+    trace: str = ""  # its traceback, written into the folder of each scenario that needs it
+
+    @property
+    def message(self) -> str:
+        """One line: which plugin, from where, and its error."""
+        return f"plugin '{self.name}' ({self.where}) failed to load: {self.error}"
+
+    def failure(self) -> PluginError:
+        """The error of a scenario that needs this plugin."""
+        return PluginError(self.message, self.trace)
+
+
+def _broken(name: str, where: str, err: BaseException) -> BrokenPlugin:
+    text = " ".join(str(err).split())
+    return BrokenPlugin(name, where, f"{type(err).__name__}: {text}" if text else
+                        type(err).__name__, "".join(traceback.format_exception(err)))
+
+
 @dataclass
 class Registry(Generic[T]):
     """Plugins of one kind by name; filled from entry points and project plugins on first use."""
@@ -199,6 +226,7 @@ class Registry(Generic[T]):
     kind: type[T]
     items: dict[str, T] = field(default_factory=dict)
     sources: dict[str, str] = field(default_factory=dict)  # name -> where it was registered
+    broken: dict[str, BrokenPlugin] = field(default_factory=dict)  # entry points that failed
 
     def register(self, item: T, replace: bool = False, source: str = "") -> T:
         """Add one plugin; the same name twice is an error unless `replace`."""
@@ -214,12 +242,18 @@ class Registry(Generic[T]):
         return item
 
     def get(self, name: str) -> T:
-        """The plugin of that name; a SpecError naming the known ones otherwise."""
+        """The plugin of that name; a PluginError when it (or a project plugin module, which
+        might have registered it) failed to load, a SpecError naming the known ones otherwise."""
         load()
         item = self.items.get(name)
-        if item is None:
-            raise SpecError(f"unknown {self.what} '{name}'{did_you_mean(name, self.items)}")
-        return item
+        if item is not None:
+            return item
+        if name in self.broken:
+            raise self.broken[name].failure()
+        module = next(iter(_BROKEN_MODULES.values()), None)
+        if module is not None:  # a project module that failed may be the one registering it
+            raise PluginError(f"unknown {self.what} '{name}'; {module.message}", module.trace)
+        raise SpecError(f"unknown {self.what} '{name}'{did_you_mean(name, self.items)}")
 
     def names(self) -> list[str]:
         """Every registered name, sorted."""
@@ -277,9 +311,14 @@ def _caller_module() -> str:
 
 
 def _entry_point_source(ep: Any) -> str:
+    where = _distribution(ep)
+    return f"{ep.module} (entry point{where})" if where else ep.module
+
+
+def _distribution(ep: Any) -> str:
+    """' of dist 1.0' for an entry point that knows its distribution."""
     dist = getattr(ep, "dist", None)
-    where = f" (entry point of {dist.name} {dist.version})" if dist is not None else ""
-    return f"{ep.module}{where}"
+    return f" of {dist.name} {dist.version}" if dist is not None else ""
 
 
 @dataclass(frozen=True)
@@ -295,29 +334,35 @@ class PluginInfo:
 def catalogue(project: Project | None = None) -> list[PluginInfo]:
     """Every registered plugin of every kind, installed ones and the project's own."""
     load(project)
-    return [PluginInfo(reg.what, name, item.description, reg.sources.get(name, "?"))
-            for reg in REGISTRIES for name, item in sorted(reg.items.items())]
+    found = [PluginInfo(reg.what, name, item.description, reg.sources.get(name, "?"))
+             for reg in REGISTRIES for name, item in sorted(reg.items.items())]
+    found += [PluginInfo(reg.what, name, f"FAILED TO LOAD: {b.error}", b.where)
+              for reg in REGISTRIES for name, b in sorted(reg.broken.items())]
+    return found + [PluginInfo("plugin module", b.name, f"FAILED TO LOAD: {b.error}", b.where)
+                    for b in _BROKEN_MODULES.values()]
+
+
+def broken() -> list[BrokenPlugin]:
+    """Every plugin that failed to load (after `load`), entry points then project modules:
+    what a command reports once before running what does not need them."""
+    return [*(b for reg in REGISTRIES for _, b in sorted(reg.broken.items())),
+            *_BROKEN_MODULES.values()]
 
 
 _LOADED: set[str] = set()  # "entry points" and the roots whose project plugins are imported
+_BROKEN_MODULES: dict[str, BrokenPlugin] = {}  # project plugin modules that failed, by module
 
 
 def load(project: Project | None = None) -> None:
     """Import every installed plugin (entry points) and the project's plugin modules, once.
-    Worker processes call this with their parent's project before running anything."""
+    Worker processes call this with their parent's project before running anything. A plugin
+    that fails (any exception) is recorded in `broken()`, never raised here: only the
+    scenarios that name it fail (`Registry.get`)."""
     if "entry points" not in _LOADED:
         _LOADED.add("entry points")
         for reg in REGISTRIES:
             for ep in sorted(entry_points(group=reg.group), key=lambda e: e.name):
-                try:
-                    item = ep.load()
-                except Exception as err:  # a broken plugin names itself, not a traceback
-                    raise SpecError(f"plugin {ep.name} ({ep.value}, group {reg.group}) "
-                                    f"failed to import: {type(err).__name__}: {err}") from err
-                if getattr(item, "name", None) != ep.name:
-                    raise SpecError(f"plugin {ep.value}: entry point '{ep.name}' must name an "
-                                    f"object whose name is '{ep.name}'")
-                reg.register(item, source=_entry_point_source(ep))
+                _load_entry_point(reg, ep)
     proj = project or project_mod.current()
     key = str(proj.root)
     if key in _LOADED or not proj.plugins:
@@ -325,12 +370,25 @@ def load(project: Project | None = None) -> None:
     _LOADED.add(key)
     if str(proj.root) not in sys.path:  # plugin modules kept in the project folder
         sys.path.insert(0, str(proj.root))
+    config = proj.config_file.name if proj.config_file is not None else "the project"
     for module in proj.plugins:
         try:
             importlib.import_module(module)
-        except ImportError as err:
-            raise SpecError(f"{proj.config_file}: plugin module '{module}' cannot be imported "
-                            f"({err})") from err
+        except Exception as err:  # a team's module: its own error, named, not "internal"
+            _BROKEN_MODULES[module] = _broken(module, f"plugin module of {config}", err)
+
+
+def _load_entry_point(reg: Registry[Any], ep: Any) -> None:
+    """Register one entry point's object; a failure is recorded under its name."""
+    where = f"entry point {ep.value}{_distribution(ep)}, group {reg.group}"
+    try:
+        item = ep.load()
+        if getattr(item, "name", None) != ep.name:
+            raise SpecError(f"entry point '{ep.name}' must name an object whose name is "
+                            f"'{ep.name}'")
+        reg.register(item, source=_entry_point_source(ep))
+    except Exception as err:  # a broken plugin takes down only the scenarios that name it
+        reg.broken[ep.name] = _broken(ep.name, where, err)
 
 
 def definitions(metrics: Registry[MetricSet] = METRICS) -> dict[str, MetricDef]:

@@ -12,7 +12,19 @@ from kartci.report.interactive import body_assets, figures_block, head_assets
 from kartci.report.laps import lap_tables
 from kartci.report.markdown import VERDICT_WORD
 from kartci.report.static import scenario_svgs
-from kartci.report.tables import CSS, MARK, RUN, Wording, conditioning, delta, num, tolerance
+from kartci.report.tables import (
+    CSS,
+    RUN,
+    Wording,
+    badge,
+    conditioning,
+    delta,
+    num,
+    tolerance,
+    verdict_line,
+    worst_first,
+)
+from kartci.verdict import Status
 from kartci.verdict.result import ScenarioResult, exit_code
 
 HELP = ("<p>Figures: hover to read values (the time cursor is shared by a scenario's plots and "
@@ -23,9 +35,8 @@ HELP = ("<p>Figures: hover to read values (the time cursor is shared by a scenar
 
 
 def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
-    st = r.status.value
     out = [f'<section id="{html.escape(r.name)}"><h2>{html.escape(r.name)} '
-           f'<span class="{st}">{MARK[r.status]} {st}</span></h2>',
+           f'{badge(r.status)}</h2>',
            f"<p>{html.escape(r.description)}</p>"]
     if r.error:
         out.append(f'<p class="error">{html.escape(r.error)}</p></section>')
@@ -39,20 +50,19 @@ def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
                    f"{html.escape(str(r.run.get('log', '')))}</code></p>")
     out.append(f"<table><tr><th>metric</th><th>value</th><th>{words.base}</th><th>delta</th>"
                "<th>tolerance</th><th>conditioning</th><th>verdict</th></tr>")
-    for v in r.verdicts:
+    for v in sorted(r.verdicts, key=lambda v: not v.status.bad):  # failing metrics first
         out.append(f"<tr><td>{html.escape(v.name)}</td><td>{num(v.value, v.unit)}</td>"
                    f"<td>{num(v.baseline, v.unit)}</td><td>{delta(v)}</td>"
                    f"<td>{tolerance(v)}</td><td class=\"cond-{v.conditioning.value}\">"
-                   f"{conditioning(v)}</td><td class=\"{v.status.value}\">{MARK[v.status]} "
-                   f"{v.status.value}</td></tr>")
+                   f"{conditioning(v)}</td><td>{badge(v.status)}</td></tr>")
     out.append("</table>")
     if r.criteria:
         out.append("<table><tr><th>criterion</th><th>bound</th><th>value</th><th>result</th>"
                    "</tr>")
-        for c in r.criteria:
-            cls = "pass" if c.ok else "failed"
+        for c in sorted(r.criteria, key=lambda c: c.ok):  # failed criteria first
             out.append(f"<tr><td>{html.escape(c.name)}</td><td>{html.escape(c.bound)}</td>"
-                       f"<td>{num(c.value)}</td><td class=\"{cls}\">{cls}</td></tr>")
+                       f"<td>{num(c.value)}</td><td>"
+                       f"{badge(Status.PASS if c.ok else Status.FAILED)}</td></tr>")
         out.append("</table>")
     if r.plots is not None:
         out.append(lap_tables(r.plots))
@@ -77,11 +87,13 @@ def report_html(results: list[ScenarioResult], words: Wording = RUN,
                 static: bool = False, history: tuple[list[str], Any] | None = None) -> str:
     """report.html, self-contained and offline: the verdict, a table of scenarios, and each
     scenario's metrics, criteria, lap tables and figures: interactive (uPlot, inlined once), or
-    `static` SVG with no script (report-static.html, for e-mail)."""
+    `static` SVG with no script (report-static.html, for e-mail). Scenarios come worst first,
+    in the index and in the sections, under a one-line verdict."""
     code = exit_code(results)
+    results = worst_first(results)
     rows = "".join(f'<tr><td><a href="#{html.escape(r.name)}">{html.escape(r.name)}</a></td>'
-                   f'<td class="{r.status.value}">{MARK[r.status]} {r.status.value}</td></tr>'
-                   for r in results)
+                   f"<td>{badge(r.status)}</td></tr>" for r in results)
+    verdict = verdict_line(results)
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     body = "\n".join(_scenario(r, words, static) for r in results)
     if history is not None and not static:
@@ -90,7 +102,9 @@ def report_html(results: list[ScenarioResult], words: Wording = RUN,
     return (f"<!doctype html><html><head><meta charset=\"utf-8\"><title>{html.escape(title)}"
             f"</title><style>{CSS}</style>{'' if static else head_assets()}</head><body>"
             f"<h1>{html.escape(title)}: "
-            f"{VERDICT_WORD[code]}</h1><p>written {stamp}; exit code {code}</p>"
+            f"{VERDICT_WORD[code]}</h1>"
+            f'<p class="verdict {verdict[:4].lower()}">{html.escape(verdict)}</p>'
+            f"<p>written {stamp}; exit code {code}</p>"
             f"<table><tr><th>scenario</th><th>status</th></tr>{rows}</table>"
             f"{'' if static else HELP}"
             f"{body}{'' if static else body_assets()}</body></html>\n")

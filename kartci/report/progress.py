@@ -12,7 +12,7 @@ from rich.live import Live
 from rich.table import Table
 from rich.text import Text
 
-from kartci.report.tables import MARK, num
+from kartci.report.tables import marked, num
 from kartci.runner import Event, EventKind, Job
 from kartci.verdict import Status
 
@@ -73,7 +73,7 @@ class ProgressView:
             row.rtf = o.run.get("real_time_factor")
             row.status = (o.result.status if o.result is not None else
                           Status.ERROR if o.error else Status.PASS)
-            line = (f"{MARK[row.status]} {ev.folder}: {row.status.value} (sim "
+            line = (f"{ev.folder}: {marked(row.status)} (sim "
                     f"{num(o.run.get('sim_time_s'), 's')}, {num(row.rtf)}x real time)")
             if o.error:
                 line += f": {o.error}"

@@ -10,7 +10,16 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from kartci.runner.events import Event, EventKind
-    from kartci.runner.jobs import Job, Outcome, expand, parse_shard, shard
+    from kartci.runner.jobs import (
+        Job,
+        Outcome,
+        Refused,
+        dealt,
+        expand,
+        parse_shard,
+        runnable,
+        shard,
+    )
     from kartci.runner.kinds import ExecutorKind
     from kartci.runner.run import (
         default_baselines,
@@ -20,13 +29,14 @@ if TYPE_CHECKING:
         scenario_folders,
         score,
     )
-    from kartci.runner.suite import run_jobs
+    from kartci.runner.suite import refused_results, run_jobs
 
 _WHERE = {"Event": "events", "EventKind": "events", "ExecutorKind": "kinds",
-          "Job": "jobs", "Outcome": "jobs", "expand": "jobs", "parse_shard": "jobs",
+          "Job": "jobs", "Outcome": "jobs", "Refused": "jobs", "dealt": "jobs",
+          "expand": "jobs", "parse_shard": "jobs", "runnable": "jobs",
           "shard": "jobs", "default_baselines": "run",
           "evaluate": "run", "rescore": "run", "run_one": "run", "scenario_folders": "run",
-          "score": "run", "run_jobs": "suite"}
+          "score": "run", "refused_results": "suite", "run_jobs": "suite"}
 
 
 def __getattr__(name: str) -> Any:
@@ -37,6 +47,6 @@ def __getattr__(name: str) -> Any:
     return getattr(importlib.import_module(f"kartci.runner.{where}"), name)
 
 
-__all__ = ["Event", "EventKind", "ExecutorKind", "Job", "Outcome",
-           "default_baselines", "evaluate", "expand", "parse_shard", "rescore", "run_jobs",
-           "run_one", "scenario_folders", "score", "shard"]
+__all__ = ["Event", "EventKind", "ExecutorKind", "Job", "Outcome", "Refused",
+           "dealt", "default_baselines", "evaluate", "expand", "parse_shard", "refused_results",
+           "rescore", "run_jobs", "run_one", "runnable", "scenario_folders", "score", "shard"]

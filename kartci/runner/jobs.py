@@ -24,7 +24,7 @@ from types import FrameType
 from typing import Any
 
 from kartci import project
-from kartci.errors import RunError, SpecError
+from kartci.errors import PluginError, RunError, SpecError
 from kartci.figures import Plots
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
@@ -50,6 +50,7 @@ Grid = list[tuple[str, list[str]]]  # a sweep: (dotted key, its values) per axis
 # baseline of their own: 10,000 is already hours of CI and a minute of validation; a larger
 # grid is a mistake or belongs split over several commands (`--shard` splits the runs, not this).
 MAX_SWEEP_POINTS = 10_000
+REPORT_EVERY_S = 1.0  # sim time between a job's progress reports, s
 
 
 class Vary(StrEnum):
@@ -136,6 +137,45 @@ def _safe(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.=@+,-]", "_", text)
 
 
+@dataclass(frozen=True)
+class Refused:
+    """A scenario that cannot run here: it names a plugin that failed to load. It is reported
+    as an error of its own while the other scenarios run."""
+
+    label: str  # its result's name and folder
+    error: PluginError
+
+
+def plugin_failure(err: BaseException) -> PluginError | None:
+    """The failed plugin behind a scenario's validation error, if that is what it is."""
+    seen: BaseException | None = err
+    while seen is not None and not isinstance(seen, PluginError):
+        seen = seen.__cause__
+    return seen
+
+
+def runnable(names: list[str], overrides: list[str], *, allow_outside_paths: bool = False
+             ) -> tuple[list[str], list[Refused]]:
+    """The scenarios that can run, and those refused because a plugin they name failed to
+    load; any other problem is bad input that stops everything, as in `expand`."""
+    keep: list[str] = []
+    refused: list[Refused] = []
+    with project.held():
+        for name in names:
+            try:
+                load_scenario(name, overrides, allow_outside_paths=allow_outside_paths)
+            except SpecError as err:
+                cause = plugin_failure(err)
+                if cause is None:
+                    raise
+                stem = Path(name).stem if name.endswith((".yaml", ".yml")) else name
+                refused.append(Refused(_safe(stem + _variant(overrides, [])),
+                                       PluginError(str(err), cause.trace)))
+                continue
+            keep.append(name)
+    return keep, refused
+
+
 def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = None,
            repeat: int = 1, vary: Vary = Vary.SEED, progress: Progress | None = None, *,
            allow_outside_paths: bool = False) -> list[Job]:
@@ -197,9 +237,19 @@ def _checked_size(name: str, grid: Grid) -> int:
 
 def default_suite(paths: list[Path], allow_outside_paths: bool = False) -> list[str]:
     """The scenarios a plain `kartci run` runs: all but `tool` ones and grids (a scenario with
-    its own sweep), which run by name."""
-    return [p.stem for p in paths if "tool" not in (spec := load_scenario(
-        p.stem, allow_outside_paths=allow_outside_paths)).tags and not spec.sweep]
+    its own sweep), which run by name; one that names a plugin that failed to load is kept
+    (it is reported as failed, see `runnable`)."""
+    return [p.stem for p in paths if _in_default_suite(p.stem, allow_outside_paths)]
+
+
+def _in_default_suite(name: str, allow_outside_paths: bool) -> bool:
+    try:
+        spec = load_scenario(name, allow_outside_paths=allow_outside_paths)
+    except SpecError as err:
+        if plugin_failure(err) is None:
+            raise
+        return True
+    return "tool" not in spec.tags and not spec.sweep
 
 
 def _variant(overrides: list[str], point: list[tuple[str, str]]) -> str:
@@ -232,9 +282,13 @@ def parse_shard(text: str) -> tuple[int, int]:
 def shard(jobs: list[Job], index: int, total: int) -> list[Job]:
     """Shard `index` of `total` (1-based): labels sorted by name, dealt round-robin, so every
     shard gets the same count (±1) and a label with its repeats stays on one shard."""
-    labels = sorted({j.label for j in jobs})
-    mine = {label for i, label in enumerate(labels) if i % total == index - 1}
+    mine = dealt({j.label for j in jobs}, index, total)
     return [j for j in jobs if j.label in mine]
+
+
+def dealt(labels: set[str], index: int, total: int) -> set[str]:
+    """The labels of shard `index` of `total`: sorted, dealt round-robin."""
+    return {label for i, label in enumerate(sorted(labels)) if i % total == index - 1}
 
 
 @contextmanager
@@ -271,16 +325,17 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
     """Simulate, score and (for the judged run) evaluate one job; never raises for a failed run,
     so one crashing scenario cannot take the others down. Runs in any process."""
     start = time.perf_counter()
-    sim_t = [0.0]
+    sim_t = [0.0, 0.0]  # the sim time reached, and when it was last reported, s
 
     def where() -> str:
-        return f"at sim time {sim_t[0]:.1f} s"
+        return f"at sim time {sim_t[0]:.3g} s"
 
     def progress(t: float) -> None:
         sim_t[0] = t
         if ctx.timeout_s is not None and time.perf_counter() - start > ctx.timeout_s:
             raise RunError(f"time limit: over {ctx.timeout_s:g} s wall clock ({where()})")
-        if report is not None:
+        if report is not None and t - sim_t[1] >= REPORT_EVERY_S:
+            sim_t[1] = t
             report(job.folder, t)
 
     try:

@@ -288,9 +288,13 @@ def check_criteria_names(specs: list[Scenario]) -> None:
         unknown = sorted(
             c for c in spec.criteria if c not in defs and not (
                 c.partition(".")[0] in spec.agents and c.partition(".")[2] in defs))
-        if unknown:
+        if unknown:  # the nearest metric, or agent.metric for a misspelt agent's
+            hint = did_you_mean(unknown[0], [*defs, *(f"{a}.{m}" for a in spec.agents
+                                                      for m in defs)])
+            if not hint.startswith(" (did you mean"):
+                hint = did_you_mean(unknown[0], defs)  # the metrics known, not every agent's
             raise SpecError(f"scenario {spec.name}: criteria on unknown metrics: "
-                            f"{', '.join(unknown)}{did_you_mean(unknown[0], defs)}")
+                            f"{', '.join(unknown)}{hint}")
 
 
 def scenario_folders(out: Path) -> list[Path]:

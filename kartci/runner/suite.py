@@ -5,11 +5,12 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from kartci.core import UNFINISHED
+from kartci.atomic import write_text_atomic
+from kartci.core import UNFINISHED, RunFolder
 from kartci.runner import conditioning, costs
 from kartci.runner.events import Event, Listener
 from kartci.runner.executors import execute
-from kartci.runner.jobs import REPEAT_PREFIX, Context, Draw, Job, Outcome, Vary
+from kartci.runner.jobs import REPEAT_PREFIX, Context, Draw, Job, Outcome, Refused, Vary
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.run import mark_failed
 from kartci.verdict.result import ScenarioResult
@@ -55,6 +56,20 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
         if job.vary is Vary.START and len(mine) > 1:
             result = conditioning.judged(result, out / job.label, baselines)
         results.append(result)
+    return results
+
+
+def refused_results(refused: list[Refused], out: Path) -> list[ScenarioResult]:
+    """Each refused scenario as an ERROR result, its folder marked failed with the failed
+    plugin's own traceback in traceback.txt (the message names the plugin and its error)."""
+    results = []
+    for r in refused:
+        folder = out / r.label
+        folder.mkdir(parents=True, exist_ok=True)
+        mark_failed(folder, r.label, str(r.error))
+        if r.error.trace:
+            write_text_atomic(RunFolder(folder).traceback, r.error.trace)
+        results.append(ScenarioResult(r.label, "", error=str(r.error)))
     return results
 
 

@@ -7,7 +7,8 @@ context (`Scenario.model_validate(data, context=context(registries))`), not modu
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping
+from typing import Any, get_args, get_origin
 
 from pydantic import BaseModel, ValidationError, ValidationInfo
 
@@ -42,13 +43,25 @@ def with_allowed_keys(model: type[BaseModel], err: ValidationError) -> list[dict
         if e["type"] == "extra_forbidden":
             owner: Any = model
             for part in e["loc"][:-1]:
-                field = owner.model_fields.get(str(part)) if isinstance(owner, type) and (
-                    issubclass(owner, BaseModel)) else None
-                owner = field.annotation if field is not None else None
+                owner = _inner(owner, str(part))
             if isinstance(owner, type) and issubclass(owner, BaseModel):
                 e["ctx"] = {"allowed": list(owner.model_fields)}
         out.append(e)
     return out
+
+
+def _inner(owner: Any, part: str) -> Any:
+    """The model one step down an error's location: a field of a model, the value type of a
+    `dict[str, Model]` (an agent by name), the one model of an `X | None`; None otherwise."""
+    if isinstance(owner, type) and issubclass(owner, BaseModel):
+        field = owner.model_fields.get(part)
+        return field.annotation if field is not None else None
+    args = [a for a in get_args(owner) if a is not type(None)]
+    if get_origin(owner) in (dict, Mapping) and len(args) == 2:
+        return args[1]
+    if len(args) == 1:  # X | None
+        return _inner(args[0], part)
+    return None
 
 
 def _tag(value: Any, key: str, loc: tuple[str | int, ...], what: str) -> str | None:

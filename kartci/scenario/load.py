@@ -259,6 +259,11 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
         raise SpecError(f"--set {clip(repr(assignment), 80)}: expected dotted.key=value")
     parts = key.strip().split(".")
     key = clip(key, 80)  # for messages
+    agents = data.get("agents")
+    if len(parts) > 2 and parts[0] == "agents" and isinstance(agents, dict) and agents and (
+            parts[1] not in agents):  # a key inside an agent the scenario does not have
+        raise SpecError(f"--set {key}: unknown agent '{clip(parts[1], 80)}'"
+                        f"{did_you_mean(parts[1], agents)}")
     node: Any = data
     for i, part in enumerate(parts[:-1]):
         if not isinstance(node, dict):

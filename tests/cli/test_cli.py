@@ -158,7 +158,7 @@ def test_baseline_cycle_and_a_tightened_baseline_fails(tmp_path: Path) -> None:
     before = (base / "line_straight.json").read_text()
     worse = kartci("run", "line_straight", *SHORT, "--out", out, "--baselines", base)
     assert worse.returncode == 1
-    assert "cross_track_rms_m" in worse.stdout and "regressed" in worse.stdout
+    assert "cross_track_rms_m" in worse.stdout and "REGRESSED" in worse.stdout
     assert (base / "line_straight.json").read_text() == before  # untouched by the run
     html = (out / "report.html").read_text()
     assert "cross_track_rms_m" in html and 'class="regressed"' in html and 'class="kfigs"' in html

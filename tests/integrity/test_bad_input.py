@@ -234,7 +234,7 @@ def test_baseline_fifo_is_an_error_not_a_hang(tmp_path: Path) -> None:
     proc = kartci("run", "kart_manual", "--set", "duration_s=1", "--baselines", "bl",
                   "--out", "out", cwd=tmp_path)
     assert proc.returncode == 2, proc.stdout + proc.stderr
-    assert "kart_manual: 💥 error: bl/kart_manual.json: not a regular file (a FIFO)" \
+    assert "kart_manual: ERROR: bl/kart_manual.json: not a regular file (a FIFO)" \
         in proc.stdout
 
 
@@ -307,7 +307,7 @@ def test_urdf_and_map_are_read_as_bounded_regular_files(tmp_path: Path, scenario
     proc = kartci("run", scenario, "--set", "duration_s=0.1", "--set", f"{key}={fifo}",
                   "--out", "out", cwd=tmp_path)
     assert proc.returncode == 2, proc.stdout + proc.stderr
-    assert f"{scenario}: 💥 error: {fifo}: {reason}" in proc.stdout
+    assert f"{scenario}: ERROR: {fifo}: {reason}" in proc.stdout
 
 
 def test_box_and_hall_sizes_must_be_positive(tmp_path: Path) -> None:

@@ -7,6 +7,7 @@ Screenshots go to $KARTCI_ARTIFACTS (default reports/browser/ in the checkout), 
 from __future__ import annotations
 
 import base64
+import io
 import json
 import os
 import shutil
@@ -14,7 +15,8 @@ from pathlib import Path
 
 import pytest
 from cdp import Browser, find_browser
-from helpers import PAIR, ROOT, KartLap
+from helpers import EMOJI, PAIR, ROOT, KartLap, glance_results
+from PIL import Image
 
 from kartci.report import COMPARE, write_all
 from kartci.report.history import write_history
@@ -141,3 +143,53 @@ def test_history_page_names_the_commit_under_the_cursor(tmp_path: Path) -> None:
         browser.close()
     assert errors == []
     assert legend == ["000001-c1", "12.25"]  # the middle commit, by name, and its value
+
+
+GLANCE = """JSON.stringify({
+  verdict: document.querySelector('p.verdict').textContent,
+  index: [...document.querySelectorAll('table')[0].querySelectorAll('tr')].slice(1)
+    .map(r => r.textContent.trim()),
+  sections: [...document.querySelectorAll('section')].map(s => s.id),
+  icons: [...document.querySelectorAll('svg.icon')].map(s => {
+    const r = s.getBoundingClientRect(); return [r.width, r.height]; }),
+  first: (() => { const r = document.querySelector('table svg.icon').getBoundingClientRect();
+                  return [r.left, r.top, r.width, r.height]; })(),
+})"""
+
+
+def test_report_reads_at_a_glance_without_an_emoji_font(tmp_path: Path) -> None:
+    """Status marks are inline SVG shapes with words (no emoji font needed: a stock headless
+    Chromium has none), the failures come first in the index and the sections, under a
+    one-line verdict; the screenshot (report-glance.png) shows it."""
+    exe = find_browser()
+    if exe is None:
+        pytest.skip("no headless Chromium: install Debian's chromium package (.ci/run does)")
+    paths = write_all(glance_results(), tmp_path / "out")
+    for name in ("html", "static", "markdown"):
+        assert not EMOJI.search(paths[name].read_text(encoding="utf-8")), name
+    browser = Browser(exe, tmp_path / "profile")
+    try:
+        session = browser.open(paths["html"].as_uri())
+        browser.send("Emulation.setDeviceMetricsOverride", session, width=900, height=700,
+                     deviceScaleFactor=1, mobile=False)
+        page = json.loads(browser.evaluate(session, GLANCE))
+        png = base64.b64decode(browser.send("Page.captureScreenshot", session,
+                                            format="png")["data"])
+        errors = browser.console_errors()
+    finally:
+        browser.close()
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    (ARTIFACTS / "report-glance.png").write_bytes(png)
+    assert errors == []
+    assert page["verdict"] == ("FAIL: 2 of 13 scenarios fail: scenario_09 (error), scenario_06 "
+                               "(regressed) (1 error, 1 regressed, 11 pass)")
+    assert page["index"][:3] == ["scenario_09 ERROR", "scenario_06 REGRESSED",
+                                 "scenario_00 pass"]
+    assert page["sections"][:3] == ["scenario_09", "scenario_06", "scenario_00"]
+    assert len(page["icons"]) == 13 * 2 + 12 and all(i == [14, 14] for i in page["icons"])
+    left, top, _, height = page["first"]  # the error's octagon: red where it is drawn
+    image = Image.open(io.BytesIO(png)).convert("RGB")
+    pixel = image.getpixel((round(left + 2), round(top + height / 2)))
+    assert isinstance(pixel, tuple)
+    r, g, b = pixel[:3]
+    assert r > 150 and g < 60 and b < 60, (r, g, b)

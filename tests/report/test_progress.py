@@ -40,8 +40,8 @@ def test_ci_view_prints_one_line_per_finished_job() -> None:
             jobs[1], run={"sim_time_s": 26.0, "real_time_factor": 5.2})))
         view(Event(EventKind.FINISHED, "line_straight", outcome=Outcome(jobs[0], "boom")))
     lines = buf.getvalue().splitlines()
-    assert lines == ["✅ line_circle: pass (sim 26 s, 5.2x real time)",
-                     "💥 line_straight: error (sim —, —x real time): boom"]
+    assert lines == ["line_circle: pass (sim 26 s, 5.2x real time)",
+                     "line_straight: ERROR (sim —, —x real time): boom"]
 
 
 def test_live_view_counts_done_running_queued() -> None:

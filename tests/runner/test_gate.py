@@ -429,6 +429,24 @@ def test_merge_errors_do_not_echo_file_contents(tmp_path: Path, baselines: Path)
 
 # 6. Time limits hold inside a slow controller step --------------------------------------------
 
+def test_a_time_limit_names_the_sim_time_it_stopped_at(
+        tmp_path: Path, baselines: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The limit's alarm, raised inside the controller step after 0.2 s of sim time (no wall
+    clock involved), names the sim time reached there, not the last progress report's (0.0 s)."""
+    real = LinePid.step
+
+    def step(self: LinePid, t_ns: int) -> Outbox:
+        if t_ns > 200_000_000:
+            signal.raise_signal(signal.SIGALRM)  # as if the wall-clock limit expired here
+        return real(self, t_ns)
+
+    monkeypatch.setattr(LinePid, "step", step)
+    result = run_jobs(expand(["line_straight"], OVERRIDES), tmp_path, baselines,
+                      timeout_s=600.0)[0]
+    # line_pid steps every 0.06 s: at 0.24 s, one physics step (2 ms) after the 0.238 s reached
+    assert result.error == "time limit: over 600 s wall clock (at sim time 0.238 s)"
+
+
 def test_a_sleeping_controller_step_is_stopped_by_the_time_limit(
         tmp_path: Path, baselines: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     real = LinePid.step

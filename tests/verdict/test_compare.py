@@ -59,7 +59,8 @@ def test_a_worse_head_exits_1_and_every_output_names_the_regression(runs: Path) 
     assert "kartci compare report" in html and f"<td>{metric}</td>" in html
     assert 'class="regressed"' in html and html.count('class="kfigs"') == 2
     static = (out / "report-static.html").read_text()
-    assert static.count("<svg") == 6  # 3 overlaid plots each
+    figures = static.count("<svg") - static.count('<svg class="icon"')  # not the status icons
+    assert figures == 6  # 3 overlaid plots each
     md = (out / "summary.md").read_text()
     assert f"`{metric}`" in md and "| base |" in md and "regressed" in md
     assert step_summary.read_text() == "earlier step\n" + md  # appended, not replaced
