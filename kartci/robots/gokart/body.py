@@ -1,4 +1,5 @@
-"""The go-kart as a PyBullet multibody: tyre forces from a slip model (tyres.py) applied to the
+"""The go-kart as a PyBullet multibody: its chassis weighed to the parameters' mass properties
+(inertia.py), tyre forces from a slip model (tyres.py) applied to the
 chassis every physics step, position-controlled steer joints through the measured steering map,
 and wheels spun at their rolling speed (for odometry and looks; their contacts have no
 friction and only carry the weight)."""
@@ -11,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from kartci._bullet import pb, quiet_c_output
+from kartci.robots.gokart.inertia import weigh_chassis
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput, wheel_angles
 from kartci.robots.gokart.tyres import air_drag_n, drive_demand, wheel_force, wheels
@@ -30,7 +32,7 @@ class Gokart(Base):
         x, y, yaw = pose
         with quiet_c_output():
             body = int(pb.loadURDF(
-                str(physics_urdf(model_dir / model.urdf)),
+                str(physics_urdf(model_dir / model.urdf, weigh_chassis(model))),
                 [x, y, model.rear_wheel_radius_m + 0.005], pb.getQuaternionFromEuler([0, 0, yaw]),
                 flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=client))
         super().__init__(client, body, fixed_frames(model_dir / model.urdf))
