@@ -1,14 +1,18 @@
 """The kart plant's parts, each against its closed form: the simulated body weighs what the
-parameters say (kartci/robots/gokart/inertia.py)."""
+parameters say, load transfer, the motors' torque-speed curve, the friction ellipse and the
+longitudinal slip (kartci/robots/gokart/{inertia,tyres}.py)."""
 
 from __future__ import annotations
+
+import math
 
 import pytest
 
 from kartci._bullet import pb
 from kartci.errors import SpecError
 from kartci.robots.gokart.body import Gokart
-from kartci.robots.gokart.params import GokartModel, cog_x_m
+from kartci.robots.gokart.params import GRAVITY_MPS2, GokartModel, axle_distance_m, cog_x_m
+from kartci.robots.gokart.tyres import Demand, motor_force_n, normal_loads, wheel_force, wheels
 from kartci.scenario import project_root
 
 MODELS = project_root() / "kartci" / "data" / "models" / "gokart"
@@ -63,3 +67,57 @@ def test_impossible_mass_properties_are_one_line(field: str, value: float, messa
     finally:
         pb.disconnect(c)
     assert str(err.value) == message
+
+
+def test_load_transfer_moves_weight_by_its_lever() -> None:
+    tyres = wheels(NOMINAL)
+    m, h, length = NOMINAL.mass_kg, NOMINAL.cog_height_m, axle_distance_m(NOMINAL)
+    static = normal_loads(NOMINAL, tyres, 0.0, 0.0)
+    assert static == pytest.approx([w.static_kg for w in tyres])
+    assert sum(static) == pytest.approx(m)
+    # braking at 5 m/s^2: m a h / (g L) = 28.7 kg from the rear axle to the front
+    braking = normal_loads(NOMINAL, tyres, -5.0, 0.0)
+    moved = m * 5.0 * h / (GRAVITY_MPS2 * length)
+    assert braking[2] + braking[3] - static[2] - static[3] == pytest.approx(moved)
+    assert sum(braking) == pytest.approx(m)
+    # a left turn at 6 m/s^2: each axle moves m_axle a h / (g track) to its right wheel, the
+    # whole kart m a h / g in moment (the axles share it by their static loads)
+    turning = normal_loads(NOMINAL, tyres, 0.0, 6.0)
+    moment = sum((n - s) * -w.y_m * 2 for n, s, w in zip(turning, static, tyres, strict=True)) / 2
+    assert moment == pytest.approx(m * 6.0 * h / GRAVITY_MPS2)
+    assert turning[1] > static[1] and turning[0] < static[0]  # rr gains, rl loses
+    # beyond tipping the inner wheels carry nothing, never less
+    assert min(normal_loads(NOMINAL, tyres, 0.0, 60.0)) == 0.0
+
+
+def test_motor_curve_is_torque_then_power() -> None:
+    rear = wheels(NOMINAL)[0]
+    corner = NOMINAL.motor_power_w * rear.radius_m / NOMINAL.wheel_torque_limit_nm  # 3.74 m/s
+    assert corner == pytest.approx(3.743, abs=1e-3)
+    assert motor_force_n(NOMINAL, rear, 0.0) == pytest.approx(95.0 / 0.127)
+    assert motor_force_n(NOMINAL, rear, 0.9 * corner) == pytest.approx(95.0 / 0.127)
+    assert motor_force_n(NOMINAL, rear, 10.0) == pytest.approx(280.0)  # 2.8 kW at 10 m/s
+    assert motor_force_n(NOMINAL, rear, -10.0) == pytest.approx(280.0)  # and in reverse
+
+
+def test_friction_ellipse_and_longitudinal_slip() -> None:
+    model = NOMINAL.model_copy(update={"long_grip_ratio": 1.2, "rolling_resistance_coeff": 0.0})
+    rear = wheels(model)[0]
+    load, alpha = 100.0, 0.05  # kg, rad: the contact moves 0.05 rad off the wheel's heading
+    v = (10.0 * math.cos(alpha), -10.0 * math.sin(alpha))
+    pure = wheel_force(model, rear, load, Demand(0.0, 0.0), 0.0, v, 1.0)
+    lateral = load * 10.0 * math.sin(1.1 * math.atan(5.2 * alpha))  # N D sin(C atan(B alpha))
+    assert pure.fy_n == pytest.approx(lateral)
+    # braking at 4 m/s^2 on 100 kg: F_x = 400 N; F_y scaled by the ellipse
+    braked = wheel_force(model, rear, load, Demand(0.0, 4.0), 0.0, v, 1.0)
+    f_x = -load * 4.0
+    f_x_max = load * 10.0 * 1.2
+    assert braked.fx_n == pytest.approx(f_x)
+    assert braked.fy_n == pytest.approx(lateral * math.sqrt(1 - (f_x / f_x_max) ** 2))
+    assert braked.slip == pytest.approx(f_x / (15.0 * load * GRAVITY_MPS2))  # -0.027
+    # beyond the ellipse's longitudinal axis the wheel locks: all of it along x, none sideways
+    locked = wheel_force(model, rear, load, Demand(0.0, 20.0), 0.0, v, 1.0)
+    assert (locked.fx_n, locked.fy_n, locked.slip) == pytest.approx((-f_x_max, 0.0, -1.0))
+    # a driven wheel beyond it spins: +1
+    spinning = wheel_force(model, rear, 30.0, Demand(5.0, 0.0), 0.0, (1.0, 0.0), 1.0)
+    assert (spinning.fx_n, spinning.slip) == pytest.approx((30.0 * 10.0 * 1.2, 1.0))
