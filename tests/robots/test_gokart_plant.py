@@ -115,9 +115,12 @@ def test_friction_ellipse_and_longitudinal_slip() -> None:
     assert braked.fx_n == pytest.approx(f_x)
     assert braked.fy_n == pytest.approx(lateral * math.sqrt(1 - (f_x / f_x_max) ** 2))
     assert braked.slip == pytest.approx(f_x / (15.0 * load * GRAVITY_MPS2))  # -0.027
+    assert braked.spin_mps == pytest.approx(v[0] * (1 + braked.slip))  # the wheel turns slower
     # beyond the ellipse's longitudinal axis the wheel locks: all of it along x, none sideways
     locked = wheel_force(model, rear, load, Demand(0.0, 20.0), 0.0, v, 1.0)
-    assert (locked.fx_n, locked.fy_n, locked.slip) == pytest.approx((-f_x_max, 0.0, -1.0))
+    assert (locked.fx_n, locked.fy_n, locked.slip, locked.spin_mps) == pytest.approx(
+        (-f_x_max, 0.0, -1.0, 0.0))
     # a driven wheel beyond it spins: +1
     spinning = wheel_force(model, rear, 30.0, Demand(5.0, 0.0), 0.0, (1.0, 0.0), 1.0)
-    assert (spinning.fx_n, spinning.slip) == pytest.approx((30.0 * 10.0 * 1.2, 1.0))
+    assert (spinning.fx_n, spinning.slip, spinning.spin_mps) == pytest.approx(
+        (30.0 * 10.0 * 1.2, 1.0, 2.0))

@@ -6,7 +6,6 @@ friction and only carry the weight)."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -112,9 +111,7 @@ class Gokart(Base):
                      r[6] * f.fx_n + r[7] * f.fy_n)
             pb.applyExternalForce(self.body, -1, force, at, pb.WORLD_FRAME, physicsClientId=c)
             fx_sum, fy_sum = fx_sum + f.fx_n, fy_sum + f.fy_n
-            v_long = (math.cos(delta) * (vx - yaw_rate * dy)
-                      + math.sin(delta) * (vy + yaw_rate * dx))
-            spin.append((v_long + f.slip * abs(v_long)) / w.radius_m)
+            spin.append(f.spin_mps / w.radius_m)
         drag = air_drag_n(m, vx)
         pb.applyExternalForce(self.body, -1, (r[0] * drag, r[3] * drag, r[6] * drag), com,
                               pb.WORLD_FRAME, physicsClientId=c)

@@ -99,11 +99,13 @@ class Demand:
 
 @dataclass(frozen=True)
 class TyreForce:
-    """One wheel's force in the body frame (N) and its longitudinal slip ratio."""
+    """One wheel's force in the body frame (N), its longitudinal slip ratio, and its
+    circumferential speed omega r (m/s: the road speed with the slip)."""
 
     fx_n: float
     fy_n: float
     slip: float
+    spin_mps: float
 
 
 def _fade(v: float) -> float:
@@ -135,7 +137,8 @@ def wheel_force(model: GokartModel, wheel: Wheel, load_kg: float, demand: Demand
     f_lat *= math.sqrt(max(0.0, 1.0 - (f_long / f_max) ** 2)) if f_max > 0 else 0.0
     stiffness = model.long_slip_stiffness * load_kg * GRAVITY_MPS2
     slip = f_long / stiffness if abs(want) <= f_max and stiffness > 0 else math.copysign(1.0, want)
-    return TyreForce(c * f_long - s * f_lat, s * f_long + c * f_lat, slip)
+    return TyreForce(c * f_long - s * f_lat, s * f_long + c * f_lat, slip,
+                     v_long + slip * abs(v_long))
 
 
 def drive_demand(model: GokartModel, accel_mps2: float, brake_mps2: float, reverse: bool,
