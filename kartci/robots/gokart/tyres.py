@@ -81,7 +81,7 @@ def normal_loads(model: GokartModel, tyres: list[Wheel], ax_mps2: float, ay_mps2
     to_rear = per_g * ax_mps2 / axle_distance_m(model)  # kg from the front axle to the rear
     out = []
     for w in tyres:
-        axle = max(0.0, 2 * w.static_kg + (to_rear if w.driven else -to_rear))
+        axle = max(0.0, 2 * w.static_kg + (to_rear if w.driven else -to_rear))  # driven: rear
         # the axle's share of the roll moment, to the outside of the turn (-y for a_y > 0)
         across = axle / model.mass_kg * per_g * ay_mps2 / (2 * abs(w.y_m))
         out.append(axle / 2 - math.copysign(min(abs(across), axle / 2), across * w.y_m))
