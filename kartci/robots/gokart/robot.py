@@ -310,6 +310,7 @@ class KartRobot(RobotBase):
         spin = [(v_mps - yaw_rate_radps * half) / radii[0],
                 (v_mps + yaw_rate_radps * half) / radii[1], v_mps / radii[2], v_mps / radii[3]]
         body.spin(body.wheels, spin)
+        body.accel = (0.0, 0.0)  # no load transfer carried over from before the jump
         self._target, self._imu_prev = None, None
         self.contacts.clear()
 

@@ -18,7 +18,13 @@ from dataclasses import asdict, dataclass
 import casadi as ca
 
 from kartci.robots.gokart.mpcc.params import MpccVehicle
-from kartci.robots.gokart.params import GokartModel, Tyre, axle_distance_m
+from kartci.robots.gokart.params import (
+    GokartModel,
+    Tyre,
+    air_drag_per_m,
+    axle_distance_m,
+    rolling_decel_mps2,
+)
 
 NX, NU = 9, 4
 X, Y, PSI, VX, VY, R, S, DELTA, ACC = range(NX)
@@ -43,7 +49,7 @@ class SingleTrack:
         """The single-track model of a go-kart's parameters."""
         length, lr = axle_distance_m(model), model.cog_to_rear_axle_m
         return cls(length - lr, lr, model.mass_kg / model.yaw_inertia_kgm2, model.front_tyre,
-                   model.rear_tyre, model.rolling_decel_mps2, model.air_drag_per_m)
+                   model.rear_tyre, rolling_decel_mps2(model), air_drag_per_m(model))
 
     def key(self) -> str:
         """A stable text of every value, for the compiled solver's cache key."""
