@@ -5,7 +5,8 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Direction`, `Metric`, `MetricDef`: a metric's value and its definition.
 - `Frozen` and the parameter bases (`ControllerParams`, `NodeParams`, `RobotParams`,
   `WorldParams`, `MetricParams`) that each plugin's own pydantic model extends.
-- `Controller`, `Node`, `RobotKind`, `WorldKind`, `MetricSet` and their registries.
+- `Controller`, `Node`, `RobotKind`, `WorldKind`, `MetricSet` and their registries;
+  `Outline` (a robot seen from above, convex `Polygon` parts), what a robot kind declares.
 - `RunFolder`: the one owner of a run folder's file names.
 """
 
@@ -30,7 +31,9 @@ from kartci.core.registry import (
     Controller,
     MetricSet,
     Node,
+    Outline,
     PluginInfo,
+    Polygon,
     Registry,
     RobotKind,
     WorldKind,
@@ -64,7 +67,9 @@ __all__ = [
     "Node",
     "NodeParams",
     "Outbox",
+    "Outline",
     "PluginInfo",
+    "Polygon",
     "Registry",
     "RobotKind",
     "RobotParams",
