@@ -102,7 +102,8 @@ def test_two_karts_in_their_own_namespaces_and_the_mpcc_passes(tmp_path: Path) -
     chassis box alone (the old footprint) gave, since the rear wheels stick out."""
     log, m = _run(tmp_path, "multi_agent")
     t = tables(log)
-    assert {"/kart0/odom", "/kart1/odom", "/kart0/mpcc/stats", "/kart1/joy"} <= set(t)
+    assert {"/kart0/odom", "/kart1/odom", "/kart0/mpcc/stats", "/kart1/joy",
+            "/kart0/tyres"} <= set(t)
     assert "/kart1/mpcc/stats" not in t
     assert m["kart0.overtakes"].value == 2  # the pass and the lapping pass
     assert m["kart1.overtakes"].value == -2

@@ -20,7 +20,7 @@ from kartci.robots.gokart.steering import (
 )
 
 ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRobot"),
-                  ("laps", "race"), lazy("kartci.robots.gokart.plots:kart_plots"),
+                  ("laps", "race", "handling"), lazy("kartci.robots.gokart.plots:kart_plots"),
                   "the ETH go-kart (seed 000): steering map, two rear motors, lidar, IMU",
                   KartSensors, lazy("kartci.robots.gokart.outline:outline"))
 

@@ -53,6 +53,8 @@ class Gokart(Base):
         self.input = KartInput()
         self.column = 0.0  # steering-column angle, rad
         self._steer_target: tuple[float, float] | None = None  # last steer-motor targets, rad
+        # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`)
+        self.tyre_forces: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * 4
 
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;
@@ -91,9 +93,12 @@ class Gokart(Base):
                                                              physicsClientId=c))]
         dz = -m.cog_height_m
         spin = []
+        self.tyre_forces = []
         for w, delta, mu, radius in zip(self.tyres, steer, self.mu_scale, self.radii,
                                         strict=True):
             fx, fy = wheel_force(m, w, demand, delta, (vx, vy), yaw_rate, mu)
+            # grip: the radius of wheel_force's friction circle
+            self.tyre_forces.append((fx, fy, w.load_kg * w.tyre.d_mps2 * mu))
             at = (com[0] + r[0] * w.dx_m + r[1] * w.dy_m + r[2] * dz,
                   com[1] + r[3] * w.dx_m + r[4] * w.dy_m + r[5] * dz,
                   com[2] + r[6] * w.dx_m + r[7] * w.dy_m + r[8] * dz)

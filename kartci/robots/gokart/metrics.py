@@ -1,5 +1,6 @@
-"""The go-kart's metric sets: `laps` (laps, collisions, time off track, speed, progress) and
-`race` (clearance, overtakes, MPCC solver statistics), from a run log."""
+"""The go-kart's metric sets: `laps` (laps, collisions, time off track, speed, progress),
+`race` (clearance, overtakes, MPCC solver statistics) and `handling` (sideslip, spins, tyre
+saturation, stalled time), from a run log."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from kartci.metrics import ScoreContext, outline_of, recorded_track
 from kartci.metrics.defs import DEFS, defs_of
 from kartci.metrics.outline import placed
 from kartci.metrics.progress import kart_track, lap_crossings
+from kartci.robots.gokart.handling import HANDLING_DEFS, HandlingParams, handling_metrics
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.race import SLACK_DEF, race_metrics
 from kartci.scenario.models import Scenario
@@ -93,6 +95,10 @@ def _race(ctx: ScoreContext, params: Any) -> list[Metric]:
                         ctx.table("mpcc/stats"))
 
 
+def _handling(ctx: ScoreContext, params: HandlingParams) -> list[Metric]:
+    return handling_metrics(ctx.odom, _paths(ctx)[ctx.agent], ctx.table("tyres"), params)
+
+
 LAPS = MetricSet(
     "laps",
     defs_of("laps_completed", "lap_times_s", "best_lap_s", "collisions", "off_track_s",
@@ -107,3 +113,7 @@ RACE = MetricSet(
     _race, None, ("gokart",),
     "clearance to obstacles and other karts (outline to outline), overtakes (lapping passes "
     "included), MPCC solver statistics and slack")
+HANDLING = MetricSet(
+    "handling", HANDLING_DEFS, _handling, HandlingParams, ("gokart",),
+    "how the kart drove: sideslip (max, RMS), time spinning, time with a tyre at its grip, "
+    "time stalled on the track")

@@ -1,4 +1,4 @@
-"""The go-kart in the loop: body, IMU, lidar, camera, wheel odometry, collisions."""
+"""The go-kart in the loop: body, IMU, lidar, camera, wheel odometry, tyre forces, collisions."""
 
 from __future__ import annotations
 
@@ -119,6 +119,7 @@ class KartRobot(RobotBase):
                 t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
                 [*steer, *spin, self.body.column],
                 [0.0, 0.0, *self._slip.apply(list(speeds)), 0.0]), t_ns)
+            self._tyres(t_ns, put)
             self._zone_friction(st)
             self._pedals(st)
             put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
@@ -128,6 +129,15 @@ class KartRobot(RobotBase):
             self._imu(st, t_ns, put)
         if lidar:
             self._lidar(st, t_ns, put)
+
+    def _tyres(self, t_ns: int, put: Put) -> None:
+        """`tyres`: each tyre's force and grip in the last physics step (what the tyre
+        saturation metric reads)."""
+        fx, fy, grip = (np.array(v, dtype=float) for v in zip(*self.body.tyre_forces,
+                                                               strict=True))
+        put("tyres", msg("kartci_msgs/msg/TyreForces",
+                         header=header(t_ns, f"{self.name}/base_link"),
+                         wheel=list(self.JOINTS[2:]), fx_n=fx, fy_n=fy, grip_n=grip), t_ns)
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
         """tf of the moving frames: steer links (about z) and wheel links (about y)."""
