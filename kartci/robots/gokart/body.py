@@ -53,8 +53,9 @@ class Gokart(Base):
         self.input = KartInput()
         self.column = 0.0  # steering-column angle, rad
         self._steer_target: tuple[float, float] | None = None  # last steer-motor targets, rad
-        # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`)
-        self.tyre_forces: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * 4
+        # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`);
+        # none before the first step
+        self.tyre_forces: list[tuple[float, float, float]] = []
 
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;

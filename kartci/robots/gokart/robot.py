@@ -132,7 +132,9 @@ class KartRobot(RobotBase):
 
     def _tyres(self, t_ns: int, put: Put) -> None:
         """`tyres`: each tyre's force and grip in the last physics step (what the tyre
-        saturation metric reads)."""
+        saturation metric reads); nothing before the first step."""
+        if not self.body.tyre_forces:
+            return
         fx, fy, grip = (np.array(v, dtype=float) for v in zip(*self.body.tyre_forces,
                                                                strict=True))
         put("tyres", msg("kartci_msgs/msg/TyreForces",
