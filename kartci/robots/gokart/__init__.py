@@ -1,9 +1,9 @@
 """The ETH go-kart (seed 000) as a robot kind: registered as `gokart` (entry point).
 
 Public for a team's own kart controller: the command (`KartInput`), the steering map
-(`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`) and the outline (`outline`,
-`half_width_m`: from the kart's URDF). `FOOTPRINT_M` is deprecated: `footprint_m(model)` is the
-outline's bounding box.
+(`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`); the outline is in
+`kartci.robots.gokart.outline` (`outline`, `half_width_m`, `footprint_m`: from the kart's URDF).
+`FOOTPRINT_M` is deprecated: it is `footprint_m` of the default kart.
 """
 
 from typing import Any
