@@ -7,7 +7,7 @@ context (`Scenario.model_validate(data, context=context(registries))`), not modu
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, get_args
 
 from pydantic import BaseModel, ValidationError, ValidationInfo
 
@@ -42,13 +42,22 @@ def with_allowed_keys(model: type[BaseModel], err: ValidationError) -> list[dict
         if e["type"] == "extra_forbidden":
             owner: Any = model
             for part in e["loc"][:-1]:
-                field = owner.model_fields.get(str(part)) if isinstance(owner, type) and (
-                    issubclass(owner, BaseModel)) else None
-                owner = field.annotation if field is not None else None
+                owner = _inner(owner, part)
             if isinstance(owner, type) and issubclass(owner, BaseModel):
                 e["ctx"] = {"allowed": list(owner.model_fields)}
         out.append(e)
     return out
+
+
+def _inner(owner: Any, part: str | int) -> Any:
+    """The type at `part` of `owner`: a model's field, or a list's or tuple's items (one type);
+    None when it cannot be told."""
+    if isinstance(part, int):
+        args = {a for a in get_args(owner) if a is not Ellipsis}
+        return args.pop() if len(args) == 1 else None
+    field = owner.model_fields.get(part) if isinstance(owner, type) and (
+        issubclass(owner, BaseModel)) else None
+    return field.annotation if field is not None else None
 
 
 def _tag(value: Any, key: str, loc: tuple[str | int, ...], what: str) -> str | None:

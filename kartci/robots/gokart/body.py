@@ -60,6 +60,9 @@ class Gokart(Base):
         self.input = KartInput()
         self.column = 0.0  # steering-column angle, rad
         self._steer_target: tuple[float, float] | None = None  # last steer-motor targets, rad
+        # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`);
+        # none before the first step
+        self.tyre_forces: list[tuple[float, float, float]] = []
 
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;
@@ -100,10 +103,13 @@ class Gokart(Base):
         off = self._com_offset  # the chassis' centre of mass in base_link
         dz = -m.rear_wheel_radius_m - off[2]  # the floor, from the chassis' centre of mass
         spin, fx_sum, fy_sum = [], 0.0, 0.0
+        self.tyre_forces = []
         for w, load, delta, mu in zip(self.tyres, loads, steer, self.mu_scale, strict=True):
             dx, dy = w.x_m - off[0], w.y_m - off[1]
             f = wheel_force(m, w, load, demand, delta, (vx - yaw_rate * dy, vy + yaw_rate * dx),
                             mu)
+            # grip: the lateral radius of the friction ellipse at this load
+            self.tyre_forces.append((f.fx_n, f.fy_n, load * w.tyre.d_mps2 * mu))
             at = (com[0] + r[0] * dx + r[1] * dy + r[2] * dz,
                   com[1] + r[3] * dx + r[4] * dy + r[5] * dz,
                   com[2] + r[6] * dx + r[7] * dy + r[8] * dz)

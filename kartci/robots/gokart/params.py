@@ -10,10 +10,6 @@ from pydantic import Field
 from kartci.core import Frozen, RobotParams
 from kartci.scenario.models import Angle_rad, Length_m
 
-# The kart's footprint in base_link: centre ahead of the rear axle, length, width (m), from the
-# wheel positions (Table 3.2) and tyre radii with the bodywork around them.
-FOOTPRINT_M = (0.6, 2.0, 1.2)
-
 
 class Tyre(Frozen):
     """One axle's tyres: Pacejka's magic formula for the lateral force, mass-normalised as in the
