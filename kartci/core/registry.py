@@ -44,6 +44,7 @@ class AgentContext:
     model: RobotParams
     others: tuple[str, ...] = ()  # the other agents of the scenario (their topics: /<name>/...)
     run_dir: Path | None = None  # where the run's files go (a controller's own output files)
+    world: WorldParams | None = None  # the scenario's world: the map a real robot would carry
 
 
 P = TypeVar("P", ControllerParams, NodeParams)

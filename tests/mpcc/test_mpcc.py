@@ -14,7 +14,6 @@ from kartci.metrics import Metric, compute
 from kartci.metrics.outline import outline_gap_m, placed
 from kartci.metrics.progress import kart_track
 from kartci.project import BUILTIN_SIMS
-from kartci.robots.gokart import race
 from kartci.robots.gokart.mpcc.cache import get_solver, solver_key
 from kartci.robots.gokart.mpcc.model import SingleTrack
 from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, MpccWeights

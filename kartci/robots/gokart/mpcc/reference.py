@@ -31,6 +31,33 @@ def obstacle_from_xy(track: Track, x: float, y: float, radius_m: float, speed_mp
     return Obstacle(float(s[0]), float(lat[0]), radius_m, speed_mps, follow_gap_m)
 
 
+@dataclass(frozen=True)
+class FrictionMap:
+    """The floor's friction as the kart's map knows it (the world's floor and zones): the
+    plant's `friction_at`, vectorised. `grip` is what the tyres' D is scaled by."""
+
+    floor: float  # friction coefficient outside every zone (dimensionless)
+    zones: tuple[tuple[float, float, float, float, float], ...] = ()  # x0, y0, x1, y1 m, mu
+    reference: float = 0.9  # friction at which the tyres' D applies, times 1 / tire_friction
+
+    @classmethod
+    def of(cls, world: object, reference: float) -> FrictionMap:
+        """The map of a world's parameters (`floor_friction`, `zones`; a world without them
+        is all reference floor)."""
+        zones = tuple((z.min_m[0], z.min_m[1], z.max_m[0], z.max_m[1], z.friction)
+                      for z in getattr(world, "zones", ()))
+        return cls(float(getattr(world, "floor_friction", reference)), zones, reference)
+
+    def grip(self, xy: np.ndarray) -> np.ndarray:
+        """The tyres' D scale at points (n, 2), m: the last zone holding a point wins."""
+        mu = np.full(len(xy), self.floor)
+        for x0, y0, x1, y1, f in self.zones:
+            inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+            mu = np.where(inside, f, mu)
+        out: np.ndarray = mu / self.reference
+        return out
+
+
 def _width(track: Track, s_m: np.ndarray, side: np.ndarray) -> np.ndarray:
     out: np.ndarray = np.interp(np.mod(s_m, track.length_m), track.s, side,
                                 period=track.length_m)
