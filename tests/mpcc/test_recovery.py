@@ -4,6 +4,7 @@ and the floor's friction in its model, against closed forms."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -12,9 +13,10 @@ import pytest
 from kartci.robots.gokart.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, continuous
 from kartci.robots.gokart.mpcc.params import MpccRecovery, MpccVehicle
 from kartci.robots.gokart.mpcc.recovery import Measured, MpccStatus, Watchdog
-from kartci.robots.gokart.mpcc.reference import FrictionMap
+from kartci.robots.gokart.mpcc.reference import FrictionMap, Obstacle, stage_params
 from kartci.robots.gokart.params import GokartModel, axle_distance_m
 from kartci.scenario.models import FloorZone, HallWorld
+from kartci.track import Track, track_from_rows
 
 PERIOD_S = 0.05
 KART = GokartModel()
@@ -73,7 +75,7 @@ def _derivative(vx: float, vy: float, r: float, delta: float, acc: float,
                 grip: float, model: GokartModel = KART) -> np.ndarray:
     x = np.zeros(NX)
     x[VX], x[VY], x[R], x[DELTA], x[ACC] = vx, vy, r, delta, acc
-    out = continuous(ca.DM(x), ca.DM.zeros(NU), SingleTrack.of(model), MpccVehicle(), grip)
+    out = continuous(ca.SX(ca.DM(x)), ca.SX.zeros(NU), SingleTrack.of(model), MpccVehicle(), grip)
     return np.asarray(ca.evalf(out)).ravel()
 
 
@@ -97,3 +99,22 @@ def test_the_models_drive_is_power_limited_above_the_corner_speed(mass_kg: float
                 - m.rolling_decel_mps2 * math.tanh(v / 0.3) - m.air_drag_per_m * v * v)
     assert _derivative(v, 0.0, 0.0, 0.0, 5.0, 1.0, model)[VX] == pytest.approx(expected,
                                                                               rel=1e-3)
+
+
+def _circle_track() -> Track:
+    a = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
+    rows = np.column_stack([30 * np.cos(a), 30 * np.sin(a), np.full(64, 2.0), np.full(64, 2.0)])
+    return track_from_rows(rows, Path("circle.csv"))
+
+
+@pytest.mark.parametrize(("follow_gap_m", "hi_m"), [(3.0, 0.81 + 0.4), (0.0, 0.81)])
+def test_a_kart_is_passed_inside_the_edge_margin_and_a_box_is_not(follow_gap_m: float,
+                                                                   hi_m: float) -> None:
+    """4 m track, padding 1.19 m (outline 0.69 + 0.5): the corridor is +-0.81 m. Something 0.69
+    m wide at -0.8 m with a 0.9 m margin needs the centre line at >= 0.79 m: beside a kart the
+    left bound gives 0.4 m of the edge margin (margin 0.5 -> 0.1 m), beside a box it does not."""
+    track = _circle_track()
+    ob = Obstacle(10.0, -0.8, 0.69, 0.0, follow_gap_m)
+    rows = stage_params(track, np.array([10.0]), 0.075, 1.19, [ob], 0.9, 2.0, squeeze_m=0.4)
+    lo, hi, s_max = rows[0, 5:8]
+    assert (lo, hi, s_max) == pytest.approx((-0.8 + 0.69 + 0.9, hi_m, 1e6))

@@ -111,7 +111,8 @@ class Mpcc:
         w0 = self._initial_guess(x0)
         guess = lay.states(w0)[1:]
         params = stage_params(self.track, guess[:, S], sp.step_s, self.padding_m, obstacles,
-                              sp.obstacle_margin_m, self.kart_length_m)
+                              sp.obstacle_margin_m, self.kart_length_m,
+                              sp.track_margin_m - sp.passing_margin_m)
         params = np.column_stack([params, self._grip(guess)])
         p = np.concatenate([weights_vector(sp.weights), [sp.max_lateral_accel_mps2,
                                                           sp.max_brake_mps2, sp.front_check_m,
@@ -144,8 +145,9 @@ class Mpcc:
         heading = np.column_stack([np.cos(states[:, PSI]), np.sin(states[:, PSI])])
         xy = states[:, [X, Y]]
         m = self.single_track
-        return np.minimum(self.friction.grip(xy + m.lf_m * heading),
-                          self.friction.grip(xy - m.lr_m * heading))
+        out: np.ndarray = np.minimum(self.friction.grip(xy + m.lf_m * heading),
+                                     self.friction.grip(xy - m.lr_m * heading))
+        return out
 
     def _initial_guess(self, x0: np.ndarray) -> np.ndarray:
         lay, sp = self.lay, self.spec

@@ -8,7 +8,9 @@ velocities (m/s), yaw rate (rad/s), arc-length progress (m), mean front-wheel an
 longitudinal acceleration command (m/s^2, negative = brake). Input u = [jerk (m/s^3), steering
 rate (rad/s), progress speed vs (m/s), slack (m)]. Tyre forces are mass-normalised (m/s^2), as
 in the ETH kart's MPC (REFERENCE.md): an axle carrying a share of the mass gives that share
-times D sin(C atan(B alpha)) per kg of the whole kart.
+times D sin(C atan(B alpha)) per kg of the whole kart. Mirrored from the plant where it matters
+for planning: the motors' power limit (drive at most 2 x motor power / (m v)), rolling resistance
+and drag, and the floor's friction under each stage (`grip`, D scaled as the plant scales it).
 """
 
 from __future__ import annotations

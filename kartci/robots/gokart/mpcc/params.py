@@ -125,15 +125,27 @@ class MpccController(ControllerParams):
                                   "outline, m: the padding of the kart's centre line is the "
                                   "outline's half width (0.69 m, the rear wheels) plus this "
                                   "(REFERENCE.md: ETH padding 0.5 m)")
+    passing_margin_m: float = Field(0.1, ge=0.0, le=1e4,
+                                    description="kept between a track edge and the kart's "
+                                    "outline beside a kart it passes, m: "
+                                    "`track_margin_m` gives way to clearing them (the hall's "
+                                    "4 m track leaves 0.81 m either side of the centre line "
+                                    "with the full margin, too little to pass a 1.38 m kart)")
     obstacle_margin_m: float = Field(0.9, ge=0.0, le=1e4,
                                      description="kept from an obstacle's edge, m")
     front_check_m: float = Field(1.0, ge=0.0, le=1e4,
                                  description="a point this far ahead of the CoG, "
                                  "m, keeps the bounds too, so the nose does not cut corners")
-    max_column_rad: float = Field(0.5, gt=0.0, le=2.0,
-                                  description="steering-column angle range, +- rad "
-                                  "(REFERENCE.md: ETH MPCC +-0.5 rad, a mean front-wheel angle "
-                                  "of 0.176 rad; the hall track laps within it)")
+    max_column_rad: float = Field(0.65, gt=0.0, le=2.0,
+                                  description="steering-column angle range, +- rad. ETH's "
+                                  "MPCC uses +-0.5 rad (REFERENCE.md): a mean front-wheel angle "
+                                  "of 0.176 rad, a 6.8 m kinematic turning radius, where the "
+                                  "hall track's tightest turn has a 2.46 m centre-line radius "
+                                  "(s = 58 m; 0.81 m of room either side after the padding). "
+                                  "At 0.5 the kart laps alone (mpcc_lap) but runs wide into "
+                                  "the slower kart in multi_agent's east hairpin; 0.65 (0.224 "
+                                  "rad, 5.3 m) is the smallest of 0.5 / 0.65 / 0.8 that drives "
+                                  "every shipped MPCC scenario without a collision")
     recovery: MpccRecovery = Field(MpccRecovery(), description="loss-of-control detection "
                                    "and the recovery behaviour")
     method: MpccMethod = Field(MpccMethod.RTI, description="`rti`: real-time iterations, "
