@@ -95,7 +95,9 @@ def test_hpipm_solves_the_structured_qp_as_a_general_solver_does(
     lin = mpcc.built.rti.lin
     osqp = ca.conic("ref", "osqp", {"h": lin.sparsity_out("hess_f"),
                                     "a": lin.sparsity_out("jac_g")},
-                    {"osqp": {"verbose": False, "eps_abs": 1e-9, "eps_rel": 1e-9,
+                    # 1e-7: at 1e-9 ADMM hits its iteration cap on the last QP (within
+                    # 1.4e-5 of HPIPM's step), 1e-7 it reaches, far below the 1e-3 compared
+                    {"osqp": {"verbose": False, "eps_abs": 1e-7, "eps_rel": 1e-7,
                               "max_iter": 100000, "polish": True}})
     for qp in (seen[0], seen[-1]):
         ours = np.asarray(hpipm(**qp)["x"]).ravel()
@@ -116,11 +118,12 @@ def test_a_failed_qp_brakes_and_is_counted(tmp_path: Path) -> None:
 
 def test_rti_overtakes_in_multi_agent(tmp_path: Path) -> None:
     _, m = _run(tmp_path, "multi_agent", RTI)
-    assert m["kart0.overtakes"].value == 2  # the pass and the lapping pass
+    # the pass; the power-limited kart within ETH's limits no longer laps kart1 in 25 s
+    assert m["kart0.overtakes"].value == 1
     assert m["kart0.collisions"].value == 0
     assert m["kart0.off_track_s"].value == 0
     assert m["kart0.solver_failures"].value == 0
-    assert m["kart0.min_clearance_m"].value > 0.1  # outline to outline: 0.168 m
+    assert m["kart0.min_clearance_m"].value > 0.1  # outline to outline: 0.207 m
     # the Ipopt reference's mean lap (baseline) within 2 %
     assert m["kart0.lap_times_s"].value == pytest.approx(
         _reference("multi_agent", "kart0.lap_times_s"), rel=0.02)

@@ -156,7 +156,9 @@ class MpccAgent:
         if status is MpccStatus.STALLED:
             self.mpcc.reset()
             plan = self.mpcc.solve(x0, self._obstacles())
-            return dataclasses.replace(plan, success=False, status=MpccStatus.STALLED)
+            # a failed solve keeps its own status: it says why the kart stands
+            return (dataclasses.replace(plan, success=False, status=MpccStatus.STALLED)
+                    if plan.success else plan)
         return self.mpcc.solve(x0, self._obstacles())
 
     def _path(self, plan: Plan, t_ns: int) -> Any:
