@@ -10,7 +10,7 @@ from kartci import portable
 def main() -> None:
     """Re-execute pinned if needed (before anything that computes is imported), then run."""
     portable.reexec(["-P", "-m", "kartci", *sys.argv[1:]])
-    from kartci.cli import main as cli
+    from kartci.cli import main as cli  # CLI start-up: loaded once, after the re-exec
 
     cli()
 

@@ -59,23 +59,30 @@ class PlotContext:
 
 
 def wheel_series(ctx: PlotContext, joints: tuple[str, str]) -> tuple[dict[str, pd.DataFrame], ...]:
-    """Measured and commanded wheel speeds and collisions of every agent."""
+    """Measured and commanded speeds of the wheels `joints` (left, right) and collisions of
+    every agent."""
     t = ctx.tables
     wheels, commands, collisions = {}, {}, {}
     for agent in ctx.scenario.agents:
-        js = t.get(f"/{agent}/joint_states")
+        js = _wheel_speeds(t.get(f"/{agent}/joint_states"), joints)
         if js is not None:
-            wheels[agent] = pd.DataFrame({"t": js["t"], "left": js[f"{joints[0]}.velocity"],
-                                          "right": js[f"{joints[1]}.velocity"]})
-        cmd = t.get(f"/{agent}/wheel_cmd")
+            wheels[agent] = js
+        cmd = _wheel_speeds(t.get(f"/{agent}/wheel_cmd"), joints)
         if cmd is not None:
-            commands[agent] = pd.DataFrame({"t": cmd["t"],
-                                            "left": cmd["left_wheel_hinge.velocity"],
-                                            "right": cmd["right_wheel_hinge.velocity"]})
+            commands[agent] = cmd
         col = t.get(f"/{agent}/collision")
         if col is not None:
             collisions[agent] = col
     return wheels, commands, collisions
+
+
+def _wheel_speeds(table: pd.DataFrame | None, joints: tuple[str, str]) -> pd.DataFrame | None:
+    """Left and right speeds over time from a JointState table; None when its messages do not
+    name both joints (an agent may send its speeds unnamed, in order: nothing to attribute)."""
+    left, right = (f"{j}.velocity" for j in joints)
+    if table is None or left not in table or right not in table:
+        return None
+    return pd.DataFrame({"t": table["t"], "left": table[left], "right": table[right]})
 
 
 def overlay(base: Plots | None, head: Plots | None) -> Plots | None:

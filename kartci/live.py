@@ -25,7 +25,7 @@ class LiveView:
         """Start the server on HOST:`port` (0: any free port); `rate` is sim seconds per wall
         second (0: as fast as the simulator goes)."""
         try:
-            import foxglove
+            import foxglove  # optional dependency: foxglove-sdk (kartci[live])
         except ImportError as err:
             raise SpecError("kartci run --live needs foxglove-sdk: pip install "
                             '"kartci[live]"') from err

@@ -22,9 +22,11 @@ that was not (the API, the pytest plugin) runs in a spawned child that is.
 
 from __future__ import annotations
 
+import importlib
 import os
 import platform as _platform
 import sys
+import warnings
 from collections.abc import Mapping
 from enum import StrEnum
 from functools import cache
@@ -140,8 +142,6 @@ def _numpy_pinned() -> bool:
 
 def _numpy_cpu() -> tuple[list[str], list[str], dict[str, bool]]:
     """numpy's baseline features, its dispatch targets, and which features are on."""
-    import importlib
-
     umath: Any = importlib.import_module("numpy._core._multiarray_umath")
     return (list(umath.__cpu_baseline__), list(umath.__cpu_dispatch__),
             dict(umath.__cpu_features__))
@@ -161,8 +161,6 @@ def warn_unpinned() -> None:
     """A run about to happen in this process, which is not pinned: say that its last bits may
     differ from `kartci run`'s (a Python warning, once per place)."""
     if state() is Pin.UNPINNED:
-        import warnings
-
         warnings.warn("this process was not started with kartci's pinned environment (numpy "
                       "or the process came before `import kartci`): a run here may differ in "
                       "its last bits from `kartci run`; see kartci.portable", RuntimeWarning,
@@ -187,7 +185,7 @@ def reexec(args: list[str]) -> None:
 
 
 def _version(dist: str) -> str:
-    from importlib import metadata
+    from importlib import metadata  # start-up: +30 ms on `import kartci`, read at run time
 
     try:
         return metadata.version(dist)

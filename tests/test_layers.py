@@ -126,3 +126,83 @@ def test_the_kind_scan_finds_what_it_looks_for(tmp_path: Path) -> None:
         "kartci/mod.py:3: 'line_tracker' in a string",
         "kartci/mod.py:5: identifier line_tracker_model",
     ]
+
+
+def _import_runs(body: list[ast.stmt]) -> list[list[ast.Import | ast.ImportFrom]]:
+    """The runs of consecutive import statements in one block of statements."""
+    runs: list[list[ast.Import | ast.ImportFrom]] = []
+    previous: ast.stmt | None = None
+    for stmt in body:
+        if isinstance(stmt, ast.Import | ast.ImportFrom):
+            if isinstance(previous, ast.Import | ast.ImportFrom):
+                runs[-1].append(stmt)
+            else:
+                runs.append([stmt])
+        previous = stmt
+    return runs
+
+
+def _reason(line: str) -> str:
+    """The text of a `#` comment on a line, pragmas (noqa, type: ignore) left out."""
+    text = line.partition("#")[2]
+    return re.sub(r"\b(noqa|type:\s*ignore)\b(\[[^]]*\]|:\s*[A-Z0-9, ]+)?", "", text).strip()
+
+
+def unexplained_late_imports(root: Path = ROOT) -> list[str]:
+    """Every import made inside a function without a `#` comment saying why it is late: on the
+    import's own line, or on the line above the run of imports it belongs to."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        lines = path.read_text(encoding="utf-8").splitlines()
+        tree = ast.parse("\n".join(lines))
+        seen: set[int] = set()
+        for func in ast.walk(tree):
+            if not isinstance(func, ast.FunctionDef | ast.AsyncFunctionDef):
+                continue
+            for node in ast.walk(func):
+                for block in (getattr(node, f, None) for f in ("body", "orelse", "finalbody")):
+                    if not isinstance(block, list):
+                        continue
+                    for run in _import_runs(block):
+                        above = lines[run[0].lineno - 2] if run[0].lineno > 1 else ""
+                        heads = _reason(above) if above.strip().startswith("#") else ""
+                        for imp in run:
+                            own = any(_reason(line) for line in
+                                      lines[imp.lineno - 1:(imp.end_lineno or imp.lineno)])
+                            if id(imp) not in seen and not (heads or own):
+                                found.append(f"kartci/{path.relative_to(root).as_posix()}:"
+                                             f"{imp.lineno}: {ast.unparse(imp)}")
+                            seen.add(id(imp))
+    return found
+
+
+def test_every_late_import_says_why() -> None:
+    """Imports inside functions are left only for optional dependencies and start-up cost
+    (`kartci --help`, the pytest plugin's load, `import kartci`), each with a one-line `#`
+    reason; any other import belongs at the top of its module (issue 25)."""
+    assert unexplained_late_imports() == []
+
+
+def test_the_late_import_scan_finds_what_it_looks_for(tmp_path: Path) -> None:
+    """The scan is not vacuous: an import without a reason is caught (a pragma is no reason);
+    one with a reason on its line or above its run of imports is not, nor a top-level one."""
+    (tmp_path / "mod.py").write_text(
+        "import os\n"
+        "def f() -> None:\n"
+        "    # optional dependency: ray\n"
+        "    import ray\n"
+        "\n"
+        "    from ray import util\n"
+        "    x = 1\n"
+        "    import json\n"
+        "    import csv  # noqa: F401\n"
+        "    if x:\n"
+        "        import zenoh  # optional dependency: zenoh\n"
+        "    class K:\n"
+        "        def g(self) -> None:\n"
+        "            import sqlite3\n")
+    assert unexplained_late_imports(tmp_path) == [
+        "kartci/mod.py:8: import json",
+        "kartci/mod.py:9: import csv",
+        "kartci/mod.py:14: import sqlite3",
+    ]

@@ -19,6 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from kartci import project
 from kartci.bridge import ros2
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening
@@ -98,8 +99,6 @@ class ExternalAgent:
         return topic if topic.startswith("/") else f"/{self.name}/{topic}"
 
     def _start(self, run_dir: Path | None) -> Child:
-        from kartci import project
-
         root = project.current().root
         values = {"python": sys.executable, "endpoint": self.endpoint, "root": str(root),
                   "domain_id": str(self.spec.domain_id), "namespace": self.name}

@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import Field
 
 from kartci.core import ControllerParams, Frozen
+from kartci.core.params import Count, Period_s
 
 COMMAND_TYPES = {  # what the bridge takes back, and the robot topic each is applied on
     "ackermann_msgs/msg/AckermannDriveStamped": "ackermann_cmd",
@@ -42,10 +43,9 @@ class ExternalController(ControllerParams):
 
     type: Literal["external"] = Field("external", description="controller type: an external "
                                       "stack over Zenoh (rmw_zenoh conventions)")
-    period_s: float = Field(0.02, gt=0.0, le=3600.0,
-                            description="control period, s: /clock is published "
-                            "and a command awaited every period (a whole multiple of "
-                            "physics.dt_s)")
+    period_s: Period_s = Field(0.02, description="control period, s: /clock is published "
+                               "and a command awaited every period (a whole multiple of "
+                               "physics.dt_s)")
     publish: tuple[str, ...] = Field(("odom", "/kartci/track"), description="topics sent to "
                                      "the stack (besides /clock), as the robot publishes them: "
                                      "odom, imu, joint_states, velodyne_points, /tf, ...")
@@ -59,16 +59,13 @@ class ExternalController(ControllerParams):
     mode: Mode = Field(Mode.LOCKSTEP, description="lockstep (wait for every tick's answer, "
                        "deterministic) or paced (run at real_time_factor, not deterministic)")
     real_time_factor: float = Field(1.0, gt=0.0, le=1e6, description="paced mode: sim s per wall s")
-    tick_timeout_s: float = Field(1.0, gt=0.0, le=3600.0,
-                                  description="lockstep: wall-clock deadline for "
-                                  "one tick's answer; a miss is a late_commands event")
-    max_late_in_row: int = Field(5, ge=1, le=1_000_000,
-                                 description="this many late ticks in a row end the "
-                                 "run as an error")
-    startup_timeout_s: float = Field(20.0, gt=0.0, le=3600.0,
-                                     description="wall-clock time the stack has "
-                                     "to declare its subscription to /clock and its command "
-                                     "publishers")
+    tick_timeout_s: Period_s = Field(1.0, description="lockstep: wall-clock deadline for "
+                                     "one tick's answer; a miss is a late_commands event")
+    max_late_in_row: Count = Field(5, description="this many late ticks in a row end the "
+                                   "run as an error")
+    startup_timeout_s: Period_s = Field(20.0, description="wall-clock time the stack has "
+                                        "to declare its subscription to /clock and its command "
+                                        "publishers")
     port: int | None = Field(None, ge=1, le=65535, description="loopback TCP port the "
                              "bridge listens on (tcp/127.0.0.1:<port>); default a free one per "
                              "run. Fix it for a stack you start yourself (no `command`)")
@@ -81,6 +78,5 @@ class ExternalController(ControllerParams):
                             "folder (default: the project folder)")
     env: dict[str, str] = Field(default_factory=dict, description="extra environment "
                                 "variables for it")
-    stop_timeout_s: float = Field(3.0, gt=0.0, le=3600.0,
-                                  description="time it has to exit after SIGTERM "
-                                  "before it is killed")
+    stop_timeout_s: Period_s = Field(3.0, description="time it has to exit after SIGTERM "
+                                     "before it is killed")

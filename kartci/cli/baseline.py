@@ -35,7 +35,7 @@ def baseline_update(
     complete, current, pinned run is taken: a scenario whose last run failed or did not finish
     is refused, and with no names only the scenarios of the last run in OUT are taken. A metric
     whose spread exceeds its tolerance is flagged ill-conditioned."""
-    from kartci.app.accept import accept  # the CLI's lazy start-up: the runner loads PyBullet
+    from kartci.app.accept import accept  # CLI start-up: the runner loads PyBullet (+0.5 s)
 
     def say(line: str) -> None:
         err_console.print(line, highlight=False, markup=False)

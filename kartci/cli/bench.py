@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from kartci.bench import Change, compare, load
 from kartci.cli.common import app
 
 bench_app = typer.Typer(help="Read the JSON files the benchmarks/ scripts write (--json).",
@@ -30,8 +31,6 @@ def bench_compare(
     """Each figure's median in OLD and NEW, their ratio (new / old) and whether it got better
     or worse beyond the noise. Medians from one machine are noisy: trust ratios over many
     figures, not one."""
-    from kartci.bench import Change, compare, load
-
     rows = compare(load(old), load(new), noise)
     typer.echo(f"{'figure':44s} {'unit':8s} {'old':>10s} {'new':>10s} {'new/old':>8s}  change")
     for r in rows:

@@ -13,6 +13,7 @@ from rich.table import Table
 from rich.text import Text
 from typer.core import TyperCommand, TyperGroup
 
+from kartci import __version__, project
 from kartci.commandline import AllowOutsideOpt as AllowOutsideOpt
 from kartci.commandline import OutOpt as OutOpt
 from kartci.commandline import SetOpt as SetOpt
@@ -20,7 +21,15 @@ from kartci.commandline import err_console as err_console
 from kartci.commandline import out_console as out_console
 from kartci.commandline import out_dir as out_dir
 from kartci.errors import KartciError, RunError, SpecError
+from kartci.report import write_all
+from kartci.report.ci import (
+    annotation_lines,
+    append_step_summary,
+    in_github_actions,
+    scenario_files,
+)
 from kartci.report.tables import MARK, RUN, Wording, conditioning, delta, num, tolerance
+from kartci.runner.gate import strict_default
 from kartci.verdict.result import ScenarioResult, exit_code, one_line
 
 COMMANDS_GROUP = "kartci.commands"  # entry points: name -> "module:attr", a typer.Typer
@@ -77,8 +86,6 @@ app.add_typer(baseline_app, name="baseline")
 
 def _print_version(value: bool) -> None:
     if value:
-        from kartci import __version__
-
         typer.echo(f"kartci {__version__}")
         raise typer.Exit()
 
@@ -93,8 +100,6 @@ def _options(version: Annotated[bool, typer.Option(
 def complete_scenario(incomplete: str) -> list[tuple[str, str]]:
     """Shell completion of scenario names (with where each comes from); reads no file, and a
     broken project completes nothing rather than printing into the shell."""
-    from kartci import project
-
     try:
         proj = project.current()
         found = proj.all_scenarios()
@@ -114,14 +119,12 @@ StrictOpt = Annotated[bool | None, typer.Option(
 
 def strict_mode(flag: bool | None) -> bool:
     """`--strict/--no-strict` as given, else the default (strict under CI)."""
-    from kartci.runner.gate import strict_default
-
     return strict_default() if flag is None else flag
 
 
 def baselines_dir(path: Path | None, must_exist: bool = True) -> Path:
     """`--baselines` (a folder, when it must exist), else the project's baselines folder."""
-    from kartci.runner import default_baselines
+    from kartci.runner import default_baselines  # CLI start-up: PyBullet (+0.5 s)
 
     if path is not None and must_exist and not path.is_dir():
         raise SpecError(f"--baselines {path}: no such folder")
@@ -158,14 +161,6 @@ def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     merge reports for it) the CI outputs; exit with the gating code. A report that cannot be
     written is exit 2, and no earlier report stays in its place (write_all removes them
     first)."""
-    from kartci.report import write_all
-    from kartci.report.ci import (
-        annotation_lines,
-        append_step_summary,
-        in_github_actions,
-        scenario_files,
-    )
-
     try:
         paths = write_all(results, out, words, history)
     except (KartciError, OSError):

@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from kartci.cli.common import app, out_console
+from kartci.scaffold import init_project
 
 
 @app.command()
@@ -25,8 +26,6 @@ def init(
     one short scenario, baselines/, the gate workflow .github/workflows/kartci.yml,
     constraints.txt, a README section and a .gitignore line. Refuses to overwrite an existing
     file unless --force."""
-    from kartci.scaffold import init_project
-
     steps = init_project(folder, force)
     out_console.print(f"kartci project in {folder.resolve()}:", markup=False, highlight=False)
     for step in steps:

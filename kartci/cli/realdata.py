@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.table import Table
 
 from kartci.cli.common import (
     AllowOutsideOpt,
@@ -17,9 +18,14 @@ from kartci.cli.common import (
     app,
     baselines_dir,
     finish,
+    out_console,
     out_dir,
     strict_mode,
 )
+from kartci.core import CONTROLLERS
+from kartci.errors import SpecError
+from kartci.runner.gate import require_baselines
+from kartci.runner.outdir import clear_reports, locked, write_manifest
 
 LogArg = Annotated[Path, typer.Argument(help="ROS 1 .bag, rosbag2 folder or .mcap file.")]
 ProfileOpt = Annotated[Path | None, typer.Option(
@@ -34,9 +40,7 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
     """Score a recorded log with the same metric code as a run (duration, distance, speeds;
     laps, lap times and cross-track error with a track; localization error with an estimate),
     write the same reports and judge it against baselines/<profile name>.json."""
-    from kartci.realdata.score import score_log
-    from kartci.runner.gate import require_baselines
-    from kartci.runner.outdir import clear_reports, locked, write_manifest
+    from kartci.realdata.score import score_log  # CLI start-up: PyBullet, pandas (+0.7 s)
 
     out = out_dir(out, "score")
     with locked(out):
@@ -69,9 +73,7 @@ def simreal_cmd(
     log and in windows re-started every --window-s, and report the divergence: APE / RPE (as
     evo), per-signal residuals (x, y, yaw, speed, yaw rate), both paths overlaid; judged
     against baselines/<profile>_simreal.json and the scenario's criteria like a run."""
-    from kartci.realdata.score import simreal_log
-    from kartci.runner.gate import require_baselines
-    from kartci.runner.outdir import clear_reports, locked, write_manifest
+    from kartci.realdata.score import simreal_log  # CLI start-up: PyBullet, pandas (+0.7 s)
 
     out = out_dir(out, "simreal")
     with locked(out):
@@ -111,10 +113,7 @@ def calibrate_cmd(
     if mpcc:
         _fit_mpcc(log, params, out_dir(out, "calibrate"))
         return
-    from rich.table import Table
-
-    from kartci.cli.common import out_console
-    from kartci.realdata.calibrate import calibrate_log
+    from kartci.realdata.calibrate import calibrate_log  # CLI start-up: PyBullet, scipy
 
     out = out_dir(out, "calibrate")
     fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out,
@@ -134,10 +133,6 @@ def calibrate_cmd(
 
 
 def _fit_mpcc(log: Path, names: list[str], out: Path) -> None:
-    from kartci.cli.common import out_console
-    from kartci.core import CONTROLLERS
-    from kartci.errors import SpecError
-
     fit = CONTROLLERS.get("mpcc").fit
     if fit is None:
         raise SpecError("--mpcc: the registered mpcc controller has no model to fit")

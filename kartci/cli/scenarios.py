@@ -11,8 +11,12 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
+from kartci import project
 from kartci.cli.common import AllowOutsideOpt, SetOpt, app, complete_scenario, out_console
+from kartci.core import catalogue
 from kartci.errors import SpecError
+from kartci.scenario import load_scenario, scenario_catalogue
+from kartci.scenario.schema import scenario_schema, write_schema
 
 
 @app.command("list")
@@ -22,9 +26,6 @@ def list_cmd() -> None:
     Every scenario reachable by name: the project's own, then kartci's built-ins, each with its
     one-line description. A file that cannot be loaded is listed with its error (exit 2); the
     others are listed all the same."""
-    from kartci import project
-    from kartci.scenario import scenario_catalogue
-
     entries = scenario_catalogue()
     if not entries:
         where = ", ".join(str(p) for p in project.current().scenario_path)
@@ -46,8 +47,6 @@ def show(name: Annotated[str, typer.Argument(help="A scenario name or YAML path.
                                              autocompletion=complete_scenario)],
          set_: SetOpt = None, allow_outside_paths: AllowOutsideOpt = False) -> None:
     """Print a scenario fully resolved (world and model files included, overrides applied)."""
-    from kartci.scenario import load_scenario
-
     spec = load_scenario(name, set_ or [], allow_outside_paths=allow_outside_paths)
     typer.echo(json.dumps(spec.model_dump(mode="json"), indent=2))
 
@@ -57,8 +56,6 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
     """JSON Schema of scenario files, for editor completion and validation: with every
     registered plugin, the project's own included. Point a scenario at it with a first line
     `# yaml-language-server: $schema=<path relative to the scenario file>`."""
-    from kartci.scenario.schema import scenario_schema, write_schema
-
     if out is None:
         typer.echo(json.dumps(scenario_schema(), indent=2))
     else:
@@ -71,8 +68,6 @@ def plugins() -> None:
 
     Controllers, nodes, robot kinds, world kinds and metric sets (what a scenario can name), each
     with its one-line description and the module it comes from."""
-    from kartci.core import catalogue
-
     table = Table("kind", "name", "description", "from", box=None)
     for info in catalogue():
         table.add_row(Text(info.kind), Text(info.name), Text(info.description),

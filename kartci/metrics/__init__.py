@@ -21,7 +21,7 @@ from kartci.core import (
     definitions,
 )
 from kartci.errors import LogError
-from kartci.logs import SCENARIO_TOPIC
+from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.scenario import Scenario, scenario_from_json
 
 if TYPE_CHECKING:  # pandas, the log readers and scipy load when a log is scored, not before
@@ -105,6 +105,7 @@ def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
 
 def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
     """The track a run log recorded on /kartci/track, so laps are scored from the log alone."""
+    # start-up: kartci.track brings scipy (+0.3 s), needed once a log's laps are scored
     from kartci.track import TRACK_TOPIC, track_from_text
 
     table = log_tables.get(TRACK_TOPIC)
@@ -115,8 +116,6 @@ def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
 
 def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
     """All metrics of a run log, keyed by name (single agent) or `agent.name` (several)."""
-    from kartci.logs import tables
-
     log_tables = tables(log_path)
     scenario = recorded_scenario(log_tables, log_path)
     many = len(scenario.agents) > 1

@@ -18,6 +18,7 @@ import numpy as np
 from pydantic import Field
 
 from kartci.core import Direction, Metric, MetricDef, MetricParams
+from kartci.core.params import Size_m
 from kartci.logs.reader import messages
 from kartci.logs.types import stamp_ns
 from kartci.metrics import ScoreContext, outline_of
@@ -30,10 +31,9 @@ class DetectionMetricsParams(MetricParams):
 
     topic: str = Field("obstacle_detector/detections", description="the detections "
                        "(vision_msgs/Detection3DArray), relative to the agent or absolute")
-    range_m: float = Field(15.0, gt=0.0, le=1e4,
-                           description="truth boxes and detections this close "
-                           "to the kart count, m")
-    match_m: float = Field(1.0, gt=0.0, le=1e4, description="largest centre distance of a match, m")
+    range_m: Size_m = Field(15.0, description="truth boxes and detections this close "
+                            "to the kart count, m")
+    match_m: Size_m = Field(1.0, description="largest centre distance of a match, m")
     dynamic_mps: float = Field(0.5, ge=0.0, le=100.0, description="a kart faster than this is a "
                                "dynamic truth box, m/s")
 

@@ -11,6 +11,7 @@ import numpy as np
 from pydantic import Field
 
 from kartci.core import Direction, Metric, MetricDef, MetricParams
+from kartci.core.params import Duration_s, Period_s, Size_m
 from kartci.errors import LogError
 from kartci.metrics import ScoreContext
 from kartci.metrics.trajectory import (
@@ -30,16 +31,14 @@ class LocalizationMetricsParams(MetricParams):
     topic: str = Field("localization/odom", description="the estimate (nav_msgs/Odometry), "
                        "relative to the agent's namespace or absolute")
     reference_topic: str = Field("odom", description="ground truth (nav_msgs/Odometry)")
-    max_diff_s: float = Field(0.01, gt=0.0, le=3600.0, description="association: largest stamp "
-                              "difference of a pose pair, s (evo's --t_max_diff)")
-    converged_m: float = Field(0.1, gt=0.0, le=1e4,
-                               description="the estimate has converged once its "
-                               "position error stays below this for `hold_s`, m")
-    hold_s: float = Field(1.0, ge=0.0, le=3600.0, description="how long the error must stay below "
-                          "`converged_m`, s")
-    diverged_m: float = Field(0.3, gt=0.0, le=1e4,
-                              description="after convergence, a position error "
-                              "above this is a divergence event, m")
+    max_diff_s: Period_s = Field(0.01, description="association: largest stamp "
+                                 "difference of a pose pair, s (evo's --t_max_diff)")
+    converged_m: Size_m = Field(0.1, description="the estimate has converged once its "
+                                "position error stays below this for `hold_s`, m")
+    hold_s: Duration_s = Field(1.0, description="how long the error must stay below "
+                               "`converged_m`, s")
+    diverged_m: Size_m = Field(0.3, description="after convergence, a position error "
+                               "above this is a divergence event, m")
 
 
 DEFS: dict[str, MetricDef] = {

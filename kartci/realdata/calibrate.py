@@ -21,12 +21,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.optimize import least_squares
 
+from kartci.atomic import write_text_atomic
 from kartci.errors import RunError, SpecError
 from kartci.realdata.divergence import divergence, residuals, run_whole, run_windows
-from kartci.realdata.drive import Drive
+from kartci.realdata.drive import Drive, read_drive
+from kartci.realdata.importer import import_log
 from kartci.realdata.plant import Plant
-from kartci.realdata.profile import Profile
+from kartci.realdata.profile import Profile, resolve_profile
 from kartci.realdata.simreal import SimSetup, check_commands, sim_setup
 
 WEIGHTS = np.array([1.0, 1.0, 1.0, 0.2, 0.2])  # x m, y m, yaw m/rad, speed s, yaw rate m s/rad
@@ -163,8 +166,6 @@ class Objective:
 
 def calibrate(objective: Objective) -> Fit:
     """Fit the objective's parameters; divergence before (start values) and after."""
-    from scipy.optimize import least_squares
-
     params = objective.params
     lo = np.array([p.lo / p.start for p in params])
     hi = np.array([p.hi / p.start for p in params])
@@ -203,11 +204,6 @@ def calibrate_log(log: Path, profile_path: Path | None, scenario: str | None,
                   out: Path, allow_outside_paths: bool = False) -> Fit:
     """Fit `names` to `log`; writes OUT/calibration.json and OUT/overlay.yaml. The profile's
     files stay inside the project unless `allow_outside_paths` (`--allow-outside-paths`)."""
-    from kartci.atomic import write_text_atomic
-    from kartci.realdata.drive import read_drive
-    from kartci.realdata.importer import import_log
-    from kartci.realdata.profile import resolve_profile
-
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
     setup = sim_setup(profile, scenario, overrides)

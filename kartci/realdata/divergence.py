@@ -5,7 +5,6 @@ drift does not hide model error), compared signal by signal with the log."""
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from pydantic import Field
@@ -13,6 +12,7 @@ from pydantic import Field
 from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.errors import LogError
 from kartci.metrics import ScoreContext
+from kartci.metrics.trajectory import DeltaUnit, Trajectory, TrajectoryError, ape, rpe
 from kartci.realdata.drive import Drive
 from kartci.realdata.plant import Plant
 
@@ -80,18 +80,14 @@ def residuals(real: np.ndarray, sim: np.ndarray) -> np.ndarray:
                             sim[:, 5] - real[:, 5]])
 
 
-def trajectory(t: np.ndarray, states: np.ndarray) -> Any:
+def trajectory(t: np.ndarray, states: np.ndarray) -> Trajectory:
     """A planar state series as a Trajectory (z = 0, yaw about z)."""
-    from kartci.metrics.trajectory import Trajectory
-
     return Trajectory.planar(t, states[:, 0], states[:, 1], states[:, 2])
 
 
 def divergence(t: np.ndarray, real_w: np.ndarray, sim_w: np.ndarray, t_whole: np.ndarray,
                real_whole: np.ndarray, sim_whole: np.ndarray) -> dict[str, float]:
     """The divergence metrics (see DEFS) of a windowed and a whole-log sim run."""
-    from kartci.metrics.trajectory import DeltaUnit, TrajectoryError, ape, rpe
-
     win = ape(trajectory(t, real_w), trajectory(t, sim_w))
     whole_ref, whole_sim = trajectory(t_whole, real_whole), trajectory(t_whole, sim_whole)
     whole = ape(whole_ref, whole_sim)

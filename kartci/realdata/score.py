@@ -8,6 +8,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from kartci.realdata import simreal
 from kartci.realdata.importer import import_log
 from kartci.realdata.profile import resolve_profile
 from kartci.realdata.runlog import write_result
@@ -34,8 +35,6 @@ def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
                 baselines: Path, allow_outside_paths: bool = False) -> ScenarioResult:
     """The log's commands replayed into the sim (whole and windowed) into
     OUT/<profile name>_simreal/, scored for divergence and judged like a run."""
-    from kartci.realdata import simreal
-
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
     setup = simreal.sim_setup(profile, scenario, overrides)

@@ -15,7 +15,7 @@ import numpy as np
 from kartci import core
 from kartci.core import SimReal
 from kartci.errors import SpecError
-from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, open_log
+from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, msg, open_log
 from kartci.logs.types import for_writing
 from kartci.realdata.divergence import SIM_WHOLE, SIM_WINDOWS, run_whole, run_windows
 from kartci.realdata.drive import Drive, read_drive
@@ -125,8 +125,6 @@ def _scenario(profile: Profile, drive: Drive, setup: SimSetup, window_s: float) 
 
 def _write(imported: Path, dst: Path, scenario: Scenario, agent: str, drive: Drive,
            runs: dict[str, Any]) -> None:
-    from kartci.logs import msg
-
     with open_log(imported) as reader:
         store = for_writing(reader.typestore)
     with McapLogWriter(dst, store) as out:

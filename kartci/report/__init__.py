@@ -20,13 +20,13 @@ def __getattr__(name: str) -> Any:
     """The writers load on first use (report_html brings matplotlib and the figures), so a
     command that prints a table starts fast."""
     if name == "report_html":
-        from kartci.report.html import report_html
+        from kartci.report.html import report_html  # start-up: matplotlib, on first use
         return report_html
     if name == "junit_xml":
-        from kartci.report.junit import junit_xml
+        from kartci.report.junit import junit_xml  # start-up, as report_html
         return junit_xml
     if name == "summary_md":
-        from kartci.report.markdown import summary_md
+        from kartci.report.markdown import summary_md  # start-up, as report_html
         return summary_md
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
@@ -56,7 +56,7 @@ def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
 def _history(results: list[ScenarioResult], folder: Path | None) -> tuple[list[str], Any] | None:
     """Earlier commits' summaries in `folder` (sorted by name, oldest first) and this run; None
     when there are none (no folder yet: the first run on main)."""
-    from kartci.report.history import collect, load_summary
+    from kartci.report.history import collect, load_summary  # start-up: pandas, when drawn
 
     earlier = sorted(folder.glob("*.json")) if folder is not None and folder.is_dir() else []
     if not earlier:
@@ -74,6 +74,7 @@ def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN,
     paths = {key: out / name for key, name in FILES.items()}
     for path in paths.values():
         path.unlink(missing_ok=True)
+    # start-up: the writers (matplotlib, the figures) load when reports are written
     from kartci.report.html import report_html
     from kartci.report.junit import junit_xml
     from kartci.report.markdown import summary_md

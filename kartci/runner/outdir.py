@@ -44,7 +44,7 @@ def valid_label(label: object) -> bool:
 def locked(out: Path) -> Iterator[None]:
     """Hold OUT's writer lock (creating OUT); a second writer gets a RunError at once."""
     try:
-        import fcntl
+        import fcntl  # optional: POSIX only
     except ImportError:  # not POSIX: no lock, as before
         out.mkdir(parents=True, exist_ok=True)
         yield

@@ -9,11 +9,13 @@ reports and, for a shard, `shard.json`. A sweep point's folder is `<scenario>@<k
 from __future__ import annotations
 
 import math
+import multiprocessing as mp
 import os
 import shutil
 import time
 import traceback
 from collections.abc import Callable, Mapping
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -103,9 +105,6 @@ def run_pinned(scenario: Scenario, out: Path, folder: Path,
     agent objects cannot leave this process, so their runs stay here (run.json says so)."""
     if agents or portable.state() is not portable.Pin.UNPINNED:
         return run_one(scenario, out, None, folder, agents)
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
-
     with ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as pool:
         return pool.submit(run_one, scenario, out, None, folder).result()
 

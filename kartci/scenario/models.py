@@ -14,8 +14,11 @@ from pydantic import (
     model_validator,
 )
 
+from kartci.core.params import Angle_rad as Angle_rad
 from kartci.core.params import ControllerParams as ControllerParams
+from kartci.core.params import Distance_m, Duration_s, Friction, Period_s, Size_m
 from kartci.core.params import Frozen as Frozen
+from kartci.core.params import Length_m as Length_m
 from kartci.core.params import MetricParams as MetricParams
 from kartci.core.params import NodeParams as NodeParams
 from kartci.core.params import RobotParams as RobotParams
@@ -23,19 +26,8 @@ from kartci.core.params import WorldParams as WorldParams
 from kartci.scenario.dispatch import dispatch, registries_of
 from kartci.scenario.yamlio import preview
 
-# --- physical bounds: every numeric key is bounded by what its unit (the key's suffix) can mean
-# for a kart or a line tracker, generously (every shipped scenario is far inside), so that no
-# value runs nonsense physics or overflows geometry. A key's own bounds narrow these:
-#   m +-1e4 (10 km: wider than any race circuit), m/s +-100 (a kart tops 30 m/s),
-#   m/s^2 +-100 (10 g), m/s^3 +-1e4, s +-3600 (the longest run; periods > 0), Hz 0-1e5,
-#   rad +-2 pi, rad/s +-1e3 (a kart's wheel spins at 250 rad/s), kg, kg m^2, N m 0-1e5,
-#   1/m +-1e3, 1/s +-1e4, per sqrt(s) 0-1e3, friction 0-10 (rubber: about 1),
-#   dimensionless gains, weights and scales +-1e6, pixels 1-8192, counts 0-1e6.
-Length_m = Annotated[float, Field(ge=-1e4, le=1e4)]
 Coordinate_m = Length_m  # a coordinate in a world
 Point_m = tuple[Coordinate_m, Coordinate_m]
-Edge_m = Annotated[float, Field(gt=0.0, le=1e4)]  # a size: a box or a hall of no extent is no body
-Angle_rad = Annotated[float, Field(ge=-2 * math.pi, le=2 * math.pi)]
 LATERAL_MAX_M = 100.0  # a start this far beside a line or centreline is off any course
 UNITS = {"_mps2": "m/s^2", "_mps3": "m/s^3", "_mps": "m/s",
          "_radps": "rad/s", "_rad": "rad", "_kgm2": "kg m^2", "_kg": "kg", "_nm": "N m",
@@ -76,9 +68,9 @@ class CircleCourse(Frozen):
                               "frame")
     radius_m: float = Field(1.0, gt=0.05, le=1e6, description="radius of the line's axis, m "
                             "(seed 001 Sec. 7.2 does not give it; line_lab/circle uses 0.362 m)")
-    start_rad: float = Field(-1.5707963267948966, ge=-math.tau, le=math.tau,
-                             description="polar angle of the start point "
-                             "about the centre, rad (-pi/2: the bottom of the circle, heading +x)")
+    start_rad: Angle_rad = Field(-1.5707963267948966, description="polar angle of the start "
+                                 "point about the centre, rad (-pi/2: the bottom of the circle, "
+                                 "heading +x)")
 
 
 Course = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]
@@ -89,11 +81,10 @@ class Box(Frozen):
 
     center_m: Point_m = Field(description="centre of the box's footprint, (x, y) "
                                           "in m, world frame")
-    size_m: tuple[Edge_m, Edge_m, Edge_m] = Field((0.1, 0.1, 0.1), description="edge lengths "
+    size_m: tuple[Size_m, Size_m, Size_m] = Field((0.1, 0.1, 0.1), description="edge lengths "
                                                "(x, y, z) in m, before the yaw rotation")
-    yaw_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
-                           description="rotation about the vertical axis, rad, "
-                           "counter-clockwise")
+    yaw_rad: Angle_rad = Field(0.0, description="rotation about the vertical axis, rad, "
+                               "counter-clockwise")
 
 
 class LineLabWorld(WorldParams):
@@ -109,9 +100,8 @@ class LineLabWorld(WorldParams):
         description="luminance of the white floor as the line cameras see it (0-1, Eq. 5.1); "
         "calibrated so that the sensor sweep gives the seed's slope, Eq. 6.12 (39.4 per m)",
     )
-    floor_friction: float = Field(1.0, ge=0.0, le=10.0,
-                                  description="Coulomb friction coefficient of "
-                                  "the floor (dimensionless); seed 001 Sec. 5.6: no slip")
+    floor_friction: Friction = Field(1.0, description="Coulomb friction coefficient of "
+                                     "the floor (dimensionless); seed 001 Sec. 5.6: no slip")
     course: Course = Field(description="the black line: `{type: straight, ...}` or "
                            "`{type: circle, ...}`")
     obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (the sonar "
@@ -124,17 +114,16 @@ class FloorZone(Frozen):
     name: str = Field(description="name of the surface, e.g. `coated`")
     min_m: Point_m = Field(description="lower-left corner (x, y), m, world frame")
     max_m: Point_m = Field(description="upper-right corner (x, y), m, world frame")
-    friction: float = Field(ge=0.0, le=10.0, description="friction coefficient mu = pull force / "
-                            "weight (seed 000 Sec. 4.2; REFERENCE.md: about 0.6 for a coated "
-                            "floor)")
+    friction: Friction = Field(description="friction coefficient mu = pull force / "
+                               "weight (seed 000 Sec. 4.2; REFERENCE.md: about 0.6 for a coated "
+                               "floor)")
 
 
 class TrackWorldParams(WorldParams):
     """What every world around a closed race track has (each kind documents its own)."""
 
     track: str = Field(description="closed track, TUMFTM CSV on the project's world path")
-    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
-                                  description="friction coefficient of the floor")
+    floor_friction: Friction = Field(0.9, description="friction coefficient of the floor")
     zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
     obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor")
 
@@ -144,20 +133,18 @@ class HallWorld(TrackWorldParams):
 
     kind: Literal["hall"] = Field("hall", description="world kind: an indoor hall")
     description: str = Field("", description="one line about the world, shown in reports")
-    size_m: tuple[Edge_m, Edge_m] = Field((32.0, 20.0), description="interior (x, y) extent, m, "
+    size_m: tuple[Size_m, Size_m] = Field((32.0, 20.0), description="interior (x, y) extent, m, "
                                         "from (0, 0) (an approximation of the Winti lab, "
                                         "REFERENCE.md)")
     wall_height_m: float = Field(4.0, gt=0.5, le=1e4, description="height of walls and pillars, m")
-    wall_thickness_m: float = Field(0.3, gt=0.0, le=1e4,
-                                    description="thickness of the walls, m, outside the "
-                                    "interior")
+    wall_thickness_m: Size_m = Field(0.3, description="thickness of the walls, m, outside the "
+                                     "interior")
     pillars_m: tuple[Point_m, ...] = Field((), description="centres (x, y) of "
                                                        "square pillars, m")
-    pillar_size_m: float = Field(0.5, gt=0.0, le=1e4, description="side of a square pillar, m")
-    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
-                                  description="friction coefficient of the floor "
-                                  "outside any zone (mu = pull force / weight, seed 000 Sec. "
-                                  "4.2); 0.9: tire on concrete (REFERENCE.md)")
+    pillar_size_m: Size_m = Field(0.5, description="side of a square pillar, m")
+    floor_friction: Friction = Field(0.9, description="friction coefficient of the floor "
+                                     "outside any zone (mu = pull force / weight, seed 000 Sec. "
+                                     "4.2); 0.9: tire on concrete (REFERENCE.md)")
     zones: tuple[FloorZone, ...] = Field((), description="rectangles of floor with their own "
                                          "friction (the seed's second, coated surface)")
     track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
@@ -178,17 +165,15 @@ class CircuitWorld(TrackWorldParams):
                        "w_tr_left_m`: relative to a world folder on the project's search path, "
                        "or absolute")
     margin_m: float = Field(10.0, ge=1.0, le=1e4, description="ground beyond the track's extent, m")
-    floor_friction: float = Field(0.9, ge=0.0, le=10.0,
-                                  description="friction coefficient of the ground "
-                                  "(mu, dimensionless): tyre on asphalt or concrete, about 0.9 "
-                                  "(REFERENCE.md)")
+    floor_friction: Friction = Field(0.9, description="friction coefficient of the ground "
+                                     "(mu, dimensionless): tyre on asphalt or concrete, about 0.9 "
+                                     "(REFERENCE.md)")
     zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
     barriers: bool = Field(True, description="walls along both track edges")
-    barrier_offset_m: float = Field(1.0, ge=0.0, le=1e4,
-                                    description="gap from the track edge to the "
-                                    "barrier's inner face, m")
-    barrier_height_m: float = Field(0.8, gt=0.0, le=1e4, description="barrier height, m")
-    barrier_thickness_m: float = Field(0.3, gt=0.0, le=1e4, description="barrier thickness, m")
+    barrier_offset_m: Distance_m = Field(1.0, description="gap from the track edge to the "
+                                         "barrier's inner face, m")
+    barrier_height_m: Size_m = Field(0.8, description="barrier height, m")
+    barrier_thickness_m: Size_m = Field(0.3, description="barrier thickness, m")
     barrier_segment_m: float = Field(3.0, gt=0.2, le=1e4, description="length of one barrier box "
                                      "along the edge, m (shorter follows curves closer)")
     obstacles: tuple[Box, ...] = Field((), description="static boxes on or beside the track")
@@ -212,25 +197,22 @@ class Pose2D(Frozen):
     """Start pose relative to the course start, in the course frame: of the line-sensor
     midpoint for a line tracker, of base_link for a kart (along the track's centreline)."""
 
-    along_m: float = Field(0.0, ge=0.0, le=1e4,
-                           description="distance along the course (line or track "
-                           "centreline) from its start, m")
+    along_m: Distance_m = Field(0.0, description="distance along the course (line or track "
+                                "centreline) from its start, m")
     lateral_m: float = Field(0.0, ge=-LATERAL_MAX_M, le=LATERAL_MAX_M, description="offset "
                                 "from the line or centreline, m; left of it is positive; on a "
                                 "track, within the track's width there")
-    heading_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
-                               description="heading relative to the course direction at "
-                               "that point, rad; counter-clockwise is positive")
+    heading_rad: Angle_rad = Field(0.0, description="heading relative to the course direction at "
+                                   "that point, rad; counter-clockwise is positive")
 
 
 class Carry(Frozen):
     """The robot carried once, without its knowledge (a kidnap): its pose jumps, its motion
     is kept."""
 
-    at_s: float = Field(ge=0.0, le=3600.0, description="when, sim time, s")
+    at_s: Duration_s = Field(description="when, sim time, s")
     offset_m: Point_m = Field(description="the jump (x, y) in the world frame, m")
-    yaw_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
-                           description="turned by this much too, rad")
+    yaw_rad: Angle_rad = Field(0.0, description="turned by this much too, rad")
 
 
 class AgentSpec(Frozen):
@@ -276,16 +258,13 @@ class PhysicsSpec(Frozen):
 class LineMetricsParams(MetricParams):
     """Parameters of the line tracker's tracking metrics."""
 
-    transient_s: float = Field(5.0, ge=0.0, le=3600.0,
-                               description="start-up transient excluded from "
-                               "the cross-track errors, s")
-    lost_threshold_m: float = Field(0.021, gt=0.0, le=1e4,
-                                    description="the sensor's range, m: farther "
-                                    "from the line axis counts as lost (seed 001 Eq. 6.15: "
-                                    "+-0.021 m)")
-    settle_band_m: float = Field(0.002, gt=0.0, le=1e4,
-                                 description="the cross-track error band that "
-                                 "ends settling (settle_time_s), m")
+    transient_s: Duration_s = Field(5.0, description="start-up transient excluded from "
+                                    "the cross-track errors, s")
+    lost_threshold_m: Size_m = Field(0.021, description="the sensor's range, m: farther "
+                                     "from the line axis counts as lost (seed 001 Eq. 6.15: "
+                                     "+-0.021 m)")
+    settle_band_m: Size_m = Field(0.002, description="the cross-track error band that "
+                                  "ends settling (settle_time_s), m")
 
 
 class Criterion(Frozen):
@@ -312,7 +291,7 @@ class Scenario(Frozen):
                                                "of one, or `{kind: NAME, ...}` in full")
     agents: dict[str, AgentSpec] = Field(min_length=1, description="the robots by name; the "
                                          "name is their topic namespace (`/kart0/...`)")
-    duration_s: float = Field(gt=0.0, le=3600.0, description="simulated time to run, s")
+    duration_s: Period_s = Field(description="simulated time to run, s")
     seed: int = Field(0, ge=0, le=2**63 - 1, description="seed of the run's one random "
                       "generator (fits an int64): the same scenario and seed give the same "
                       "numbers on every run")

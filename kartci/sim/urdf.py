@@ -13,8 +13,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.errors import SpecError
+from kartci.logs import msg
 from kartci.scenario.yamlio import read_bytes_bounded, read_text_bounded
 
 URDF_MAX_BYTES = 8 << 20  # a URDF (meshes are files of their own); the shipped ones are 6 KB
@@ -23,8 +25,6 @@ URDF_MAX_BYTES = 8 << 20  # a URDF (meshes are files of their own); the shipped 
 def urdf_path(model: Any) -> Path:
     """A robot model's URDF: an absolute path as resolved when the scenario was loaded, or a
     name relative to `<kind>/` on the project's model path."""
-    from kartci import project
-
     path = Path(str(model.urdf))
     return path if path.is_absolute() else project.current().model_file(f"{model.kind}/{path}")
 
@@ -120,8 +120,6 @@ def prefixed_urdf(text: str, namespace: str) -> str:
 def robot_descriptions(scenario: Any) -> list[tuple[str, Any]]:
     """`/<agent>/robot_description` (std_msgs/String, the URDF with tf-prefixed links) of every
     agent whose model has a URDF: what Foxglove's 3D panel and robot_state_publisher read."""
-    from kartci.logs import msg
-
     out = []
     for name, spec in scenario.agents.items():
         if getattr(spec.model, "urdf", None) is None:

@@ -129,6 +129,30 @@ def test_an_agent_object_drives_and_the_log_says_so(tmp_path: Path) -> None:
     assert run_json["replaced_agents"] == {"lt0": "test_api.Bang"}
 
 
+
+def test_a_run_whose_agent_sends_unnamed_wheel_commands_reports(tmp_path: Path) -> None:
+    """`Bang` sends wheel speeds without joint names (the robot reads them in order): the
+    report and the baseline's reference trace draw what they can (the commanded speeds they
+    cannot attribute are left out) instead of failing on a missing `left_wheel_hinge` column."""
+    out, baselines = tmp_path / "out", tmp_path / "baselines"
+    baselines.mkdir()
+    kartci.run("line_straight", overrides=QUICK, agents={"lt0": Bang()}, out=out,
+               baselines=baselines)
+
+    def cli(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([sys.executable, "-m", "kartci.cli", *args, str(out),
+                               "--baselines", str(baselines)],
+                              capture_output=True, text=True, timeout=300)
+
+    r = cli("report", "--no-strict")
+    assert r.returncode == 1, r.stdout + r.stderr  # 3 s do not complete the line: judged
+    static = (out / "report-static.html").read_text(encoding="utf-8")
+    assert "driven wheel speeds (measured)" in static  # the commands: not attributable
+    r = cli("baseline", "update", "--replicas", "0")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (baselines / "traces" / "line_straight.json").is_file()
+
+
 class NoStep:
     period_s = 0.06
     inputs = ("line_sensor",)

@@ -4,12 +4,12 @@ use (`drivers`, `mpcc.agent`), so a run without an MPCC never imports CasADi."""
 
 from __future__ import annotations
 
-import math
 from typing import Literal
 
 from pydantic import Field
 
 from kartci.core import Controller, ControllerParams, Frozen, lazy
+from kartci.core.params import Angle_rad, Duration_s, Length_m, Period_s
 from kartci.robots.gokart.mpcc.params import MpccController
 from kartci.scenario.models import LogSource
 
@@ -21,9 +21,8 @@ class ManualController(ControllerParams):
     mapping: str = Field("ps4", description="joystick mapping: `gokart/joy/<mapping>.yaml` on "
                          "the project's model path (built in: ps4, g29; seed 000 Sec. 5.1)")
     source: LogSource = Field(description="the recorded sensor_msgs/Joy stream to replay")
-    period_s: float = Field(0.02, gt=0.0, le=3600.0,
-                            description="control period, s: a whole multiple of "
-                            "physics.dt_s")
+    period_s: Period_s = Field(0.02, description="control period, s: a whole multiple of "
+                               "physics.dt_s")
 
 
 class CommandsController(ControllerParams):
@@ -34,19 +33,17 @@ class CommandsController(ControllerParams):
                                       "recorded commands")
     source: LogSource = Field(description="the recorded command stream (AckermannDriveStamped, "
                               "Twist or TwistStamped)")
-    period_s: float = Field(0.02, gt=0.0, le=3600.0,
-                            description="control period, s: a whole multiple of "
-                            "physics.dt_s")
+    period_s: Period_s = Field(0.02, description="control period, s: a whole multiple of "
+                               "physics.dt_s")
 
 
 class ScriptStep(Frozen):
     """One command of a script, held from `t_s` until the next step's time (seed 000 Sec. 5.2
     command format: steering-wheel angle, motor acceleration, brake deceleration)."""
 
-    t_s: float = Field(ge=0.0, le=3600.0, description="sim time from which this command holds, s")
-    steering_rad: float = Field(0.0, ge=-math.tau, le=math.tau,
-                                description="steering-column (steering-wheel) angle, rad; "
-                                "positive turns left (Table 3.3 range -1.84 to 1.73)")
+    t_s: Duration_s = Field(description="sim time from which this command holds, s")
+    steering_rad: Angle_rad = Field(0.0, description="steering-column (steering-wheel) angle, rad; "
+                                    "positive turns left (Table 3.3 range -1.84 to 1.73)")
     accel_mps2: float = Field(0.0, ge=-100.0, le=100.0,
                               description="motor command as an acceleration, m/s^2")
     brake_mps2: float = Field(0.0, ge=-100.0, le=100.0,
@@ -60,9 +57,8 @@ class ScriptController(ControllerParams):
                                     "timeline")
     steps: tuple[ScriptStep, ...] = Field(min_length=1, description="the commands, each from "
                                           "its t_s on; before the first, the first holds")
-    period_s: float = Field(0.02, gt=0.0, le=3600.0,
-                            description="control period, s: a whole multiple of "
-                            "physics.dt_s")
+    period_s: Period_s = Field(0.02, description="control period, s: a whole multiple of "
+                               "physics.dt_s")
 
 
 class JoyDriverController(ControllerParams):
@@ -74,17 +70,14 @@ class JoyDriverController(ControllerParams):
     mapping: str = Field("ps4", description="joystick mapping the driver's Joy messages go "
                          "through: `gokart/joy/<mapping>.yaml` on the model path")
     target_speed_mps: float = Field(5.0, ge=-100.0, le=100.0, description="speed on straights, m/s")
-    lookahead_m: float = Field(3.5, ge=-1e4, le=1e4,
-                               description="pure-pursuit distance to the aim point on the "
-                               "centreline, m")
-    lateral_offset_m: float = Field(0.0, ge=-1e4, le=1e4,
-                                    description="drive this far left of the centreline, m")
+    lookahead_m: Length_m = Field(3.5, description="pure-pursuit distance to the aim point on the "
+                                  "centreline, m")
+    lateral_offset_m: Length_m = Field(0.0, description="drive this far left of the centreline, m")
     max_lateral_accel_mps2: float = Field(4.0, ge=-100.0, le=100.0,
                                           description="cornering limit that sets the "
                                           "speed from the curvature ahead, m/s^2")
-    period_s: float = Field(0.02, gt=0.0, le=3600.0,
-                            description="control period, s: a whole multiple of "
-                            "physics.dt_s")
+    period_s: Period_s = Field(0.02, description="control period, s: a whole multiple of "
+                               "physics.dt_s")
 
 
 KART = ("gokart",)

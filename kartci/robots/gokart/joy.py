@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from kartci import project
 from kartci.core import JoyCommand, RobotParams
 from kartci.errors import SpecError
+from kartci.logs import messages
 from kartci.logs.types import header, msg, stamp_ns
 from kartci.project import did_you_mean
 from kartci.robots.gokart.params import GokartModel
@@ -103,8 +104,6 @@ def _parse(path: Path) -> JoyMapping:
 def check_pad(m: JoyMapping, name: str, log: Path, topic: str) -> None:
     """The recorded pad must have the mapping's axis and button counts: a pad of another make
     would otherwise be read with the wrong axes, silently."""
-    from kartci.logs import messages
-
     for _, _, joy in messages(log, [topic]):
         check_counts(m, name, joy, f"{log} {topic}")
         return

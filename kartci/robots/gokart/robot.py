@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from kartci._bullet import pb
 from kartci.errors import SpecError
 from kartci.logs import header, msg
 from kartci.metrics.outline import bounds
@@ -160,8 +161,6 @@ class KartRobot(RobotBase):
 
     def _camera(self, st: BodyState, t_ns: int, put: Put) -> None:
         """A low-resolution RGB image from camera_link (optical frame: z forward, y down)."""
-        from kartci._bullet import pb
-
         cam = self.sensors.camera
         pos, rot = self.body.frame_pose("camera_link", st)
         view = pb.computeViewMatrix(pos.tolist(), (pos + rot[:, 2]).tolist(),
@@ -244,8 +243,6 @@ class KartRobot(RobotBase):
 
     def post_step(self, t_ns: int, put: Put) -> None:
         """Contacts with anything but the floor, grouped into collisions (episodes)."""
-        from kartci._bullet import pb
-
         seen: set[str] = set()
         for c in pb.getContactPoints(bodyA=self.body.body, physicsClientId=self.client):
             if c[2] == self.floor or c[2] == self.body.body:

@@ -7,11 +7,11 @@ import csv
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 
 from kartci.commandline import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
 from kartci.errors import SpecError
+from kartci.scenario import load_scenario
 
 app = typer.Typer(rich_markup_mode=None)  # help shown as written, as kartci's own commands
 
@@ -29,9 +29,10 @@ def characterise(
 ) -> None:
     """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
     6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
-    # the simulator and the scenario loader load when the command runs, not when kartci starts
+    # CLI start-up: numpy and the simulator load when the command runs, not on `kartci --help`
+    import numpy as np
+
     from kartci.robots.line_tracker.characterise import sweep
-    from kartci.scenario import load_scenario
 
     out = out_dir(out, "characterisation")
     spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)
@@ -90,9 +91,10 @@ def characterise(
 def sensor_sweep(offsets_m: list[float], curves: dict[str, list[float]], title: str) -> str:
     """Line-sensor luminance curves against the sensor's lateral offset (mm), its ±8 mm range
     marked."""
-    import matplotlib.pyplot as plt  # matplotlib loads to draw, not when kartci starts
+    # CLI start-up: matplotlib and kartci's figure look (Agg) load to draw, not with kartci
+    import matplotlib.pyplot as plt
 
-    from kartci.plotstyle import finish  # kartci's figure look (and Agg)
+    from kartci.plotstyle import finish
 
     fig, ax = plt.subplots(figsize=(5.5, 3.5))
     for label, ys in curves.items():
@@ -110,7 +112,7 @@ def study(
     """Draw the seed's study figures (Figs. 7.1.2-7.1.4, Sec. 7.2) from the line tracker's grid
     runs in OUT (line_straight_grid, line_circle_grid, line_circle_edge_fast/slow):
     OUT/study.html, one SVG per figure."""
-    # matplotlib and the run folders' tables load when the command runs
+    # CLI start-up: matplotlib and the run folders' tables load when the command runs
     from kartci.robots.line_tracker import figures
     from kartci.robots.line_tracker import study as st
 

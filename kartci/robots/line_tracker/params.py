@@ -7,6 +7,7 @@ from typing import Literal
 from pydantic import Field
 
 from kartci.core import Frozen, RobotParams
+from kartci.core.params import Duration_s, Friction, Length_m
 from kartci.errors import SpecError
 from kartci.scenario.models import LineLabWorld, Scenario
 
@@ -18,24 +19,20 @@ class LineTrackerModel(RobotParams):
                                           "line tracker")
     urdf: str = Field("line_tracker.urdf", description="the robot's URDF: absolute, or "
                       "relative to line_tracker/ on the project's model path")
-    wheel_radius_m: float = Field(0.035, ge=-1e4, le=1e4,
-                                  description="drive wheel radius, m (annex model.sdf)")
-    wheel_separation_m: float = Field(0.15, ge=-1e4, le=1e4,
-                                      description="distance between the drive wheels, m "
-                                      "(wheels at y = +-0.075 m, annex model.sdf)")
+    wheel_radius_m: Length_m = Field(0.035, description="drive wheel radius, m (annex model.sdf)")
+    wheel_separation_m: Length_m = Field(0.15, description="distance between the drive wheels, m "
+                                         "(wheels at y = +-0.075 m, annex model.sdf)")
     wheel_speed_limit_radps: float = Field(18.46, ge=-1e3, le=1e3,
                                            description="wheel speed limit, rad/s: the "
                                            "DC motors' measured saturation (Sec. 5.4)")
-    wheel_time_constant_s: float = Field(0.1, ge=0.0, le=3600.0,
-                                         description="first-order wheel response "
-                                         "time constant, s (Sec. 5.4); 0: ideal wheels")
+    wheel_time_constant_s: Duration_s = Field(0.1, description="first-order wheel response "
+                                              "time constant, s (Sec. 5.4); 0: ideal wheels")
     wheel_torque_limit_nm: float = Field(0.5, gt=0.0, le=1e5, description="torque limit per wheel "
                                          "motor, N m")
-    tire_friction: float = Field(1.0, ge=0.0, le=10.0, description="tyre friction factor "
-                                 "(dimensionless), multiplied by the floor's friction")
-    sensor_point_x_m: float = Field(0.095, ge=-1e4, le=1e4,
-                                    description="line-sensor midpoint ahead of "
-                                    "base_link, m (annex model.sdf camera pose)")
+    tire_friction: Friction = Field(1.0, description="tyre friction factor "
+                                    "(dimensionless), multiplied by the floor's friction")
+    sensor_point_x_m: Length_m = Field(0.095, description="line-sensor midpoint ahead of "
+                                       "base_link, m (annex model.sdf camera pose)")
     wheel_drive: Literal["motor", "set_velocity"] = Field(
         "motor", description="`motor`: a torque-limited velocity motor holds each wheel at its "
         "lagged target every physics step; `set_velocity`: the annex TestSensor.cc's "
@@ -50,11 +47,10 @@ class LineTrackerModel(RobotParams):
                                              "wheel's principal inertias, kg m^2 (None: the "
                                              "URDF's); SDF's default for a link without "
                                              "<inertial> is 1 kg m^2 about each axis")
-    caster_friction: float = Field(0.0, ge=0.0, le=10.0,
-                                   description="friction factor of the caster "
-                                   "sphere, a fixed collision of the chassis that slides "
-                                   "(Sec. 5.1.1); 0: frictionless. The annex model.sdf gives it no "
-                                   "<surface>, so ODE used min(1 default, floor 100) = 1")
+    caster_friction: Friction = Field(0.0, description="friction factor of the caster "
+                                      "sphere, a fixed collision of the chassis that slides "
+                                      "(Sec. 5.1.1); 0: frictionless. The annex model.sdf gives "
+                                      "it no <surface>, so ODE used min(1 default, floor 100) = 1")
 
 
 class LineSensorSpec(Frozen):
@@ -84,13 +80,11 @@ class SonarSpec(Frozen):
     """HC-SR04 ultrasonic range finder (seed 001, Sec. 5.3)."""
 
     enabled: bool = Field(True, description="simulate the sonar (`sonar`, sensor_msgs/Range)")
-    min_range_m: float = Field(0.02, ge=-1e4, le=1e4, description="minimum range, m (Sec. 5.3)")
-    max_range_m: float = Field(4.0, ge=-1e4, le=1e4, description="maximum range, m (Sec. 5.3)")
-    cone_radius_m: float = Field(1.07, ge=-1e4, le=1e4,
-                                 description="cone radius at max range, m (Sec. 5.3)")
-    resolution_m: float = Field(0.003, ge=-1e4, le=1e4,
-                                description="range resolution, m: readings are "
-                                "rounded to it (Sec. 5.3)")
+    min_range_m: Length_m = Field(0.02, description="minimum range, m (Sec. 5.3)")
+    max_range_m: Length_m = Field(4.0, description="maximum range, m (Sec. 5.3)")
+    cone_radius_m: Length_m = Field(1.07, description="cone radius at max range, m (Sec. 5.3)")
+    resolution_m: Length_m = Field(0.003, description="range resolution, m: readings are "
+                                   "rounded to it (Sec. 5.3)")
     rays: int = Field(9, ge=1, le=64, description="rays cast per reading: one on the axis and "
                       "the rest on the cone's rim")
 

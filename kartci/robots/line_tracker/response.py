@@ -11,6 +11,7 @@ from pydantic import Field
 
 from kartci import geometry
 from kartci.core import Direction, Metric, MetricDef, MetricParams, MetricSet
+from kartci.core.params import Duration_s, Size_m
 from kartci.metrics import ScoreContext
 from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
@@ -31,12 +32,10 @@ DEFS: dict[str, MetricDef] = {
 class LineResponseParams(MetricParams):
     """Where the oscillation amplitude starts being measured."""
 
-    transient_s: float = Field(5.0, ge=0.0, le=3600.0,
-                               description="start-up transient left out of the "
-                               "oscillation amplitude, s")
-    lost_threshold_m: float = Field(0.021, gt=0.0, le=1e4,
-                                    description="farther than this the line is "
-                                    "lost and the rest of the run is left out, m (Eq. 6.15)")
+    transient_s: Duration_s = Field(5.0, description="start-up transient left out of the "
+                                    "oscillation amplitude, s")
+    lost_threshold_m: Size_m = Field(0.021, description="farther than this the line is "
+                                     "lost and the rest of the run is left out, m (Eq. 6.15)")
 
 
 def _m(name: str, value: float) -> Metric:

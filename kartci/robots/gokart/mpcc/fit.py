@@ -17,13 +17,15 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+import casadi as ca
 import numpy as np
+from scipy.optimize import least_squares
 
 from kartci.atomic import write_text_atomic
 from kartci.errors import LogError, SpecError
 from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.metrics import recorded_scenario
-from kartci.robots.gokart.mpcc.model import SingleTrack
+from kartci.robots.gokart.mpcc.model import DELTA, NU, NX, PSI, VX, VY, R, SingleTrack, continuous
 from kartci.robots.gokart.mpcc.params import MpccVehicle
 from kartci.robots.gokart.params import GokartModel, cog_x_m
 
@@ -81,10 +83,6 @@ def _step_function(track: SingleTrack, vehicle: MpccVehicle, names: Sequence[str
                    h: float) -> Any:
     """One RK4 step of (vy, r) with inputs vx, delta and the fitted parameters p (no
     longitudinal acceleration: the lateral dynamics alone)."""
-    import casadi as ca
-
-    from kartci.robots.gokart.mpcc.model import DELTA, NU, NX, PSI, VX, VY, R, continuous
-
     p = ca.SX.sym("p", len(names))
     m = _symbolic(track, names, p)
     vy, r, vx, delta = (ca.SX.sym(n) for n in ("vy", "r", "vx", "delta"))
@@ -137,8 +135,6 @@ def fit_mpcc(data: Lateral, track: SingleTrack, vehicle: MpccVehicle, names: Seq
              window_s: float = 0.5) -> MpccFit:
     """Fit the named single-track parameters (see `fittable`) to the recorded lateral
     motion, starting from the kart's own."""
-    from scipy.optimize import least_squares
-
     fields = fittable(track)
     unknown = [n for n in names if n not in fields]
     if unknown:

@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import Field
 
 from kartci.core import ControllerParams, Frozen
+from kartci.core.params import Count, Distance_m, Gain, Period_s, Size_m
 
 
 class MpccMethod(StrEnum):
@@ -34,27 +35,22 @@ class MpccVehicle(Frozen):
                                  description="below this speed, m/s: kinematic model only")
     blend_max_mps: float = Field(3.0, ge=-100.0, le=100.0,
                                  description="above this speed, m/s: dynamic model only")
-    kinematic_relax_s: float = Field(0.1, gt=0.0, le=3600.0,
-                                     description="time constant with which the "
-                                     "kinematic model's lateral speed and yaw rate relax to "
-                                     "their no-slip values, s")
+    kinematic_relax_s: Period_s = Field(0.1, description="time constant with which the "
+                                        "kinematic model's lateral speed and yaw rate relax to "
+                                        "their no-slip values, s")
 
 
 class MpccWeights(Frozen):
     """Cost weights (runtime parameters of the solver: changing them compiles nothing)."""
 
-    contouring: float = Field(0.1, ge=-1e6, le=1e6,
-                              description="cost per m^2 of contouring (lateral) error "
-                              "(Liniger et al., REFERENCE.md)")
-    lag: float = Field(100.0, ge=-1e6, le=1e6, description="cost per m^2 of lag error")
-    progress: float = Field(0.5, ge=-1e6, le=1e6, description="reward per m/s of progress speed")
-    jerk: float = Field(0.001, ge=-1e6, le=1e6,
-                        description="cost per (m/s^3)^2 of longitudinal jerk")
-    steer_rate: float = Field(0.5, ge=-1e6, le=1e6,
-                              description="cost per (rad/s)^2 of front-wheel angle rate")
-    slack: float = Field(100.0, ge=-1e6, le=1e6,
-                         description="cost per m and per m^2 of track-bound violation "
-                         "(soft constraints)")
+    contouring: Gain = Field(0.1, description="cost per m^2 of contouring (lateral) error "
+                             "(Liniger et al., REFERENCE.md)")
+    lag: Gain = Field(100.0, description="cost per m^2 of lag error")
+    progress: Gain = Field(0.5, description="reward per m/s of progress speed")
+    jerk: Gain = Field(0.001, description="cost per (m/s^3)^2 of longitudinal jerk")
+    steer_rate: Gain = Field(0.5, description="cost per (rad/s)^2 of front-wheel angle rate")
+    slack: Gain = Field(100.0, description="cost per m and per m^2 of track-bound violation "
+                        "(soft constraints)")
 
 
 class MpccRecovery(Frozen):
@@ -84,15 +80,13 @@ class MpccController(ControllerParams):
 
     type: Literal["mpcc"] = Field("mpcc", description="controller type: model predictive "
                                   "contouring control")
-    period_s: float = Field(0.05, gt=0.0, le=3600.0,
-                            description="control period = solver call period, s: a whole "
-                            "multiple of physics.dt_s")
+    period_s: Period_s = Field(0.05, description="control period = solver call period, s: a whole "
+                               "multiple of physics.dt_s")
     horizon_steps: int = Field(30, ge=5, le=80, description="prediction horizon N, steps "
                                "(REFERENCE.md: N = 30 at 0.05 s measured; ETH: N = 31)")
-    step_s: float = Field(0.075, gt=0.0, le=3600.0,
-                          description="horizon step, s: 30 x 0.075 s = 2.25 s, "
-                          "long enough to brake from 10 m/s for the hall's hairpin (ETH: 31 x "
-                          "0.1 s)")
+    step_s: Period_s = Field(0.075, description="horizon step, s: 30 x 0.075 s = 2.25 s, "
+                             "long enough to brake from 10 m/s for the hall's hairpin (ETH: 31 x "
+                             "0.1 s)")
     rk4_substeps: int = Field(3, ge=1, le=8, description="RK4 integration steps per horizon "
                               "step (0.025 s each: the yaw dynamics of a 20 kg m^2 kart are "
                               "fast at low speed)")
@@ -119,21 +113,21 @@ class MpccController(ControllerParams):
     max_steer_rate_radps: float = Field(1.2, gt=0.0, le=1e3,
                                         description="front-wheel angle rate limit, "
                                         "rad/s")
-    max_jerk_mps3: float = Field(40.0, gt=0.0, le=1e4, description="longitudinal jerk limit, m/s^3")
-    track_margin_m: float = Field(0.5, ge=0.0, le=1e4,
+    max_jerk_mps3: Size_m = Field(40.0, description="longitudinal jerk limit, m/s^3")
+    track_margin_m: Distance_m = Field(0.5,
                                   description="kept between each track edge and the kart's "
                                   "outline, m: the padding of the kart's centre line is the "
                                   "outline's half width (0.69 m, the rear wheels) plus this "
                                   "(REFERENCE.md: ETH padding 0.5 m)")
-    passing_margin_m: float = Field(0.1, ge=0.0, le=1e4,
+    passing_margin_m: Distance_m = Field(0.1,
                                     description="kept between a track edge and the kart's "
                                     "outline beside a kart it passes, m: "
                                     "`track_margin_m` gives way to clearing them (the hall's "
                                     "4 m track leaves 0.81 m either side of the centre line "
                                     "with the full margin, too little to pass a 1.38 m kart)")
-    obstacle_margin_m: float = Field(0.9, ge=0.0, le=1e4,
+    obstacle_margin_m: Distance_m = Field(0.9,
                                      description="kept from an obstacle's edge, m")
-    front_check_m: float = Field(1.0, ge=0.0, le=1e4,
+    front_check_m: Distance_m = Field(1.0,
                                  description="a point this far ahead of the CoG, "
                                  "m, keeps the bounds too, so the nose does not cut corners")
     max_column_rad: float = Field(0.65, gt=0.0, le=2.0,
@@ -159,10 +153,9 @@ class MpccController(ControllerParams):
     sqp_cold_iterations: int = Field(10, ge=1, le=100, description="RTI: SQP iterations of a "
                                      "solve without a previous plan (the first, and after a "
                                      "failure)")
-    max_iterations: int = Field(100, ge=1, le=1_000_000,
-                                description="a solve that hits this counts as "
-                                "failed (Ipopt iterations; in RTI the QP solver's own cap): "
-                                "an iteration cap, not wall time, so runs stay deterministic")
+    max_iterations: Count = Field(100, description="a solve that hits this counts as "
+                                  "failed (Ipopt iterations; in RTI the QP solver's own cap): "
+                                  "an iteration cap, not wall time, so runs stay deterministic")
     compile: bool = Field(True, description="generate C and compile it (cached on disk)")
     vehicle: MpccVehicle = Field(MpccVehicle(), description="the prediction model's "
                                  "parameters (changing them recompiles the solver)")
