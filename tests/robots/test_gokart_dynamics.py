@@ -94,7 +94,7 @@ def step_steer(column_rad: float = 0.5, v_mps: float = 6.0,
     for k in range(0, len(rows), ODOM_EVERY):
         x[DELTA] = rows[k, 5]
         x[ACC] = pedals(float(math.hypot(x[VX], x[VY])))
-        x = np.asarray(f(x, ca.DM.zeros(NU))).ravel()
+        x = np.asarray(f(x, ca.DM.zeros(NU), 1.0)).ravel()  # grip 1: the tyres' own D
         model_r.append(x[R])
     return rows[ODOM_EVERY - 1::ODOM_EVERY, 4], np.array(model_r)
 
