@@ -10,7 +10,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
-from layers import cycles, edges
+from layers import Edge, cycles, edges, levels
 
 
 def test_no_cycle() -> None:
@@ -206,3 +206,12 @@ def test_the_late_import_scan_finds_what_it_looks_for(tmp_path: Path) -> None:
         "kartci/mod.py:9: import csv",
         "kartci/mod.py:14: import sqlite3",
     ]
+
+
+def test_levels_put_every_import_above_what_it_imports() -> None:
+    """`tools/layers.py --levels`: the longest import path down, so every arrow points down."""
+    tiny = [Edge("a", "b", "", False), Edge("b", "c", "", False), Edge("a", "c", "", True)]
+    assert levels(tiny) == {0: ["c"], 1: ["b"], 2: ["a"]}
+    found = edges()
+    at = {name: k for k, names in levels(found).items() for name in names}
+    assert [e.where for e in found if at[e.source] <= at[e.target]] == []

@@ -2,6 +2,7 @@
 
     python tools/layers.py            # packages, their imports, and every cycle
     python tools/layers.py --late     # also list each import made inside a function
+    python tools/layers.py --levels   # the packages by level, top to bottom (no cycle: arrows down)
 
 A package is a subpackage of kartci (`kartci.runner`) or a top-level module (`kartci.track`);
 `kartci` itself is the package's `__init__.py`. An import inside a function counts as an edge
@@ -119,10 +120,31 @@ def cycles(found: list[Edge]) -> list[list[str]]:
     return sorted((c for c in comps if len(c) > 1), key=len, reverse=True)
 
 
+def levels(found: list[Edge]) -> dict[int, list[str]]:
+    """Packages by level: 0 imports no other package, each level imports only lower ones (the
+    longest import path down). Meaningful only without a cycle."""
+    down: dict[str, set[str]] = defaultdict(set)
+    for e in found:
+        down[e.source].add(e.target)
+    level: dict[str, int] = {}
+
+    def of(name: str) -> int:
+        if name not in level:
+            level[name] = 0  # a guard against a cycle, which `cycles` reports
+            level[name] = 1 + max((of(t) for t in down[name]), default=-1)
+        return level[name]
+
+    by: dict[int, list[str]] = defaultdict(list)
+    for name in sorted({e.source for e in found} | {e.target for e in found}):
+        by[of(name)].append(name)
+    return dict(by)
+
+
 def main() -> int:
     """Print the graph and its cycles; exit 1 when there is a cycle."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--late", action="store_true", help="list imports made inside functions")
+    ap.add_argument("--levels", action="store_true", help="print the packages by level")
     args = ap.parse_args()
     found = edges()
     by: dict[tuple[str, str], list[Edge]] = defaultdict(list)
@@ -135,6 +157,9 @@ def main() -> int:
     print(f"\n{len(found)} imports between packages, {sum(e.late for e in found)} of them late")
     for comp in comps:
         print(f"cycle of {len(comp)} packages: {', '.join(comp)}")
+    if args.levels:
+        for k, names in sorted(levels(found).items(), reverse=True):
+            print(f"level {k}: {'  '.join(n.removeprefix('kartci.') for n in names)}")
     if args.late:
         for e in found:
             if e.late:

@@ -77,7 +77,9 @@ class ExternalAgent:
         self._latest: dict[str, Any] = {}
         self.child: Child | None = None
         self.inbox = Inbox()
-        session, self.endpoint = open_listening(spec.port)
+        session, self.endpoint = open_listening(
+            spec.port, connect=spec.connect, router=spec.zenoh_mode == "router",
+            allow_remote=spec.allow_remote)
         self.node = Node(session, spec.domain_id, spec.node_name)
         try:
             self.clock = self.node.publisher("/clock", CLOCK)

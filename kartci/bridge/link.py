@@ -2,13 +2,20 @@
 attachments and liveliness tokens.
 
 Isolation: the session is a peer that listens on a free loopback port of its own, with multicast
-and gossip scouting off and no router, so nothing but the run's own stack (told the port) can
-reach it; `-j N` runs are separate networks.
+scouting off and no router, so nothing but the run's own stack (told the port) can reach it;
+`-j N` runs are separate networks. Gossip is on (single hop, as in rmw_zenoh's default session
+config): the session tells each process of the stack where the others listen, so a stack of
+several processes all connected to kartci connect to each other too (peers route nothing for
+others; without gossip they never meet). Joining more is explicit: endpoints to connect to (a
+team's router), router mode, and rmw_zenoh's $ZENOH_CONFIG_OVERRIDE, all held to this host
+unless the scenario allows remote endpoints.
 """
 
 from __future__ import annotations
 
+import ipaddress
 import json
+import os
 import socket
 import threading
 import time
@@ -18,9 +25,11 @@ from typing import Any
 import zenoh
 
 from kartci.bridge import ros2
-from kartci.errors import RunError
+from kartci.errors import RunError, SpecError
 
 LOOPBACK = "127.0.0.1"
+CONNECT_TIMEOUT_MS = 5000  # ms, to reach the endpoints to connect to (else an error)
+OVERRIDE_ENV = "ZENOH_CONFIG_OVERRIDE"  # rmw_zenoh's: key=value;... of Zenoh config
 
 
 def free_port() -> int:
@@ -30,28 +39,94 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def peer_config(listen: list[str], connect: list[str]) -> zenoh.Config:
-    """A peer on loopback endpoints only: no multicast, no gossip, no router, no timestamps."""
+def parse_override(text: str) -> list[tuple[str, str]]:
+    """`ZENOH_CONFIG_OVERRIDE` as rmw_zenoh reads it: `key=value` items separated by `;`, each key
+    a slash path of Zenoh's configuration, each value JSON5
+    (`mode="router";listen/endpoints=["tcp/127.0.0.1:7447"]`)."""
+    pairs = []
+    for item in filter(None, (part.strip() for part in text.split(";"))):
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise SpecError(f"{OVERRIDE_ENV}: {item!r} is not key=value")
+        pairs.append((key.strip(), value.strip()))
+    return pairs
+
+
+def is_loopback(endpoint: str) -> bool:
+    """Whether a Zenoh endpoint (`tcp/127.0.0.1:7447`, `udp/[::1]:7447#...`) is on this host."""
+    address = endpoint.partition("/")[2].split("#", 1)[0].split("?", 1)[0]
+    host = address.rpartition(":")[0].strip("[]")
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _endpoints(conf: zenoh.Config, key: str) -> list[str]:
+    """The endpoints of `listen` or `connect`: a list, or one list per mode."""
+    value = json.loads(conf.get_json(f"{key}/endpoints")) or []
+    lists = value.values() if isinstance(value, dict) else [value]
+    return [str(e) for endpoints in lists for e in endpoints or []]
+
+
+def beyond_host(conf: zenoh.Config) -> list[str]:
+    """What in a configuration reaches past this host: non-loopback endpoints, multicast."""
+    out = [e for key in ("listen", "connect") for e in _endpoints(conf, key)
+           if not is_loopback(e)]
+    if json.loads(conf.get_json("scouting/multicast/enabled")) is not False:
+        out.append("multicast scouting")
+    return out
+
+
+def session_config(listen: list[str], connect: list[str], router: bool,
+                   override: str = "") -> zenoh.Config:
+    """A peer (or a router) on the given endpoints: no multicast, no timestamps; gossip on so
+    the processes connected to it learn each other's endpoints; a router to `connect` to must
+    be there (no silent start alone). `override` (ZENOH_CONFIG_OVERRIDE) is applied last."""
     conf = zenoh.Config()
-    conf.insert_json5("mode", '"peer"')
+    conf.insert_json5("mode", '"router"' if router else '"peer"')
     conf.insert_json5("listen/endpoints", json.dumps(listen))
     conf.insert_json5("connect/endpoints", json.dumps(connect))
+    if connect:
+        conf.insert_json5("connect/exit_on_failure", '{router: true, peer: true, client: true}')
+        conf.insert_json5("connect/timeout_ms", json.dumps(
+            dict.fromkeys(("router", "peer", "client"), CONNECT_TIMEOUT_MS)))
     conf.insert_json5("scouting/multicast/enabled", "false")
-    conf.insert_json5("scouting/gossip/enabled", "false")
+    conf.insert_json5("scouting/gossip/enabled", "true")
+    conf.insert_json5("scouting/gossip/multihop", "false")
+    for key, value in parse_override(override):
+        try:
+            conf.insert_json5(key, value)
+        except zenoh.ZError as err:
+            raise SpecError(f"{OVERRIDE_ENV}: cannot set {key} to {value} ({err})") from err
     return conf
 
 
-def open_listening(port: int | None = None, attempts: int = 5) -> tuple[zenoh.Session, str]:
+def open_listening(port: int | None = None, *, connect: tuple[str, ...] = (),
+                   router: bool = False, allow_remote: bool = False,
+                   attempts: int = 5) -> tuple[zenoh.Session, str]:
     """A session listening on `tcp/127.0.0.1:<port>` (default a free port), and that endpoint
-    (a free port taken between the probe and the bind is retried)."""
+    (a free port taken between the probe and the bind is retried). It connects to `connect`
+    and takes $ZENOH_CONFIG_OVERRIDE; anything reaching past this host is refused unless
+    `allow_remote`."""
     last: Exception | None = None
+    override = os.environ.get(OVERRIDE_ENV, "")
     for _ in range(attempts if port is None else 1):
         endpoint = f"tcp/{LOOPBACK}:{port or free_port()}"
+        conf = session_config([endpoint], list(connect), router, override)
+        if not allow_remote and (remote := beyond_host(conf)):
+            raise SpecError(f"bridge: {', '.join(remote)} reaches beyond this host; set "
+                            "allow_remote: true in the external controller to allow it")
         try:
-            return zenoh.open(peer_config([endpoint], [])), endpoint
-        except zenoh.ZError as err:  # the port was taken meanwhile
+            return zenoh.open(conf), endpoint
+        except zenoh.ZError as err:  # the port was taken meanwhile, or no router to join
             last = err
-    raise RunError(f"bridge: cannot listen on tcp/{LOOPBACK}:{port or '<free port>'} ({last})")
+            if connect:
+                break
+    raise RunError(f"bridge: cannot listen on tcp/{LOOPBACK}:{port or '<free port>'}"
+                   f"{' and connect to ' + ', '.join(connect) if connect else ''} ({last})")
 
 
 class Publisher:

@@ -69,6 +69,22 @@ class ExternalController(ControllerParams):
     port: int | None = Field(None, ge=1, le=65535, description="loopback TCP port the "
                              "bridge listens on (tcp/127.0.0.1:<port>); default a free one per "
                              "run. Fix it for a stack you start yourself (no `command`)")
+    # the three network-joining settings are left out of a dump (and so of a baseline's
+    # scenario fields) at their defaults: they change what else shares the graph, not the run,
+    # and baselines accepted before they existed stay current
+    connect: tuple[str, ...] = Field(
+        (), exclude_if=lambda v: v == (),
+        description="Zenoh endpoints the bridge also connects to, e.g. a running router "
+        "(`tcp/127.0.0.1:7447`, rmw_zenohd's default) so the team's other tools share the "
+        "graph; it must be there when the run starts")
+    zenoh_mode: Literal["peer", "router"] = Field(
+        "peer", exclude_if=lambda v: v == "peer",
+        description="the bridge's Zenoh mode: router lets rmw_zenoh nodes with their default "
+        "config (a router on tcp/localhost:7447) use kartci as theirs (with port: 7447)")
+    allow_remote: bool = Field(
+        False, exclude_if=lambda v: v is False,
+        description="allow endpoints beyond this host (in `connect` or "
+        "$ZENOH_CONFIG_OVERRIDE) and multicast scouting; off, they are an error")
     command: tuple[str, ...] = Field((), description="program kartci starts for the run "
                                      "(empty: start the stack yourself, connecting to "
                                      "`port`); `{python}` is kartci's Python, "

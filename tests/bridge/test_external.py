@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -18,6 +19,7 @@ from helpers import ROOT, kartci
 
 SCENARIOS = ROOT / "scenarios"
 LISTENER = Path(__file__).with_name("zenoh_listener.py")
+TWO_STAGE = Path(__file__).with_name("zenoh_two_stage.py")
 DRIVER = ROOT / "examples" / "zenoh_stack" / "kart_driver.py"
 
 
@@ -224,3 +226,69 @@ def test_a_stack_started_by_hand_connects_to_a_fixed_port(tmp_path: Path,
     assert p.returncode == 0, p.stdout + p.stderr
     stamps = [c["stamp"] for c in json.loads(seen.read_text())["clock"]]
     assert stamps == [k * 20_000_000 for k in range(26)]
+
+
+def test_a_stack_of_two_processes_meets_through_kartci(tmp_path: Path, baselines: Path) -> None:
+    """Planner and driver both connect to kartci only; kartci's gossip tells each where the
+    other listens, so the plan reaches the driver and every tick is answered on time."""
+    stack = ["{python}", str(TWO_STAGE), "{namespace}"]
+    proj = project(tmp_path, {"two": external(0.5, stack, startup_timeout_s=10.0)})
+    out = tmp_path / "out"
+    p = kartci("run", "--out", out, "--baselines", baselines, "--no-strict", cwd=proj)
+    assert p.returncode == 0, p.stdout + p.stderr
+    cmds = messages(out / "two" / "run.mcap", "/kart0/ackermann_cmd")
+    stamps = [c.header.stamp.sec * 10**9 + c.header.stamp.nanosec for c in cmds]
+    assert stamps == [k * 20_000_000 for k in range(26)]
+    timing = json.loads((out / "two" / "metrics.json").read_text())["timing"]
+    assert timing["late_commands"]["value"] == 0
+
+
+@pytest.mark.parametrize("kartci_is_router", [False, True])
+def test_a_stack_behind_a_router_drives(tmp_path: Path, baselines: Path,
+                                        kartci_is_router: bool) -> None:
+    """A two-process stack (gossip on, as rmw_zenoh's nodes) connects only to a router: one the
+    test starts on 127.0.0.1 that kartci joins (`connect`), or kartci itself (`zenoh_mode:
+    router`). (Peers meet through gossip: a zenoh 1.10 router did not forward between two peers
+    of which one had gossip off.)"""
+    import subprocess
+
+    import zenoh
+
+    from kartci.bridge.link import free_port
+
+    port = free_port()
+    router_ep = f"tcp/127.0.0.1:{port}"
+    router = None
+    if kartci_is_router:
+        settings: dict[str, Any] = {"zenoh_mode": "router", "port": port}
+    else:
+        conf = zenoh.Config()
+        conf.insert_json5("mode", '"router"')
+        conf.insert_json5("listen/endpoints", json.dumps([router_ep]))
+        conf.insert_json5("scouting/multicast/enabled", "false")
+        router = zenoh.open(conf)
+        settings = {"connect": [router_ep]}
+    proj = project(tmp_path, {"routed": external(0.5, [], **settings)})
+    stack = subprocess.Popen([sys.executable, str(TWO_STAGE), "kart0"], start_new_session=True,
+                             env={**os.environ, "KARTCI_ZENOH_ENDPOINT": router_ep})
+    try:
+        p = kartci("run", "--out", tmp_path / "out", "--baselines", baselines, "--no-strict",
+                   cwd=proj)
+    finally:
+        os.killpg(stack.pid, signal.SIGTERM)
+        stack.wait(10)
+        if router is not None:
+            router.close()  # type: ignore[no-untyped-call]
+    assert p.returncode == 0, p.stdout + p.stderr
+    cmds = messages(tmp_path / "out" / "routed" / "run.mcap", "/kart0/ackermann_cmd")
+    stamps = [c.header.stamp.sec * 10**9 + c.header.stamp.nanosec for c in cmds]
+    assert stamps == [k * 20_000_000 for k in range(26)]
+
+
+def test_joining_a_remote_endpoint_is_refused_unless_allowed(tmp_path: Path) -> None:
+    proj = project(tmp_path, {"far": external(0.5, [], connect=["tcp/192.0.2.1:7447"])})
+    p = kartci("run", "--out", tmp_path / "out", "--no-strict", cwd=proj)
+    assert p.returncode == 2
+    assert "Traceback" not in p.stdout + p.stderr
+    assert ("bridge: tcp/192.0.2.1:7447 reaches beyond this host; set allow_remote: true in "
+            "the external controller to allow it") in p.stdout + p.stderr
