@@ -1,6 +1,6 @@
 """Deprecated: import from `kartci.robots.gokart` (the kart's command, steering map and
 outline live with the kart). Kept so that code written against `kartci.vehicle` keeps working;
-nothing in kartci imports it."""
+nothing in kartci imports it. `FOOTPRINT_M` is computed from the kart's URDF on import here."""
 
 from kartci.robots.gokart import (
     FOOTPRINT_M,

@@ -12,6 +12,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from kartci.core import Direction
@@ -83,3 +84,30 @@ def glance_results() -> list[ScenarioResult]:
     results[6] = ScenarioResult("scenario_06", "slower", [verdict(Status.REGRESSED, 12.5)])
     results[9] = ScenarioResult("scenario_09", "crashed", error="run crashed: boom")
     return results
+
+
+def bullet_gaps_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """PyBullet's closest distance between two default karts' collision shapes (chassis box,
+    wheel spheres; 0 when they touch) with base_link at each pair of poses (x, y, yaw), m: an
+    outline-free reference for the clearance metric."""
+    from kartci._bullet import pb  # start-up cost: only the tests that need PyBullet load it
+    from kartci.robots.gokart import GokartModel
+    from kartci.sim.urdf import physics_urdf, urdf_path
+
+    client = pb.connect(pb.DIRECT)
+    try:
+        path = str(physics_urdf(urdf_path(GokartModel())))
+        bodies = [pb.loadURDF(path, physicsClientId=client) for _ in range(2)]
+        com = pb.getDynamicsInfo(bodies[0], -1, physicsClientId=client)[3]  # in base_link
+        out = []
+        for pa, pb_pose in zip(a, b, strict=True):
+            for body, (x, y, yaw) in zip(bodies, (pa, pb_pose), strict=True):
+                c, s = np.cos(yaw), np.sin(yaw)
+                pb.resetBasePositionAndOrientation(
+                    body, (x + c * com[0] - s * com[1], y + s * com[0] + c * com[1], com[2]),
+                    pb.getQuaternionFromEuler((0, 0, yaw)), physicsClientId=client)
+            points = pb.getClosestPoints(*bodies, 10.0, physicsClientId=client)
+            out.append(max(0.0, min((p[8] for p in points), default=10.0)))
+        return np.array(out)
+    finally:
+        pb.disconnect(physicsClientId=client)

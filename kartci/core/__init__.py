@@ -6,9 +6,10 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
 - `Frozen` and the parameter bases (`ControllerParams`, `NodeParams`, `RobotParams`,
   `WorldParams`, `MetricParams`) that each plugin's own pydantic model extends.
 - `Controller`, `Node`, `RobotKind` (with what kind-neutral code asks of a kind:
-  `WheelOdometry`, `JoyCommand`, `SimReal`), `WorldKind`, `MetricSet` and their registries;
-  `Registries`, the five passed explicitly to what validates a scenario
-  (`DEFAULT_REGISTRIES`: the process-wide ones); `broken()`: the plugins that failed to load.
+  `WheelOdometry`, `JoyCommand`, `SimReal`; `Outline`, a robot seen from above, convex `Polygon`
+  parts), `WorldKind`, `MetricSet` and their registries; `Registries`, the five passed explicitly
+  to what validates a scenario (`DEFAULT_REGISTRIES`: the process-wide ones); `broken()`: the
+  plugins that failed to load.
 - `Channel`, `ControlSpace`: a robot kind's command and observation as vectors (`kartci.gym`).
 - `RunFolder`: the one owner of a run folder's file names.
 """
@@ -38,7 +39,9 @@ from kartci.core.registry import (
     JoyCommand,
     MetricSet,
     Node,
+    Outline,
     PluginInfo,
+    Polygon,
     Registries,
     Registry,
     RobotKind,
@@ -81,7 +84,9 @@ __all__ = [
     "Node",
     "NodeParams",
     "Outbox",
+    "Outline",
     "PluginInfo",
+    "Polygon",
     "Registries",
     "Registry",
     "RobotKind",

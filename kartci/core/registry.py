@@ -46,6 +46,7 @@ class AgentContext:
     model: RobotParams
     others: tuple[str, ...] = ()  # the other agents of the scenario (their topics: /<name>/...)
     run_dir: Path | None = None  # where the run's files go (a controller's own output files)
+    world: WorldParams | None = None  # the scenario's world: the map a real robot would carry
 
 
 P = TypeVar("P", ControllerParams, NodeParams)
@@ -101,6 +102,10 @@ class Node(_AgentType[NodeParams]):
     works_on: ClassVar[str] = "runs on"
 
 
+Polygon = tuple[tuple[float, float], ...]  # corners (x, y), m, counter-clockwise
+Outline = tuple[Polygon, ...]  # a robot seen from above: convex parts, in its body frame
+
+
 @dataclass(frozen=True)
 class WheelOdometry:
     """Forward speed from a robot's `joint_states`: the mean spin of these wheel joints (rad/s)
@@ -136,9 +141,10 @@ class RobotKind:
     plots: Callable[..., Any] | None = None  # (PlotContext) -> results.Plots
     description: str = ""
     sensors: type[Frozen] | None = None  # the robot's sensor specs (agents.<name>.sensors)
-    # its outline in base_link: centre ahead of base_link, length, width (m); what clearance
-    # and detection metrics draw around a robot of this kind (None: a point at base_link)
-    footprint_m: tuple[float, float, float] | None = None
+    # (model, its URDF text as a log recorded it, or None: the model's file) -> the robot seen
+    # from above in base_link, m: what clearance, detection ground truth and other robots'
+    # lidar see of a robot of this kind (None: a point at base_link)
+    outline: Callable[[Any, str | None], Outline] | None = None
     publishes: tuple[str, ...] = ()  # topics its sensors can publish in its namespace (`imu`)
     accepts: tuple[str, ...] = ()  # command topics it applies (`cmd_vel`, `wheel_cmd`)
     odometry: Callable[[Any], WheelOdometry] | None = None  # (params) -> its wheel odometry

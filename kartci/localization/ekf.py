@@ -18,6 +18,7 @@ import numpy as np
 
 Array = np.ndarray
 VY, BIAS = 3, 4  # state indices
+VY_PRIOR_STD_MPS = 0.5  # vy before any registration: a kart slides at most a few m/s
 
 
 def wrap(angle: float) -> float:
@@ -43,7 +44,7 @@ class PlanarEkf:
         """Start at the guess with its uncertainty; vy at zero (0.5 m/s sigma), the bias at
         zero (0.01 rad/s sigma)."""
         self.s = np.array([x, y, yaw, 0.0, 0.0])
-        self.P = np.diag([std_xy_m**2, std_xy_m**2, std_yaw_rad**2, 0.5**2, 0.01**2])
+        self.P = np.diag([std_xy_m**2, std_xy_m**2, std_yaw_rad**2, VY_PRIOR_STD_MPS**2, 0.01**2])
         self.noise = noise
 
     def predict(self, v_mps: float, gyro_radps: float, dt_s: float,
@@ -95,9 +96,15 @@ class PlanarEkf:
         self.P = IKH @ self.P @ IKH.T + K @ R @ K.T  # Joseph form: stays symmetric PSD
 
     def reset(self, z: Array, R: Array) -> None:
-        """Jump to a pose (relocalization), keeping vy and the bias estimate."""
+        """Jump to a pose (relocalization), keeping the bias estimate. vy starts again from its
+        prior (0, 0.5 m/s sigma): while the filter was lost its registrations were gated out, so
+        vy was integrated open loop from the accelerometer and kept a wrong drift (0.5 m/s off in
+        localization_kidnap) that the small reset covariance would not let the next scans fix."""
+        bias_var = self.P[BIAS, BIAS]
         self.s[:3] = z
+        self.s[VY] = 0.0
+        self.P = np.zeros((5, 5))
         self.P[:3, :3] = R
-        self.P[:3, 3:] = 0.0
-        self.P[3:, :3] = 0.0
+        self.P[VY, VY] = VY_PRIOR_STD_MPS**2
+        self.P[BIAS, BIAS] = bias_var
 

@@ -55,6 +55,9 @@ FLATTENERS: dict[str, Callable[[Any], Row]] = {
                                            "brake_mps2", "reverse", "emergency_stop"),
     "kartci_msgs/msg/SolverStats": _fields("success", "status", "solve_ms", "iterations",
                                            "cost", "failures", "max_slack_m"),
+    "kartci_msgs/msg/TyreForces": lambda m: {
+        f"{w}.{k}": float(getattr(m, k)[i]) for i, w in enumerate(m.wheel)
+        for k in ("fx_n", "fy_n", "grip_n")},
     "nav_msgs/msg/Path": lambda m: {"xs": [p.pose.position.x for p in m.poses],
                                     "ys": [p.pose.position.y for p in m.poses]},
     "sensor_msgs/msg/Imu": lambda m: {"ax": m.linear_acceleration.x,

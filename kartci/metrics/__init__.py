@@ -11,7 +11,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from kartci import core
-from kartci.core import Direction, Metric, MetricDef, MetricParams, definition, definitions
+from kartci.core import (
+    Direction,
+    Metric,
+    MetricDef,
+    MetricParams,
+    Outline,
+    definition,
+    definitions,
+)
 from kartci.errors import LogError
 from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.scenario import Scenario, scenario_from_json
@@ -71,10 +79,20 @@ def metric_sets(scenario: Scenario, agent: str) -> list[core.MetricSet]:
     return [s for s in sets if not s.robots or kind in s.robots]
 
 
-def footprint_m(scenario: Scenario, agent: str) -> tuple[float, float, float] | None:
-    """An agent's outline (centre ahead of base_link, length, width; m) as its robot kind
-    declares it, so clearance and detection know no kind's constant; None: no outline."""
-    return core.ROBOTS.get(scenario.agents[agent].model.kind).footprint_m
+def outline_of(ctx: ScoreContext, agent: str) -> Outline | None:
+    """An agent's outline (convex parts in base_link, m) as its robot kind derives it from the
+    robot's description the log recorded (`/<agent>/robot_description`; a log without one: the
+    model's file), once per log; None: the kind declares no outline (a point at base_link)."""
+    def make() -> Outline | None:
+        model = ctx.scenario.agents[agent].model
+        kind = core.ROBOTS.get(model.kind)
+        if kind.outline is None:
+            return None
+        table = ctx.tables.get(f"/{agent}/robot_description")
+        text = None if table is None or table.empty else str(table["data"].iloc[0])
+        return kind.outline(model, text)
+
+    return ctx.shared(f"outline /{agent}", make)
 
 
 def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
@@ -114,4 +132,4 @@ def compute(log_path: Path) -> tuple[Scenario, dict[str, Metric]]:
 
 
 __all__ = ["Direction", "Metric", "MetricDef", "ScoreContext", "compute", "definition",
-           "definitions", "footprint_m", "metric_sets", "recorded_scenario", "recorded_track"]
+           "definitions", "metric_sets", "outline_of", "recorded_scenario", "recorded_track"]

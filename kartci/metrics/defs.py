@@ -30,10 +30,11 @@ DEFS: dict[str, MetricDef] = {
     "max_speed_mps": MetricDef("m/s", Direction.EQUAL, 0.2, 0.03, "top speed of base_link"),
     "progress_m": MetricDef("m", Direction.HIGHER, 0.5, 0.01, "arc length driven along the track"),
     "min_clearance_m": MetricDef("m", Direction.HIGHER, 0.05, 0.2,
-                                 "smallest gap between the kart's footprint and an obstacle or "
-                                 "another kart"),
+                                 "smallest gap between the robot's outline (from its "
+                                 "description) and an obstacle or another robot's outline"),
     "overtakes": MetricDef("count", Direction.HIGHER, 0.0, 0.0,
-                           "net passes of other karts (passes minus times passed)"),
+                           "net passes of other karts (passes minus times passed; lapping a "
+                           "kart is a pass)"),
     "solver_failures": MetricDef("count", Direction.LOWER, 0.0, 0.0,
                                  "MPCC solves that failed or hit the iteration cap (the kart "
                                  "braked)"),

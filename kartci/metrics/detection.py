@@ -1,6 +1,6 @@
 """Obstacle detection scored from the log: each `obstacle_detector/detections` message (a frame)
 against the ground-truth boxes of that moment: the world's static boxes (/kartci/obstacles) and
-every other robot (its odometry and its kind's footprint; dynamic while faster than
+every other robot (its odometry and the centre of its kind's outline; dynamic while faster than
 `dynamic_mps`).
 
 A detection matches a truth box when their centres are within `match_m` (centre distance, not
@@ -21,7 +21,8 @@ from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.core.params import Size_m
 from kartci.logs.reader import messages
 from kartci.logs.types import stamp_ns
-from kartci.metrics import ScoreContext, footprint_m
+from kartci.metrics import ScoreContext, outline_of
+from kartci.metrics.outline import bounds
 from kartci.track import OBSTACLES_TOPIC
 
 
@@ -63,10 +64,11 @@ def _truth(ctx: ScoreContext, t: float, statics: list[tuple[float, float]],
             continue
         i = min(int(np.searchsorted(odom["t"].to_numpy(), t)), len(odom) - 1)
         row = odom.iloc[i]
-        outline = footprint_m(ctx.scenario, other)
-        ahead = outline[0] if outline else 0.0
-        out.append((float(row["x"]) + ahead * math.cos(row["yaw"]),
-                    float(row["y"]) + ahead * math.sin(row["yaw"]),
+        outline = outline_of(ctx, other)
+        ahead, left = bounds(outline)[:2] if outline else (0.0, 0.0)
+        c, s = math.cos(row["yaw"]), math.sin(row["yaw"])
+        out.append((float(row["x"]) + ahead * c - left * s,
+                    float(row["y"]) + ahead * s + left * c,
                     abs(float(row["vx"])) > params.dynamic_mps))
     return out
 

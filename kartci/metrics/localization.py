@@ -39,6 +39,10 @@ class LocalizationMetricsParams(MetricParams):
                                "`converged_m`, s")
     diverged_m: Size_m = Field(0.3, description="after convergence, a position error "
                                "above this is a divergence event, m")
+    rearm_s: Duration_s = Field(0.1, description="a dip below `diverged_m` shorter than "
+                                "this does not end a divergence event (noise around the "
+                                "threshold is one event, not two; 0.1 s: one 10 Hz lidar "
+                                "correction), s")
 
 
 DEFS: dict[str, MetricDef] = {
@@ -56,11 +60,12 @@ DEFS: dict[str, MetricDef] = {
                                  "estimate until its error stays below the convergence "
                                  "threshold (inf: never)"),
     "divergence_events": MetricDef("count", Direction.LOWER, 0.0, 0.0, "times the error rose "
-                                   "above the divergence threshold after convergence"),
+                                   "above the divergence threshold after convergence (a dip "
+                                   "below it shorter than rearm_s, s, does not count again)"),
     "diverged_s": MetricDef("s", Direction.LOWER, 0.1, 0.2, "time spent above the "
                             "divergence threshold after convergence"),
-    "recovery_s": MetricDef("s", Direction.LOWER, 0.1, 0.2, "longest divergence, from the "
-                            "crossing up to the crossing back (to the end: not recovered)"),
+    "recovery_s": MetricDef("s", Direction.LOWER, 0.1, 0.2, "longest divergence event, from "
+                            "the crossing up to the crossing back (to the end: not recovered)"),
 }
 
 
@@ -112,25 +117,40 @@ def converge_index(t_s: np.ndarray, err: np.ndarray,
     return None
 
 
+def spans(t_s: np.ndarray, above: np.ndarray, rearm_s: float) -> list[tuple[int, int | None]]:
+    """The divergence events as (up, down) indices into `t_s` of the crossing up and the
+    crossing back (None: not recovered); `above[i]` says the error at `t_s[i]` is above the
+    threshold. A dip below it shorter than `rearm_s` (s) joins the events on either side."""
+    step = np.diff(np.concatenate([[0], above.astype(int)]))
+    downs = np.flatnonzero(step == -1)
+    out: list[tuple[int, int | None]] = []
+    for up in np.flatnonzero(step == 1):
+        later = downs[downs > up]
+        down = int(later[0]) if len(later) else None
+        last = out[-1][1] if out else None
+        if last is not None and t_s[up] - t_s[last] < rearm_s:
+            out[-1] = (out[-1][0], down)
+        else:
+            out.append((int(up), down))
+    return out
+
+
 def episodes(t_s: np.ndarray, err: np.ndarray, params: LocalizationMetricsParams) -> list[Metric]:
-    """Convergence time, then the divergence episodes after it (from the start when the
+    """Convergence time, then the divergence events after it (from the start when the
     estimate never converged: a lost estimate is one long divergence, not none)."""
     start = converge_index(t_s, err, params)
     converge = float("inf") if start is None else float(t_s[start] - t_s[0])
     t = t_s[start or 0:]
-    above = np.concatenate([[False], err[start or 0:] > params.diverged_m])
-    ups = np.flatnonzero(np.diff(above.astype(int)) == 1)  # index into t of each crossing up
-    downs = np.flatnonzero(np.diff(above.astype(int)) == -1)
+    above = err[start or 0:] > params.diverged_m
     longest, events = 0.0, []
-    for up in ups:
-        later = downs[downs > up]
-        end = float(t[later[0]]) if len(later) else float(t[-1])
+    for up, down in spans(t, above, params.rearm_s):
+        end = float(t[-1] if down is None else t[down])
         longest = max(longest, end - float(t[up]))
         events.append({"t_s": round(float(t[up]), 3),
-                       "recovered_s": round(end - float(t[up]), 3) if len(later) else None})
+                       "recovered_s": None if down is None else round(end - float(t[up]), 3)})
     dt = np.diff(t, append=t[-1])
     extra: dict[str, Any] = {"events": events}
     return [Metric("converge_time_s", converge, "s"),
-            Metric("divergence_events", float(len(ups)), "count", extra),
-            Metric("diverged_s", float(np.sum(dt[above[1:]])), "s"),
+            Metric("divergence_events", float(len(events)), "count", extra),
+            Metric("diverged_s", float(np.sum(dt[above])), "s"),
             Metric("recovery_s", longest, "s")]

@@ -43,22 +43,25 @@ def with_allowed_keys(model: type[BaseModel], err: ValidationError) -> list[dict
         if e["type"] == "extra_forbidden":
             owner: Any = model
             for part in e["loc"][:-1]:
-                owner = _inner(owner, str(part))
+                owner = _inner(owner, part)
             if isinstance(owner, type) and issubclass(owner, BaseModel):
                 e["ctx"] = {"allowed": list(owner.model_fields)}
         out.append(e)
     return out
 
 
-def _inner(owner: Any, part: str) -> Any:
-    """The model one step down an error's location: a field of a model, the value type of a
-    `dict[str, Model]` (an agent by name), the one model of an `X | None`; None otherwise."""
+def _inner(owner: Any, part: str | int) -> Any:
+    """The type one step down an error's location: a field of a model, the value type of a
+    `dict[str, Model]` (an agent by name), the items of a list or tuple of one type (an index),
+    the one type of an `X | None`; None when it cannot be told."""
     if isinstance(owner, type) and issubclass(owner, BaseModel):
-        field = owner.model_fields.get(part)
+        field = owner.model_fields.get(part) if isinstance(part, str) else None
         return field.annotation if field is not None else None
-    args = [a for a in get_args(owner) if a is not type(None)]
+    args = [a for a in get_args(owner) if a is not type(None) and a is not Ellipsis]
     if get_origin(owner) in (dict, Mapping) and len(args) == 2:
         return args[1]
+    if isinstance(part, int) and get_origin(owner) in (list, tuple):
+        return args[0] if len(set(args)) == 1 else None
     if len(args) == 1:  # X | None
         return _inner(args[0], part)
     return None

@@ -253,7 +253,8 @@ def _mapping(value: str, kind: Any, what: str, proj: project.Project,
 
 
 def apply_override(data: dict[str, Any], assignment: str) -> None:
-    """Apply one `dotted.key=value`; the value is parsed as YAML (numbers, booleans, lists)."""
+    """Apply one `dotted.key=value`; the value is parsed as YAML (numbers, booleans, lists). A
+    number after a list is an index into it (`world.zones.0.friction`): that item must exist."""
     key, sep, raw = assignment.partition("=")
     if not sep or not key.strip():
         raise SpecError(f"--set {clip(repr(assignment), 80)}: expected dotted.key=value")
@@ -265,13 +266,43 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
         raise SpecError(f"--set {key}: unknown agent '{clip(parts[1], 80)}'"
                         f"{did_you_mean(parts[1], agents)}")
     node: Any = data
-    for i, part in enumerate(parts[:-1]):
-        if not isinstance(node, dict):
-            raise SpecError(f"--set {key}: '{clip('.'.join(parts[:i]), 80)}' is not a mapping")
-        node = node.setdefault(part, {})
+    for i in range(len(parts) - 1):
+        node = _step(node, parts, i, key)
+    where = f"--set {key}: '{clip('.'.join(parts[:-1]), 80)}'"
+    if isinstance(node, list):
+        node[_item_index(node, parts[-1], where)] = parse_value(raw, f"--set {key}")
+    elif isinstance(node, dict):
+        node[parts[-1]] = parse_value(raw, f"--set {key}")
+    else:
+        raise SpecError(f"{where} is not a mapping or a list")
+
+
+def _step(node: Any, parts: list[str], i: int, key: str) -> Any:
+    """Step `i` down a `--set` key: into a list's item, or a mapping's key (made if missing,
+    unless an item index follows: no list is given there, so there is no item to set)."""
+    where = f"--set {key}: '{clip('.'.join(parts[:i]), 80)}'"
+    if isinstance(node, list):
+        return node[_item_index(node, parts[i], where)]
     if not isinstance(node, dict):
-        raise SpecError(f"--set {key}: '{clip('.'.join(parts[:-1]), 80)}' is not a mapping")
-    node[parts[-1]] = parse_value(raw, f"--set {key}")
+        raise SpecError(f"{where} is not a mapping or a list")
+    then = parts[i + 1]
+    if parts[i] not in node and then.isascii() and then.isdigit():
+        given = clip(".".join(parts[:i + 1]), 80)
+        raise SpecError(f"--set {key}: '{given}' is not in the scenario or its files (its "
+                        f"default applies), so there is no item {clip(then, 12)} to set (give "
+                        f"the whole list: --set {given}=[...])")
+    return node.setdefault(parts[i], {})
+
+
+def _item_index(items: list[Any], part: str, where: str) -> int:
+    """`part` of a `--set` key as the index of an existing item of `items`."""
+    span = f"index 0 to {len(items) - 1}" if items else "none"
+    if not (part.isascii() and part.isdigit() and len(part) <= 9):
+        raise SpecError(f"{where} is a list: '{clip(part, 40)}' is not an item index ({span})")
+    if int(part) >= len(items):
+        raise SpecError(f"{where} has {len(items)} item{'' if len(items) == 1 else 's'} "
+                        f"({span}): there is no item {int(part)}")
+    return int(part)
 
 
 def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str], marks: Marks,
@@ -284,7 +315,7 @@ def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str], ma
     # a discriminated union (a line course) puts its tag into the location: not a key
     keys = [p for p in parts if not p.startswith(("function-", "tagged")) and p not in COURSE_TAGS]
     head, loc = _place(keys, path, overrides, marks)
-    source = " (from --set)" if any(o.split("=")[0].strip() == loc for o in overrides) else ""
+    source = " (from --set)" if _set_by(loc, overrides) >= 0 else ""
     msg = clip(first["msg"].removeprefix("Value error, "))
     if first["type"] in BOUNDS:
         keys = [p for p in parts if not p.isdigit()]
@@ -309,14 +340,20 @@ def _place(keys: list[str], path: Path, overrides: list[str], marks: Marks) -> t
     the mark of the longest recorded prefix of `keys`, unless a `--set` gave the value (a
     `--set` at least as deep as that prefix), when it is the scenario's `path` and its key."""
     loc = ".".join(keys)
-    given = max((len(k) for o in overrides if loc == (k := o.split("=")[0].strip())
-                 or loc.startswith(f"{k}.")), default=-1)
+    given = _set_by(loc, overrides)
     for n in range(len(keys), 0, -1):
         mark = marks.get(".".join(keys[:n]))
         if mark is not None and len(".".join(keys[:n])) > given:
             where, line, column, inner = mark
             return f"{where}:{line}:{column}", ".".join([inner, *keys[n:]])
     return str(path), loc
+
+
+def _set_by(loc: str, overrides: list[str]) -> int:
+    """The length of the longest `--set` key that gave the value at `loc` (that key or one
+    holding it), -1 if none did."""
+    return max((len(k) for o in overrides if loc == (k := o.split("=")[0].strip())
+                or loc.startswith(f"{k}.")), default=-1)
 
 
 COURSE_TAGS = ("straight", "circle")

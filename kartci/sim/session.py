@@ -185,7 +185,8 @@ def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None,
             agent = given.get(name)
             if agent is None:
                 ctx = AgentContext(name, spec.model,
-                                   tuple(n for n in scenario.agents if n != name), run_dir)
+                                   tuple(n for n in scenario.agents if n != name), run_dir,
+                                   scenario.world)
                 agent = core.CONTROLLERS.get(spec.controller.type).build(spec.controller, ctx)
             try:
                 robot_kind = core.ROBOTS.get(spec.model.kind)

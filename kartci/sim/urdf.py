@@ -6,6 +6,7 @@ import hashlib
 import re
 import tempfile
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -79,8 +80,9 @@ def fixed_frames(path: Path, root: str = "base_link") -> dict[str, tuple[NDArray
     return frames
 
 
-def physics_urdf(path: Path) -> Path:
-    """The URDF with its frame-only links (fixed joint, no collision: sensor mounts) removed.
+def physics_urdf(path: Path, edit: Callable[[ET.Element], None] | None = None) -> Path:
+    """The URDF with its frame-only links (fixed joint, no collision: sensor mounts) removed,
+    then changed by `edit` if given (a robot's parameters overriding the file's, e.g. masses).
 
     Such links cost a third of a physics step each robot, and PyBullet's own
     URDF_MERGE_FIXED_LINKS loses the base's centre of mass (seen with 3.2.7), so they are
@@ -97,6 +99,8 @@ def physics_urdf(path: Path) -> Path:
                 and link.find("collision") is None):
             root.remove(joint)
             root.remove(link)
+    if edit is not None:
+        edit(root)
     text = ET.tostring(root, encoding="unicode")
     digest = hashlib.sha256(text.encode()).hexdigest()[:16]
     out = Path(tempfile.gettempdir()) / "kartci-urdf" / f"{path.stem}-{digest}.urdf"

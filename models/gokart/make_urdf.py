@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from kartci.robots.gokart.inertia import BOX_M, PointMass, chassis_inertial
+from kartci.robots.gokart.params import GokartModel
 from kartci.scenario.yamlio import read_yaml
 
 Vec = tuple[float, float, float]
@@ -20,35 +22,22 @@ VARIANTS: dict[str, tuple[Vec, Vec]] = {
 }
 REAR_R, FRONT_R, TIRE_MASS, STEER_MASS, FRAME_MASS = 0.127, 0.117, 2.0, 0.5, 0.01
 REAR_X, FRONT_X, REAR_Y, FRONT_Y = -0.077, 1.129, 0.5625, 0.47  # Table 3.2
-PARAMS = read_yaml(Path(__file__).with_name("params.yaml"))
+MODEL = GokartModel.model_validate(read_yaml(Path(__file__).with_name("params.yaml")))
 
 
-def _others() -> list[tuple[float, float, float, float, float]]:
-    """(mass, x, y, z, own izz) of every link but the chassis."""
+def _others() -> list[PointMass]:
+    """Every link but the chassis: wheels, steer links, and the frame links (cog, imu,
+    velodyne, camera: negligible, counted at the centre of mass)."""
     out = []
     for x, y, r, w, extra in ((REAR_X, REAR_Y, REAR_R, 0.2, 0.0),
                               (FRONT_X, FRONT_Y, FRONT_R, 0.13, 1.0)):
         for side in (1, -1):
-            out.append((TIRE_MASS, x, side * y, -0.015 * extra,
-                        TIRE_MASS * (3 * r**2 + w**2) / 12))
+            out.append(PointMass(TIRE_MASS, (x, side * y, -0.015 * extra),
+                                 TIRE_MASS * (3 * r**2 + w**2) / 12))
             if extra:
-                out.append((STEER_MASS, x, side * y, -0.015, 1e-3))
-    return out
-
-
-def chassis_inertial() -> tuple[float, float, float, float]:
-    """Chassis mass, CoM x and z in base_link, and yaw inertia about its CoM, such that the
-    whole kart has params.yaml's mass, CoM and yaw inertia (parallel-axis theorem)."""
-    total, lr = PARAMS["mass_kg"], PARAMS["cog_to_rear_axle_m"]
-    x_cog, z_cog = REAR_X + lr, PARAMS["cog_height_m"] - REAR_R
-    others = _others()
-    n_frames = 4  # cog, imu, velodyne, camera links: negligible, counted in the mass only
-    m_c = total - sum(o[0] for o in others) - n_frames * FRAME_MASS
-    x_c = (total * x_cog - sum(o[0] * o[1] for o in others)) / m_c
-    z_c = (total * z_cog - sum(o[0] * o[3] for o in others)) / m_c
-    izz_others = sum(o[4] + o[0] * ((o[1] - x_cog) ** 2 + o[2] ** 2) for o in others)
-    izz_c = PARAMS["yaw_inertia_kgm2"] - izz_others - m_c * (x_c - x_cog) ** 2
-    return m_c, x_c, z_c, izz_c
+                out.append(PointMass(STEER_MASS, (x, side * y, -0.015), 1e-3))
+    cog = (REAR_X + MODEL.cog_to_rear_axle_m, 0.0, MODEL.cog_height_m - REAR_R)
+    return out + [PointMass(FRAME_MASS, cog, 0.0)] * 4
 
 
 def inertial(mass: float, ixx: float, iyy: float, izz: float, xyz: str = "0 0 0") -> str:
@@ -87,9 +76,8 @@ def steer(side: str, y: float) -> str:
 
 
 def urdf(name: str, imu: Vec, velodyne: Vec) -> str:
-    chassis, cog_x, cog_z, izz = chassis_inertial()
-    lx, wy, hz = 1.8, 1.2, 0.3  # roll and pitch: a box of these proportions, scaled to izz
-    k = izz / (chassis * (lx**2 + wy**2) / 12)
+    c = chassis_inertial(MODEL, _others())
+    lx, wy, hz = BOX_M
     return f"""<?xml version="1.0"?>
 <!-- Go-kart "{name}" of the seed "A Comprehensive Gazebo Simulation for the Autonomous Racing
      GoKart Research Platform". base_link: x forward, y left, z up, at the rear wheel centre
@@ -102,8 +90,7 @@ def urdf(name: str, imu: Vec, velodyne: Vec) -> str:
   <material name="body"><color rgba="0.95 0.75 0.1 1"/></material>
   <material name="tire"><color rgba="0.1 0.1 0.1 1"/></material>
   <link name="base_link">
-{inertial(round(chassis, 3), k * chassis * (wy**2 + hz**2) / 12,
-          k * chassis * (lx**2 + hz**2) / 12, izz, f"{cog_x:.4f} 0 {cog_z:.4f}")}
+{inertial(round(c.mass_kg, 3), c.ixx_kgm2, c.iyy_kgm2, c.izz_kgm2, f"{c.x_m:.4f} 0 {c.z_m:.4f}")}
     <collision><origin xyz="0.6 0 0.06"/><geometry><box size="2.0 1.2 0.25"/></geometry>
     </collision>
     <visual><origin xyz="0.6 0 0.06"/><geometry><box size="2.0 1.0 0.25"/></geometry>

@@ -316,7 +316,8 @@ def test_box_and_hall_sizes_must_be_positive(tmp_path: Path) -> None:
     _project(tmp_path)
     box = "world.obstacles=[{center_m: [5.0, 5.0], size_m: [-1.0, 1.0, 1.0]}]"
     line = _one_error_line(kartci("show", "kart_manual", "--set", box, cwd=tmp_path))
-    assert line.endswith("kart_manual.yaml: world.obstacles.0.size_m.0: must be more than 0 m")
+    assert line.endswith("kart_manual.yaml: world.obstacles.0.size_m.0 (from --set): must be "
+                         "more than 0 m (got -1.0)")
     (tmp_path / "worlds").mkdir()
     hall = re.sub(r"(?m)^size_m:.*$", "size_m: [32.0, -20.0]", HALL)
     (tmp_path / "worlds" / "neg.yaml").write_text(hall, encoding="utf-8")

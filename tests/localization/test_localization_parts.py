@@ -158,3 +158,34 @@ def test_registration_finds_the_true_pose_from_an_offset_guess() -> None:
     assert math.hypot(m.xy_yaw[0] - x, m.xy_yaw[1] - y) < 0.03
     assert abs(m.xy_yaw[2] - yaw) < math.radians(0.3)
     assert m.inlier_ratio > 0.8
+
+
+def test_ekf_relocalization_forgets_the_slide_it_dead_reckoned_while_lost() -> None:
+    """Settled by 5 s of registrations, then lost for 0.5 s (five 10 Hz scans gated out) while
+    the IMU reads 1.2 m/s^2 of lateral acceleration the kart did not have: vy is 0.6 m/s off.
+    After the jump onto the registrations (covariance 4 R, as the node does) the kart drives
+    straight at 5 m/s without sliding: every following registration passes the gate (chi2 16.27)
+    and vy returns to 0. Keeping the dead-reckoned vy with its settled covariance gated the next
+    scans out (localization_kidnap's second divergence event)."""
+    f = _ekf()
+    r = np.diag([0.01**2, 0.01**2, 0.003**2])
+    x = 0.0
+    for _ in range(50):
+        for _ in range(10):
+            f.predict(5.0, 0.0, 0.01)
+            x += 0.05
+        f.update(np.array([x, 0.0, 0.0]), r)
+    for _ in range(50):
+        f.predict(5.0, 0.0, 0.01, lat_accel_mps2=1.2)
+        x += 0.05
+    assert f.s[3] == pytest.approx(0.6, abs=0.01)
+    f.reset(np.array([x, 0.0, 0.0]), 4 * r)
+    for _ in range(10):  # 1 s of registrations on the true straight line
+        for _ in range(10):
+            f.predict(5.0, 0.0, 0.01)
+            x += 0.05
+        z = np.array([x, 0.0, 0.0])
+        assert f.mahalanobis2(z, r) <= 16.27
+        f.update(z, r)
+    assert abs(f.s[3]) < 0.05
+    assert abs(f.s[1]) < 0.02

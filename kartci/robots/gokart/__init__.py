@@ -1,11 +1,15 @@
 """The ETH go-kart (seed 000) as a robot kind: registered as `gokart` (entry point).
 
 Public for a team's own kart controller: the command (`KartInput`), the steering map
-(`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`) and the outline (`FOOTPRINT_M`).
+(`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`); the outline is in
+`kartci.robots.gokart.outline` (`outline`, `half_width_m`, `footprint_m`: from the kart's URDF).
+`FOOTPRINT_M` is deprecated: it is `footprint_m` of the default kart.
 """
 
+from typing import Any
+
 from kartci.core import RobotKind, SimReal, WheelOdometry, lazy
-from kartci.robots.gokart.params import FOOTPRINT_M, GokartModel, KartSensors, axle_distance_m
+from kartci.robots.gokart.params import GokartModel, KartSensors, axle_distance_m
 from kartci.robots.gokart.steering import (
     STEERING_RATIO,
     KartInput,
@@ -23,9 +27,9 @@ def odometry(model: GokartModel) -> WheelOdometry:
 
 
 ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRobot"),
-                  ("laps", "race"), lazy("kartci.robots.gokart.plots:kart_plots"),
+                  ("laps", "race", "handling"), lazy("kartci.robots.gokart.plots:kart_plots"),
                   "the ETH go-kart (seed 000): steering map, two rear motors, lidar, IMU",
-                  KartSensors, FOOTPRINT_M,
+                  KartSensors, lazy("kartci.robots.gokart.outline:outline"),
                   publishes=("odom", "joint_states", "imu", "velodyne_points",
                              "camera/image_raw", "collision"),
                   accepts=("cmd", "ackermann_cmd", "cmd_vel"), odometry=odometry,
@@ -36,6 +40,18 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                       "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")),
                   control=lazy("kartci.robots.gokart.control:control"))
 
-__all__ = ["FOOTPRINT_M", "ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",
+
+def __getattr__(name: str) -> Any:
+    """Deprecated `FOOTPRINT_M`: the default kart's bounding box (centre ahead of base_link,
+    length, width; m), now derived from its URDF (it was a 1.2 m wide constant)."""
+    if name == "FOOTPRINT_M":
+        # start-up cost: the outline's module imports kartci.sim, which loads PyBullet
+        from kartci.robots.gokart.outline import footprint_m
+
+        return footprint_m(GokartModel())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",
            "axle_distance_m", "column_for_wheel_angle", "speed_to_pedals", "steer_for_turn_rate",
            "wheel_angles"]

@@ -1,19 +1,26 @@
-"""The go-kart as a PyBullet multibody: tyre forces from a slip model (tyres.py) applied to the
-chassis every physics step, position-controlled steer joints through the measured steering map,
-and wheels spun at their rolling speed (for odometry and looks; their contacts have no
+"""The go-kart as a PyBullet multibody: its chassis weighed to the parameters' mass properties
+(inertia.py), tyre forces from a slip model (tyres.py) applied at the wheels' contact points
+every physics step, position-controlled steer joints through the measured steering map, and
+wheels spun at their road speed and slip (for odometry and looks; their contacts have no
 friction and only carry the weight)."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
 from kartci._bullet import pb, quiet_c_output
+from kartci.robots.gokart.inertia import weigh_chassis
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput, wheel_angles
-from kartci.robots.gokart.tyres import air_drag_n, drive_demand, wheel_force, wheels
+from kartci.robots.gokart.tyres import (
+    air_drag_n,
+    drive_demand,
+    normal_loads,
+    wheel_force,
+    wheels,
+)
 from kartci.sim.body import Base, BodyState
 from kartci.sim.urdf import fixed_frames, physics_urdf
 
@@ -30,7 +37,7 @@ class Gokart(Base):
         x, y, yaw = pose
         with quiet_c_output():
             body = int(pb.loadURDF(
-                str(physics_urdf(model_dir / model.urdf)),
+                str(physics_urdf(model_dir / model.urdf, weigh_chassis(model))),
                 [x, y, model.rear_wheel_radius_m + 0.005], pb.getQuaternionFromEuler([0, 0, yaw]),
                 flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=client))
         super().__init__(client, body, fixed_frames(model_dir / model.urdf))
@@ -48,11 +55,14 @@ class Gokart(Base):
             pb.changeDynamics(self.body, link, lateralFriction=0.0, rollingFriction=0.0,
                               spinningFriction=0.0, physicsClientId=client)
         self.tyres = wheels(model)
-        self.radii = [model.rear_wheel_radius_m] * 2 + [model.front_wheel_radius_m] * 2
+        self.accel = (0.0, 0.0)  # body-frame acceleration of the last step's forces, m/s^2
         self.mu_scale = [1.0] * 4
         self.input = KartInput()
         self.column = 0.0  # steering-column angle, rad
         self._steer_target: tuple[float, float] | None = None  # last steer-motor targets, rad
+        # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`);
+        # none before the first step
+        self.tyre_forces: list[tuple[float, float, float]] = []
 
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;
@@ -89,22 +99,29 @@ class Gokart(Base):
         demand = drive_demand(m, inp.accel_mps2, inp.brake_mps2, inp.reverse, inp.estop, vx)
         steer = [0.0, 0.0, *(s[0] for s in pb.getJointStates(self.body, self.steer,
                                                              physicsClientId=c))]
-        dz = -m.cog_height_m
-        spin = []
-        for w, delta, mu, radius in zip(self.tyres, steer, self.mu_scale, self.radii,
-                                        strict=True):
-            fx, fy = wheel_force(m, w, demand, delta, (vx, vy), yaw_rate, mu)
-            at = (com[0] + r[0] * w.dx_m + r[1] * w.dy_m + r[2] * dz,
-                  com[1] + r[3] * w.dx_m + r[4] * w.dy_m + r[5] * dz,
-                  com[2] + r[6] * w.dx_m + r[7] * w.dy_m + r[8] * dz)
-            force = (r[0] * fx + r[1] * fy, r[3] * fx + r[4] * fy, r[6] * fx + r[7] * fy)
+        loads = normal_loads(m, self.tyres, *self.accel)
+        off = self._com_offset  # the chassis' centre of mass in base_link
+        dz = -m.rear_wheel_radius_m - off[2]  # the floor, from the chassis' centre of mass
+        spin, fx_sum, fy_sum = [], 0.0, 0.0
+        self.tyre_forces = []
+        for w, load, delta, mu in zip(self.tyres, loads, steer, self.mu_scale, strict=True):
+            dx, dy = w.x_m - off[0], w.y_m - off[1]
+            f = wheel_force(m, w, load, demand, delta, (vx - yaw_rate * dy, vy + yaw_rate * dx),
+                            mu)
+            # grip: the lateral radius of the friction ellipse at this load
+            self.tyre_forces.append((f.fx_n, f.fy_n, load * w.tyre.d_mps2 * mu))
+            at = (com[0] + r[0] * dx + r[1] * dy + r[2] * dz,
+                  com[1] + r[3] * dx + r[4] * dy + r[5] * dz,
+                  com[2] + r[6] * dx + r[7] * dy + r[8] * dz)
+            force = (r[0] * f.fx_n + r[1] * f.fy_n, r[3] * f.fx_n + r[4] * f.fy_n,
+                     r[6] * f.fx_n + r[7] * f.fy_n)
             pb.applyExternalForce(self.body, -1, force, at, pb.WORLD_FRAME, physicsClientId=c)
-            v_wheel = vx - yaw_rate * w.dy_m
-            v_lat = vy + yaw_rate * w.dx_m
-            spin.append((math.cos(delta) * v_wheel + math.sin(delta) * v_lat) / radius)
+            fx_sum, fy_sum = fx_sum + f.fx_n, fy_sum + f.fy_n
+            spin.append(f.spin_mps / w.radius_m)
         drag = air_drag_n(m, vx)
         pb.applyExternalForce(self.body, -1, (r[0] * drag, r[3] * drag, r[6] * drag), com,
                               pb.WORLD_FRAME, physicsClientId=c)
+        self.accel = ((fx_sum + drag) / m.mass_kg, fy_sum / m.mass_kg)
         pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
                                      targetVelocities=spin, forces=[WHEEL_SPIN_TORQUE_NM] * 4,
                                      physicsClientId=c)

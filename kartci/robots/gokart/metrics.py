@@ -1,5 +1,6 @@
-"""The go-kart's metric sets: `laps` (laps, collisions, time off track, speed, progress) and
-`race` (clearance, overtakes, MPCC solver statistics), from a run log."""
+"""The go-kart's metric sets: `laps` (laps, collisions, time off track, speed, progress),
+`race` (clearance, overtakes, MPCC solver statistics) and `handling` (sideslip, spins, tyre
+saturation, stalled time), from a run log."""
 
 from __future__ import annotations
 
@@ -10,11 +11,13 @@ import numpy as np
 import pandas as pd
 
 from kartci.core import Metric, MetricSet
-from kartci.metrics import ScoreContext, footprint_m, recorded_track
+from kartci.metrics import ScoreContext, outline_of, recorded_track
 from kartci.metrics.defs import DEFS, defs_of
+from kartci.metrics.outline import placed
 from kartci.metrics.progress import kart_track, lap_crossings
+from kartci.robots.gokart.handling import HANDLING_DEFS, HandlingParams, handling_metrics
 from kartci.robots.gokart.params import GokartModel
-from kartci.robots.gokart.race import kart_rects, race_metrics
+from kartci.robots.gokart.race import SLACK_DEF, race_metrics
 from kartci.scenario.models import Scenario
 from kartci.track import Track
 
@@ -73,19 +76,27 @@ def _laps(ctx: ScoreContext, params: Any) -> list[Metric]:
                         ctx.table("collision"))
 
 
-def _rects(ctx: ScoreContext) -> dict[str, Any]:
-    """Every robot's footprint along its path, once per log (robots without one are left out)."""
+def _outlines(ctx: ScoreContext) -> dict[str, Any]:
+    """Every robot's outline placed along its path, once per log (robots without one are left
+    out)."""
     out = {}
     for a in ctx.scenario.agents:
-        outline = footprint_m(ctx.scenario, a)
+        outline = outline_of(ctx, a)
         if outline is not None:
-            out[a] = kart_rects(ScoreContext(ctx.scenario, ctx.tables, ctx.path, a).odom, outline)
+            odom = ScoreContext(ctx.scenario, ctx.tables, ctx.path, a).odom
+            out[a] = placed(outline, odom[["x", "y", "yaw"]].to_numpy())
     return out
 
 
 def _race(ctx: ScoreContext, params: Any) -> list[Metric]:
-    rects = ctx.shared("kart_rects", lambda: _rects(ctx))
-    return race_metrics(ctx.scenario, ctx.agent, _paths(ctx), rects, ctx.table("mpcc/stats"))
+    track = ctx.shared("track", lambda: recorded_track(ctx.tables, ctx.path))
+    outlines = ctx.shared("kart_outlines", lambda: _outlines(ctx))
+    return race_metrics(ctx.scenario, ctx.agent, _paths(ctx), track.length_m, outlines,
+                        ctx.table("mpcc/stats"))
+
+
+def _handling(ctx: ScoreContext, params: HandlingParams) -> list[Metric]:
+    return handling_metrics(ctx.odom, _paths(ctx)[ctx.agent], ctx.table("tyres"), params)
 
 
 LAPS = MetricSet(
@@ -97,7 +108,12 @@ LAPS = MetricSet(
     "centreline")
 RACE = MetricSet(
     "race",
-    defs_of("min_clearance_m", "overtakes", "solver_failures", "solve_ms_median",
-            "solve_ms_p95", "solve_ms_max"),
+    {**defs_of("min_clearance_m", "overtakes", "solver_failures", "solve_ms_median",
+               "solve_ms_p95", "solve_ms_max"), "max_slack_m": SLACK_DEF},
     _race, None, ("gokart",),
-    "clearance to obstacles and other karts, overtakes, MPCC solver statistics")
+    "clearance to obstacles and other karts (outline to outline), overtakes (lapping passes "
+    "included), MPCC solver statistics and slack")
+HANDLING = MetricSet(
+    "handling", HANDLING_DEFS, _handling, HandlingParams, ("gokart",),
+    "how the kart drove: sideslip (max, RMS), time spinning, time with a tyre at its grip, "
+    "time stalled on the track")

@@ -10,10 +10,6 @@ from pydantic import Field
 from kartci.core import Frozen, RobotParams
 from kartci.scenario.models import Angle_rad, Length_m
 
-# The kart's footprint in base_link: centre ahead of the rear axle, length, width (m), from the
-# wheel positions (Table 3.2) and tyre radii with the bodywork around them.
-FOOTPRINT_M = (0.6, 2.0, 1.2)
-
 
 class Tyre(Frozen):
     """One axle's tyres: Pacejka's magic formula for the lateral force, mass-normalised as in the
@@ -42,8 +38,15 @@ class GokartModel(RobotParams):
     front_wheel_radius_m: float = Field(0.117, ge=-1e4, le=1e4,
                                         description="front tyre radius, m (Table 3.1)")
     wheel_torque_limit_nm: float = Field(95.0, ge=0.0, le=1e5,
-                                         description="torque limit per rear wheel, N m "
-                                         "(REFERENCE.md: two rear motors, 95 Nm per wheel)")
+                                         description="peak torque per rear wheel (one motor "
+                                         "each), N m: the motor curve's constant-torque part "
+                                         "(REFERENCE.md; Rimo Sinus ION data sheet: 95 Nm per "
+                                         "wheel)")
+    motor_power_w: float = Field(2800.0, gt=0.0, le=1e7,
+                                 description="power per rear motor, W: the motor curve's "
+                                 "constant-power part above the corner speed power / torque "
+                                 "(REFERENCE.md; Rimo Sinus ION data sheet: 2 x 2.8 kW, the rated "
+                                 "power; no short-time peak is published, so none is modelled)")
     max_speed_mps: float = Field(10.0, ge=-100.0, le=100.0,
                                  description="top forward speed of the rear-wheel speed "
                                  "reference, m/s (REFERENCE.md: ETH MPCC limit 10 m/s)")
@@ -76,7 +79,7 @@ class GokartModel(RobotParams):
                                       "rear axle, m (REFERENCE.md: ETH kart, 0.46 m)")
     cog_height_m: float = Field(0.24, gt=0.0, le=1e4,
                                 description="centre of mass above the floor, m "
-                                "(seed 000 Table 3.1)")
+                                "(seed 000 Table 3.1): the load transfer's lever")
     yaw_inertia_kgm2: float = Field(20.0, gt=0.0, le=1e5, description="yaw moment of inertia about "
                                     "the centre of mass, kg m^2 (REFERENCE.md: ETH kart, about "
                                     "20 kg m^2)")
@@ -89,11 +92,28 @@ class GokartModel(RobotParams):
                                            "the tyres' D applies (concrete, REFERENCE.md); a "
                                            "floor or zone of friction mu scales D by "
                                            "mu / this")
-    rolling_decel_mps2: float = Field(0.15, ge=0.0, le=100.0, description="rolling resistance and "
-                                      "drivetrain drag as a deceleration, m/s^2")
-    air_drag_per_m: float = Field(0.004, ge=0.0, le=1e3,
-                                  description="aerodynamic deceleration = this "
-                                  "* v^2, 1/m")
+    rolling_resistance_coeff: float = Field(0.015, ge=0.0, le=1.0,
+                                            description="rolling resistance per unit normal "
+                                            "load (dimensionless), drivetrain drag included: "
+                                            "an assumption (kart slicks on smooth concrete, "
+                                            "0.01-0.02; the earlier 0.15 m/s^2 / g)")
+    drag_area_m2: float = Field(0.54, ge=0.0, le=100.0,
+                                description="aerodynamic drag area Cd A, m^2: an assumption (a "
+                                "kart with its seat and sensor mast, Cd 0.9 x 0.6 m^2 frontal "
+                                "area; no measurement of the ETH kart is published)")
+    air_density_kgpm3: float = Field(1.2, gt=0.0, le=10.0,
+                                     description="air density, kg/m^3 (indoor air at 20 C, "
+                                     "1.204)")
+    long_slip_stiffness: float = Field(15.0, gt=0.0, le=1e4,
+                                       description="longitudinal slip stiffness per unit "
+                                       "normal load (dimensionless): F_x = this x slip ratio x "
+                                       "N g below the grip limit; sets the wheel speeds a drive "
+                                       "or brake force shows (an assumption: the order of "
+                                       "pneumatic tyres, no figure for the kart's Dunlop SL1)")
+    long_grip_ratio: float = Field(1.0, gt=0.0, le=10.0,
+                                   description="longitudinal over lateral peak grip "
+                                   "(dimensionless): the friction ellipse's axes ratio; 1, a "
+                                   "circle, as no source gives the kart's")
     speed_gain_per_s: float = Field(2.0, gt=0.0, le=1e4, description="drive-by-wire speed loop for "
                                     "ackermann_cmd and cmd_vel, 1/s: accel = gain * (v_cmd - v)")
     wheel_xy_m: tuple[tuple[Length_m, Length_m], ...] = Field(
@@ -195,6 +215,19 @@ class KartSensors(Frozen):
 def axle_distance_m(model: GokartModel) -> float:
     """Distance between the rear and front axles (Table 3.2), m."""
     return model.wheel_xy_m[2][0] - model.wheel_xy_m[0][0]
+
+
+GRAVITY_MPS2 = 9.81
+
+
+def rolling_decel_mps2(model: GokartModel) -> float:
+    """Rolling resistance as a deceleration, m/s^2: c_rr g, whatever the mass."""
+    return model.rolling_resistance_coeff * GRAVITY_MPS2
+
+
+def air_drag_per_m(model: GokartModel) -> float:
+    """Aerodynamic deceleration per speed squared, 1/m: rho Cd A / (2 m)."""
+    return 0.5 * model.air_density_kgpm3 * model.drag_area_m2 / model.mass_kg
 
 
 def cog_x_m(model: GokartModel) -> float:

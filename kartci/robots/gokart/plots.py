@@ -11,10 +11,10 @@ from kartci.figures import PlotContext, Plots, wheel_series
 from kartci.logs.reader import messages
 from kartci.logs.types import yaw_of
 from kartci.metrics import recorded_track
+from kartci.metrics.outline import box
 from kartci.metrics.progress import crossing_time, kart_track, wheel_margins_m
 from kartci.metrics.trajectory import Trajectory, TrajectoryError, ape_errors, associate
 from kartci.robots.gokart.params import GokartModel
-from kartci.robots.gokart.race import rect
 from kartci.track import Track
 
 SECTORS = 3
@@ -49,7 +49,7 @@ def kart_plots(ctx: PlotContext) -> Plots:
               if (odom := t.get(f"/{a}/odom")) is not None and not odom.empty}
     wheels, commands, collisions = wheel_series(ctx, ("rear_left_wheel_joint",
                                                  "rear_right_wheel_joint"))
-    obstacles = [rect(b.center_m[0], b.center_m[1], b.size_m[0], b.size_m[1], b.yaw_rad)
+    obstacles = [np.asarray(box(b.center_m, b.size_m[0], b.size_m[1], b.yaw_rad))
                  for b in getattr(scenario.world, "obstacles", ())]
     horizons, solves, laps, margins, controls = {}, {}, {}, {}, {}
     for agent in scenario.agents:
@@ -105,8 +105,8 @@ def detections(ctx: PlotContext, moments: int = 6) -> dict[str, list[tuple[np.nd
         for k in np.linspace(0, len(frames) - 1, moments).astype(int) if frames else ():
             for d in frames[k].detections:
                 c, size = d.bbox.center, d.bbox.size
-                boxes.append((rect(c.position.x, c.position.y, size.x, size.y,
-                                   yaw_of(c.orientation)),
+                boxes.append((np.asarray(box((c.position.x, c.position.y), size.x, size.y,
+                                             yaw_of(c.orientation))),
                               bool(d.results) and d.results[0].hypothesis.class_id ==
                               "dynamic"))
         out[agent] = boxes

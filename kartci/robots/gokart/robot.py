@@ -1,4 +1,4 @@
-"""The go-kart in the loop: body, IMU, lidar, camera, wheel odometry, collisions."""
+"""The go-kart in the loop: body, IMU, lidar, camera, wheel odometry, tyre forces, collisions."""
 
 from __future__ import annotations
 
@@ -11,9 +11,11 @@ import numpy as np
 from kartci._bullet import pb
 from kartci.errors import SpecError
 from kartci.logs import header, msg
+from kartci.metrics.outline import bounds
 from kartci.robots.gokart import noise
 from kartci.robots.gokart.body import Gokart
-from kartci.robots.gokart.params import FOOTPRINT_M, GokartModel, KartSensors
+from kartci.robots.gokart.outline import outline
+from kartci.robots.gokart.params import GokartModel, KartSensors
 from kartci.robots.gokart.steering import (
     KartInput,
     column_for_wheel_angle,
@@ -85,17 +87,20 @@ class KartRobot(RobotBase):
         self.contacts: dict[str, _Contact] = {}
         self.collisions_marked = 0
         self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
+        self.bounds = bounds(outline(model))  # centre ahead, left, length, width, m
 
     def static_transforms(self) -> list[Any]:
         """tf of the CoG, IMU, lidar and camera mounts."""
         return self.static_tf(self.STATIC)
 
     def footprint(self) -> Block:
-        """The kart as a box at its current pose, for other karts' lidar."""
+        """The kart as a box at its current pose, for other karts' lidar: its outline's
+        bounding box."""
         st = self.body.state()
-        ahead, length, width = FOOTPRINT_M
-        c = (st.xyz[0] + ahead * math.cos(st.yaw), st.xyz[1] + ahead * math.sin(st.yaw))
-        return Block(self.name, c, (length, width, 0.45), st.yaw)
+        ahead, left, length, width = self.bounds
+        c, s = math.cos(st.yaw), math.sin(st.yaw)
+        centre = (st.xyz[0] + ahead * c - left * s, st.xyz[1] + ahead * s + left * c)
+        return Block(self.name, centre, (length, width, 0.45), st.yaw)
 
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         """At the odometry rate: odometry, joint states, tf of the moving frames, floor friction and
@@ -115,6 +120,7 @@ class KartRobot(RobotBase):
                 t_ns, f"{ns}/base_link", [*self.JOINTS, "steering_column"],
                 [*steer, *spin, self.body.column],
                 [0.0, 0.0, *self._slip.apply(list(speeds)), 0.0]), t_ns)
+            self._tyres(t_ns, put)
             self._zone_friction(st)
             self._pedals(st)
             put("/tf", tf_message(self._joint_tf(t_ns, steer, spin)), t_ns)
@@ -124,6 +130,17 @@ class KartRobot(RobotBase):
             self._imu(st, t_ns, put)
         if lidar:
             self._lidar(st, t_ns, put)
+
+    def _tyres(self, t_ns: int, put: Put) -> None:
+        """`tyres`: each tyre's force and grip in the last physics step (what the tyre
+        saturation metric reads); nothing before the first step."""
+        if not self.body.tyre_forces:
+            return
+        fx, fy, grip = (np.array(v, dtype=float) for v in zip(*self.body.tyre_forces,
+                                                               strict=True))
+        put("tyres", msg("kartci_msgs/msg/TyreForces",
+                         header=header(t_ns, f"{self.name}/base_link"),
+                         wheel=list(self.JOINTS[2:]), fx_n=fx, fy_n=fy, grip_n=grip), t_ns)
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
         """tf of the moving frames: steer links (about z) and wheel links (about y)."""
@@ -307,6 +324,7 @@ class KartRobot(RobotBase):
         spin = [(v_mps - yaw_rate_radps * half) / radii[0],
                 (v_mps + yaw_rate_radps * half) / radii[1], v_mps / radii[2], v_mps / radii[3]]
         body.spin(body.wheels, spin)
+        body.accel = (0.0, 0.0)  # no load transfer carried over from before the jump
         self._target, self._imu_prev = None, None
         self.contacts.clear()
 

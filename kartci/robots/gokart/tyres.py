@@ -1,17 +1,27 @@
-"""Tyre forces of the simulated kart, computed per wheel and applied to the chassis each physics
-step (PyBullet's contacts only carry the kart's weight and collisions: the wheels have no
-contact friction).
+"""Tyre forces of the simulated kart, computed per wheel and applied to the chassis at each
+wheel's contact point every physics step (PyBullet's wheel contacts carry the weight only: they
+have no friction).
 
-Model (Liniger, Domahidi, Morari 2015, "Optimization-based autonomous racing of 1:43 scale RC
-cars", and the ETH kart's MPC, REFERENCE.md; Pacejka, "Tire and Vehicle Dynamics"):
-- lateral: the magic formula F_y = N D sin(C atan(B alpha)), N the wheel's static load in kg
-  (mass-normalised: D in m/s^2), alpha the slip angle from the wheel's velocity in its own frame;
-- longitudinal: the drive force m a_cmd on the rear wheels (two motors, each within its torque
-  limit), brake deceleration, rolling resistance and drivetrain drag on every wheel by load
-  share, aerodynamic drag at the centre of mass;
-- a friction circle of radius N D per wheel: the longitudinal force is clipped to it and the
-  lateral force scaled by sqrt(1 - (F_x / N D)^2), so braking or driving at the limit costs grip;
-- the floor's friction mu scales D by mu / `tyre_reference_friction`.
+Model (Pacejka, "Tire and Vehicle Dynamics"; Liniger, Domahidi, Morari 2015 and the ETH kart's
+MPC for the lateral curve, REFERENCE.md), loads mass-normalised as there (kg, forces N = kg m/s^2):
+- normal load: each axle's static share from the centre of mass, plus the longitudinal transfer
+  m a_x h / L between the axles and the lateral transfer m_axle a_y h / track across each axle
+  (h the CoM height, a_x and a_y the body's acceleration from the previous step's forces). The
+  kart has no suspension, so how the roll moment splits between the axles is an assumption: in
+  proportion to their static loads. A wheel never pulls the ground (N >= 0);
+- lateral: the magic formula N D sin(C atan(B alpha)), alpha the slip angle of the contact's
+  velocity in the wheel's frame;
+- longitudinal: each rear motor's drive force on its own wheel (the command's m a_cmd / 2) within
+  its torque-speed curve: the torque limit up to the corner speed, constant power above it;
+  brake deceleration and rolling resistance on every wheel by its load;
+- combined slip, friction ellipse: F_x is clipped to N D_x (D_x = `long_grip_ratio` D) and F_y
+  scaled by sqrt(1 - (F_x / N D_x)^2), so driving or braking at the limit leaves no side grip;
+- longitudinal slip, quasi-static (a wheel's spin settles within about 0.1 ms, far below a
+  physics step): within the grip the slip ratio is F_x / (k N g), k the slip stiffness; a
+  demand beyond it spins a driven wheel (+1) or locks a braked one (-1). It sets the wheel speeds
+  that odometry reads;
+- the floor's friction mu scales D by mu / `tyre_reference_friction`;
+- aerodynamic drag rho Cd A v |v| / 2 at the centre of mass.
 """
 
 from __future__ import annotations
@@ -19,9 +29,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from kartci.robots.gokart.params import GokartModel, Tyre, axle_distance_m, cog_x_m
+from kartci.robots.gokart.params import (
+    GRAVITY_MPS2,
+    GokartModel,
+    Tyre,
+    axle_distance_m,
+    rolling_decel_mps2,
+)
 
-SLIP_SPEED_FLOOR_MPS = 1.0  # slip angles use hypot(v_long, this): finite at standstill
+SLIP_SPEED_FLOOR_MPS = 1.0  # slip angles use max(|v_long|, this): finite at standstill
 STOP_SPEED_MPS = 0.3  # brakes and rolling resistance fade out linearly below this speed
 SPEED_LIMIT_BAND_MPS = 0.5  # the drive force fades out over this band below the top speed
 
@@ -33,25 +49,42 @@ def pacejka(tyre: Tyre, alpha_rad: float) -> float:
 
 @dataclass(frozen=True)
 class Wheel:
-    """One wheel: contact point relative to the centre of mass (body frame, m), static load (kg)
-    and tyre."""
+    """One wheel: contact point in base_link (m), static load (kg), tyre, driven or not, and
+    rolling radius (m)."""
 
-    dx_m: float
-    dy_m: float
-    load_kg: float
+    x_m: float
+    y_m: float
+    static_kg: float
     tyre: Tyre
     driven: bool
+    radius_m: float
 
 
 def wheels(model: GokartModel) -> list[Wheel]:
     """The four wheels (rl, rr, fl, fr) with static loads from the centre-of-mass position."""
-    length, lr, cx = axle_distance_m(model), model.cog_to_rear_axle_m, cog_x_m(model)
+    length, lr = axle_distance_m(model), model.cog_to_rear_axle_m
     rear_load, front_load = model.mass_kg * (length - lr) / length, model.mass_kg * lr / length
     out = []
     for i, (x, y) in enumerate(model.wheel_xy_m):
         front = i >= 2
-        out.append(Wheel(x - cx, y, (front_load if front else rear_load) / 2,
-                         model.front_tyre if front else model.rear_tyre, not front))
+        out.append(Wheel(x, y, (front_load if front else rear_load) / 2,
+                         model.front_tyre if front else model.rear_tyre, not front,
+                         model.front_wheel_radius_m if front else model.rear_wheel_radius_m))
+    return out
+
+
+def normal_loads(model: GokartModel, tyres: list[Wheel], ax_mps2: float, ay_mps2: float,
+                 ) -> list[float]:
+    """Each wheel's normal load, kg, at body acceleration (ax, ay), m/s^2: the static load plus
+    longitudinal and lateral load transfer."""
+    per_g = model.mass_kg * model.cog_height_m / GRAVITY_MPS2
+    to_rear = per_g * ax_mps2 / axle_distance_m(model)  # kg from the front axle to the rear
+    out = []
+    for w in tyres:
+        axle = max(0.0, 2 * w.static_kg + (to_rear if w.driven else -to_rear))  # driven: rear
+        # the axle's share of the roll moment, to the outside of the turn (-y for a_y > 0)
+        across = axle / model.mass_kg * per_g * ay_mps2 / (2 * abs(w.y_m))
+        out.append(axle / 2 - math.copysign(min(abs(across), axle / 2), across * w.y_m))
     return out
 
 
@@ -64,30 +97,48 @@ class Demand:
     brake_mps2: float
 
 
+@dataclass(frozen=True)
+class TyreForce:
+    """One wheel's force in the body frame (N), its longitudinal slip ratio, and its
+    circumferential speed omega r (m/s: the road speed with the slip)."""
+
+    fx_n: float
+    fy_n: float
+    slip: float
+    spin_mps: float
+
+
 def _fade(v: float) -> float:
     return max(-1.0, min(1.0, v / STOP_SPEED_MPS))
 
 
-def wheel_force(model: GokartModel, wheel: Wheel, demand: Demand, steer_rad: float,
-                v_body: tuple[float, float], yaw_rate: float, mu_scale: float,
-                ) -> tuple[float, float]:
-    """Body-frame (x, y) force, N, of one wheel at body velocity `v_body` (m/s, at the centre
-    of mass) and `yaw_rate` (rad/s)."""
-    vx = v_body[0] - yaw_rate * wheel.dy_m
-    vy = v_body[1] + yaw_rate * wheel.dx_m
+def motor_force_n(model: GokartModel, wheel: Wheel, v_long_mps: float) -> float:
+    """The largest drive force of one rear motor at its wheel's speed, N: the torque limit up
+    to the corner speed (power / torque x radius), constant power above it."""
+    torque_cap = model.wheel_torque_limit_nm / wheel.radius_m
+    return min(torque_cap, model.motor_power_w / max(abs(v_long_mps), 1e-9))
+
+
+def wheel_force(model: GokartModel, wheel: Wheel, load_kg: float, demand: Demand,
+                steer_rad: float, v_contact: tuple[float, float], mu_scale: float,
+                ) -> TyreForce:
+    """One wheel's force at normal load `load_kg`, its contact point moving at `v_contact`
+    (body frame, m/s)."""
     c, s = math.cos(steer_rad), math.sin(steer_rad)
-    v_long, v_lat = c * vx + s * vy, -s * vx + c * vy
-    alpha = -math.atan2(v_lat, math.hypot(v_long, SLIP_SPEED_FLOOR_MPS))
-    n = wheel.load_kg
-    f_max = n * wheel.tyre.d_mps2 * mu_scale
-    f_lat = n * mu_scale * pacejka(wheel.tyre, alpha)
-    f_long = -n * (demand.brake_mps2 + model.rolling_decel_mps2) * _fade(v_long)
-    if wheel.driven:  # two rear motors share the drive force, each within its torque limit
-        torque_cap = model.wheel_torque_limit_nm / model.rear_wheel_radius_m
-        f_long += max(-torque_cap, min(torque_cap, model.mass_kg * demand.drive_mps2 / 2))
-    f_long = max(-f_max, min(f_max, f_long))
+    v_long, v_lat = c * v_contact[0] + s * v_contact[1], -s * v_contact[0] + c * v_contact[1]
+    alpha = -math.atan2(v_lat, max(abs(v_long), SLIP_SPEED_FLOOR_MPS))
+    f_lat = load_kg * mu_scale * pacejka(wheel.tyre, alpha)
+    want = -load_kg * (demand.brake_mps2 + rolling_decel_mps2(model)) * _fade(v_long)
+    if wheel.driven:  # each rear motor drives its own wheel, within its torque-speed curve
+        cap = motor_force_n(model, wheel, v_long)
+        want += max(-cap, min(cap, model.mass_kg * demand.drive_mps2 / 2))
+    f_max = load_kg * wheel.tyre.d_mps2 * model.long_grip_ratio * mu_scale
+    f_long = max(-f_max, min(f_max, want))
     f_lat *= math.sqrt(max(0.0, 1.0 - (f_long / f_max) ** 2)) if f_max > 0 else 0.0
-    return c * f_long - s * f_lat, s * f_long + c * f_lat
+    stiffness = model.long_slip_stiffness * load_kg * GRAVITY_MPS2
+    slip = f_long / stiffness if abs(want) <= f_max and stiffness > 0 else math.copysign(1.0, want)
+    return TyreForce(c * f_long - s * f_lat, s * f_long + c * f_lat, slip,
+                     v_long + slip * abs(v_long))
 
 
 def drive_demand(model: GokartModel, accel_mps2: float, brake_mps2: float, reverse: bool,
@@ -103,5 +154,5 @@ def drive_demand(model: GokartModel, accel_mps2: float, brake_mps2: float, rever
 
 
 def air_drag_n(model: GokartModel, vx_mps: float) -> float:
-    """Aerodynamic drag along the body x axis, N."""
-    return -model.mass_kg * model.air_drag_per_m * vx_mps * abs(vx_mps)
+    """Aerodynamic drag along the body x axis, N: rho Cd A v |v| / 2."""
+    return -0.5 * model.air_density_kgpm3 * model.drag_area_m2 * vx_mps * abs(vx_mps)

@@ -5,6 +5,7 @@ format, its predicted horizon (nav_msgs/Path) and solver statistics every step."
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -16,7 +17,10 @@ from kartci.robots.gokart import KartInput, column_for_wheel_angle, wheel_angles
 from kartci.robots.gokart.joy import kart_command
 from kartci.robots.gokart.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
 from kartci.robots.gokart.mpcc.params import MpccController
-from kartci.robots.gokart.params import GokartModel, cog_x_m
+from kartci.robots.gokart.mpcc.recovery import Measured, MpccStatus, Watchdog
+from kartci.robots.gokart.mpcc.reference import FrictionMap
+from kartci.robots.gokart.outline import footprint_m
+from kartci.robots.gokart.params import GokartModel, axle_distance_m, cog_x_m
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
 
 
@@ -28,6 +32,11 @@ class MpccAgent:
         assert isinstance(ctx.model, GokartModel)  # Controller.build checked the robot kind
         self.spec, self.model, self.period_s = spec, ctx.model, spec.period_s
         self.frame = base_link(ctx.name)
+        # the world's floor and zones, as the real kart's map would hold them
+        self.friction = FrictionMap.of(ctx.world, ctx.model.tyre_reference_friction
+                                       / max(ctx.model.tire_friction, 1e-9))
+        _, self.kart_length_m, self.kart_width_m = footprint_m(ctx.model)  # other karts': alike
+        self.watchdog = Watchdog(spec.recovery, spec.period_s, axle_distance_m(ctx.model))
         self.track: Track | None = None
         self.mpcc: Mpcc | None = None
         self.static: list[Obstacle] = []
@@ -49,7 +58,7 @@ class MpccAgent:
         base_link to the CoG)."""
         if topic == TRACK_TOPIC:
             self.track = track_from_text(message.data, TRACK_TOPIC)
-            self.mpcc = Mpcc(self.spec, self.model, self.track)
+            self.mpcc = Mpcc(self.spec, self.model, self.track, self.friction)
             self._place_obstacles()
             return
         if topic == OBSTACLES_TOPIC:
@@ -104,13 +113,13 @@ class MpccAgent:
     def _obstacles(self) -> list[Obstacle]:
         assert self.track is not None
         out = list(self.static)
-        radius = 0.5 * self.spec.kart_width_m
+        radius = 0.5 * self.kart_width_m
         for x, y, yaw, v in self._karts.values():
             s, _, _, _ = self.track.project(np.array([[x, y]]))
             heading = self.track.pose_at(float(s[0]))[2]
             speed = v * math.cos(yaw - heading)
             out.append(obstacle_from_xy(self.track, x, y, radius, speed,
-                                        follow_gap_m=self.spec.kart_length_m + 1.0))
+                                        follow_gap_m=self.kart_length_m + 1.0))
         return out
 
     def step(self, t_ns: int) -> Outbox:
@@ -125,7 +134,7 @@ class MpccAgent:
                                                    else proj - self.track.length_m)
         s0 = proj + self.track.length_m * round((ref - proj) / self.track.length_m)
         x0 = np.array([*st, s0, self._delta, self._accel])
-        plan = self.mpcc.solve(x0, self._obstacles())
+        plan = self._plan(x0)
         self._s = s0
         # after a failed solve the brake is an emergency action, not part of a plan: the next
         # solve starts from a neutral pedal so that it is not born infeasible at standstill
@@ -135,6 +144,22 @@ class MpccAgent:
         return [("cmd", kart_command(cmd, t_ns, self.frame)),
                 ("mpcc/horizon", self._path(plan, t_ns)),
                 ("mpcc/stats", self._stats(plan, t_ns))]
+
+    def _plan(self, x0: np.ndarray) -> Plan:
+        """The watchdog first: a sliding kart brakes straight (no solve), a stalled one
+        re-plans from scratch and says so; else the MPCC's plan."""
+        assert self.mpcc is not None
+        status = self.watchdog.judge(Measured(float(x0[3]), float(x0[4]), float(x0[5]),
+                                              self._delta, float(x0[6])))
+        if status in (MpccStatus.LOSS_OF_CONTROL, MpccStatus.RECOVERING):
+            return self.mpcc.brake_straight(x0, status)
+        if status is MpccStatus.STALLED:
+            self.mpcc.reset()
+            plan = self.mpcc.solve(x0, self._obstacles())
+            # a failed solve keeps its own status: it says why the kart stands
+            return (dataclasses.replace(plan, success=False, status=MpccStatus.STALLED)
+                    if plan.success else plan)
+        return self.mpcc.solve(x0, self._obstacles())
 
     def _path(self, plan: Plan, t_ns: int) -> Any:
         poses = []

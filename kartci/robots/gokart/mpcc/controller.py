@@ -16,8 +16,14 @@ from kartci.robots.gokart.mpcc.cache import Built, get_solver
 from kartci.robots.gokart.mpcc.model import ACC, DELTA, PSI, SLACK, VS, VX, S, SingleTrack, X, Y
 from kartci.robots.gokart.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
 from kartci.robots.gokart.mpcc.params import MpccController
-from kartci.robots.gokart.mpcc.reference import Obstacle, progress_guess, stage_params
+from kartci.robots.gokart.mpcc.reference import (
+    FrictionMap,
+    Obstacle,
+    progress_guess,
+    stage_params,
+)
 from kartci.robots.gokart.mpcc.rti import Rti
+from kartci.robots.gokart.outline import footprint_m, half_width_m
 from kartci.robots.gokart.params import GokartModel
 from kartci.track import Track
 
@@ -43,14 +49,23 @@ class Plan:
 class Mpcc:
     """The MPCC on one track, each solve warm-started from the last successful one."""
 
-    def __init__(self, spec: MpccController, model: GokartModel, track: Track) -> None:
+    def __init__(self, spec: MpccController, model: GokartModel, track: Track,
+                 friction: FrictionMap | None = None) -> None:
         self.spec, self.model, self.track = spec, model, track
-        self.built: Built = get_solver(spec, SingleTrack.of(model))
+        # the floor the map knows; none: everywhere the tyres' reference floor
+        self.friction = friction or FrictionMap(model.tyre_reference_friction)
+        self.single_track = SingleTrack.of(model)
+        self.built: Built = get_solver(spec, self.single_track)
         self.lay = self.built.layout
         self.lbg, self.ubg = constraint_bounds(spec.horizon_steps)
+        # the outline's half width plus the margin keeps the whole kart off the edges
+        self.padding_m = half_width_m(model) + spec.track_margin_m
+        self.kart_length_m = footprint_m(model)[1]
         lo, hi = model.steering_limit_rad
-        self.max_delta = min(abs(sum(wheel_angles(model, lo)) / 2),
-                             abs(sum(wheel_angles(model, hi)) / 2), STEERING_RATIO * 1.7)
+        col = spec.max_column_rad
+        self.max_delta = min(abs(sum(wheel_angles(model, max(lo, -col))) / 2),
+                             abs(sum(wheel_angles(model, min(hi, col))) / 2),
+                             STEERING_RATIO * 1.7)
         self._w: np.ndarray | None = None
         self._lam_g: np.ndarray | None = None
         self._lam_x: np.ndarray | None = None
@@ -94,9 +109,11 @@ class Mpcc:
         sp, lay = self.spec, self.lay
         cold = self._w is None
         w0 = self._initial_guess(x0)
-        params = stage_params(self.track, lay.states(w0)[1:, S], sp.step_s,
-                              sp.track_padding_m, obstacles, sp.obstacle_margin_m,
-                              sp.kart_length_m)
+        guess = lay.states(w0)[1:]
+        params = stage_params(self.track, guess[:, S], sp.step_s, self.padding_m, obstacles,
+                              sp.obstacle_margin_m, self.kart_length_m,
+                              sp.track_margin_m - sp.passing_margin_m)
+        params = np.column_stack([params, self._grip(guess)])
         p = np.concatenate([weights_vector(sp.weights), [sp.max_lateral_accel_mps2,
                                                           sp.max_brake_mps2, sp.front_check_m,
                                                           sp.max_speed_mps],
@@ -121,6 +138,16 @@ class Mpcc:
             # real-time MPC; an infeasible iterate is a failure
             or (status == "Maximum_Iterations_Exceeded" and violation < FEASIBLE))
         return sol, status, ok, int(stats.get("iter_count", -1))
+
+    def _grip(self, states: np.ndarray) -> np.ndarray:
+        """The tyres' grip at each predicted stage (the last plan's poses): the least under
+        either axle, so that the plan slows before the first wheel reaches a slippery zone."""
+        heading = np.column_stack([np.cos(states[:, PSI]), np.sin(states[:, PSI])])
+        xy = states[:, [X, Y]]
+        m = self.single_track
+        out: np.ndarray = np.minimum(self.friction.grip(xy + m.lf_m * heading),
+                                     self.friction.grip(xy - m.lr_m * heading))
+        return out
 
     def _initial_guess(self, x0: np.ndarray) -> np.ndarray:
         lay, sp = self.lay, self.spec
@@ -160,6 +187,18 @@ class Mpcc:
         poses = np.array([self.track.pose_at(float(s), lateral) for s in xs[1:, S]])
         xs[1:, X], xs[1:, Y] = poses[:, 0], poses[:, 1]
         xs[1:, PSI] = np.unwrap(np.r_[x0[PSI], poses[:, 2]])[1:]
+
+    def reset(self) -> None:
+        """Forget the last plan: the next solve starts from a fresh guess."""
+        self._w = self._lam_g = self._lam_x = None
+
+    def brake_straight(self, x0: np.ndarray, status: str) -> Plan:
+        """Full brake with the wheels straight, no solve: the recovery from a loss of control
+        (a sliding kart steered into the slide by a model that does not slide spins on)."""
+        self.reset()
+        plan = self._brake(x0, status, 0, 0.0)
+        return Plan(False, status, 0, 0.0, math.nan, math.nan, plan.states, plan.accel_mps2,
+                    0.0)
 
     def _brake(self, x0: np.ndarray, status: str, iters: int, solve_ms: float) -> Plan:
         """Full brake, steering held: the safe reaction to a failed solve."""

@@ -8,7 +8,9 @@ velocities (m/s), yaw rate (rad/s), arc-length progress (m), mean front-wheel an
 longitudinal acceleration command (m/s^2, negative = brake). Input u = [jerk (m/s^3), steering
 rate (rad/s), progress speed vs (m/s), slack (m)]. Tyre forces are mass-normalised (m/s^2), as
 in the ETH kart's MPC (REFERENCE.md): an axle carrying a share of the mass gives that share
-times D sin(C atan(B alpha)) per kg of the whole kart.
+times D sin(C atan(B alpha)) per kg of the whole kart. Mirrored from the plant where it matters
+for planning: the motors' power limit (drive at most 2 x motor power / (m v)), rolling resistance
+and drag, and the floor's friction under each stage (`grip`, D scaled as the plant scales it).
 """
 
 from __future__ import annotations
@@ -18,9 +20,16 @@ from dataclasses import asdict, dataclass
 import casadi as ca
 
 from kartci.robots.gokart.mpcc.params import MpccVehicle
-from kartci.robots.gokart.params import GokartModel, Tyre, axle_distance_m
+from kartci.robots.gokart.params import (
+    GokartModel,
+    Tyre,
+    air_drag_per_m,
+    axle_distance_m,
+    rolling_decel_mps2,
+)
 
 NX, NU = 9, 4
+DRIVEN_WHEELS = 2  # one motor per rear wheel (REFERENCE.md: two 2.8 kW motors)
 X, Y, PSI, VX, VY, R, S, DELTA, ACC = range(NX)
 JERK, DDELTA, VS, SLACK = range(NU)
 
@@ -37,25 +46,33 @@ class SingleTrack:
     rear: Tyre
     rolling_decel_mps2: float
     air_drag_per_m: float
+    power_per_kg: float  # both motors' power over the mass, W/kg: the drive's power limit
 
     @classmethod
     def of(cls, model: GokartModel) -> SingleTrack:
         """The single-track model of a go-kart's parameters."""
         length, lr = axle_distance_m(model), model.cog_to_rear_axle_m
         return cls(length - lr, lr, model.mass_kg / model.yaw_inertia_kgm2, model.front_tyre,
-                   model.rear_tyre, model.rolling_decel_mps2, model.air_drag_per_m)
+                   model.rear_tyre, rolling_decel_mps2(model), air_drag_per_m(model),
+                   DRIVEN_WHEELS * model.motor_power_w / model.mass_kg)
 
     def key(self) -> str:
         """A stable text of every value, for the compiled solver's cache key."""
         return repr(sorted(asdict(self).items()))
 
 
-def _tyre(t: Tyre, share: float, alpha: ca.SX) -> ca.SX:
-    return share * t.d_mps2 * ca.sin(t.c * ca.atan(t.b * alpha))
+def _tyre(t: Tyre, share: float, alpha: ca.SX, grip: ca.SX | float) -> ca.SX:
+    return share * grip * t.d_mps2 * ca.sin(t.c * ca.atan(t.b * alpha))
 
 
-def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle) -> ca.SX:
-    """dx/dt of the blended bicycle model."""
+def _smooth_min(a: ca.SX, b: ca.SX) -> ca.SX:
+    return 0.5 * (a + b - ca.sqrt((a - b) ** 2 + 0.01))
+
+
+def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle,
+               grip: ca.SX | float = 1.0) -> ca.SX:
+    """dx/dt of the blended bicycle model; `grip` scales both tyres' D (the floor's friction
+    over the tyres' reference friction, as in the plant)."""
     psi, vx, vy, r, acc, delta = x[PSI], x[VX], x[VY], x[R], x[ACC], x[DELTA]
     lf, lr = m.lf_m, m.lr_m
     vx_s = ca.sqrt(vx * vx + 1.0)  # slip angles are undefined at standstill; smooth floor
@@ -63,13 +80,17 @@ def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle) -> ca.SX:
     alpha_r = -ca.atan((vy - lr * r) / vx_s)
     share_f, share_r = lr / (lf + lr), lf / (lf + lr)  # static axle loads: mass shares
     brake = 0.5 * (acc - ca.sqrt(acc * acc + 0.01))  # smooth min(acc, 0)
+    # the motors' power limit, as in the plant: above the corner speed the drive gives at most
+    # P / (m v) (vx floored: the torque limit is the command's own bound there)
+    drive = _smooth_min(acc - brake, m.power_per_kg / ca.sqrt(vx * vx + 1.0))
     # friction circle as in the plant: the rear motors' drive force and the brakes on both
     # axles (per kg of axle load) leave sqrt(1 - (F_x / D)^2) of each axle's lateral grip
-    long_f, long_r = -brake, (acc - brake) / share_r + brake
-    ff = _tyre(m.front, share_f, alpha_f) * ca.sqrt(1 - (long_f / m.front.d_mps2) ** 2)
-    fr = _tyre(m.rear, share_r, alpha_r) * ca.sqrt(1 - (long_r / m.rear.d_mps2) ** 2)
+    long_f, long_r = -brake, drive / share_r + brake
+    d_f, d_r = grip * m.front.d_mps2, grip * m.rear.d_mps2
+    ff = _tyre(m.front, share_f, alpha_f, grip) * ca.sqrt(ca.fmax(1 - (long_f / d_f) ** 2, 0.01))
+    fr = _tyre(m.rear, share_r, alpha_r, grip) * ca.sqrt(ca.fmax(1 - (long_r / d_r) ** 2, 0.01))
     drag = m.rolling_decel_mps2 * ca.tanh(vx / 0.3) + m.air_drag_per_m * vx * vx
-    ax = acc - brake * (1 - ca.tanh(vx / 0.3)) - drag  # brakes stop the kart, never reverse it
+    ax = drive + brake * ca.tanh(vx / 0.3) - drag  # brakes stop the kart, never reverse it
     dyn_vy = ff * ca.cos(delta) + fr - vx * r
     dyn_r = m.mass_per_yaw_inertia_per_m2 * (lf * ff * ca.cos(delta) - lr * fr)
     # kinematic bicycle: vy and r relax to their no-slip values
@@ -92,14 +113,15 @@ def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle) -> ca.SX:
 
 
 def discrete(m: SingleTrack, v: MpccVehicle, step_s: float, substeps: int) -> ca.Function:
-    """x_{k+1} = F(x_k, u_k): `substeps` RK4 steps over one horizon step."""
-    x, u = ca.SX.sym("x", NX), ca.SX.sym("u", NU)
+    """x_{k+1} = F(x_k, u_k, grip): `substeps` RK4 steps over one horizon step on a floor
+    whose friction scales the tyres' D by `grip`."""
+    x, u, grip = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("grip")
     h = step_s / substeps
     xk = x
     for _ in range(substeps):
-        k1 = continuous(xk, u, m, v)
-        k2 = continuous(xk + h / 2 * k1, u, m, v)
-        k3 = continuous(xk + h / 2 * k2, u, m, v)
-        k4 = continuous(xk + h * k3, u, m, v)
+        k1 = continuous(xk, u, m, v, grip)
+        k2 = continuous(xk + h / 2 * k1, u, m, v, grip)
+        k3 = continuous(xk + h / 2 * k2, u, m, v, grip)
+        k4 = continuous(xk + h * k3, u, m, v, grip)
         xk = xk + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("F", [x, u], [xk])
+    return ca.Function("F", [x, u, grip], [xk])

@@ -34,7 +34,7 @@ from kartci.robots.gokart.mpcc.model import (
 )
 from kartci.robots.gokart.mpcc.params import MpccController, MpccWeights
 
-STAGE_PARAMS = 8  # x_ref, y_ref, cos(heading), sin(heading), s_ref, lateral lo/hi, s_max
+STAGE_PARAMS = 9  # x_ref, y_ref, cos(heading), sin(heading), s_ref, lateral lo/hi, s_max, grip
 N_WEIGHTS = 6
 CONSTRAINTS_PER_STAGE = NX + 7
 
@@ -105,17 +105,23 @@ def build(spec: MpccController, model: SingleTrack) -> tuple[dict[str, ca.MX], L
     for k in range(n):
         xk, uk = w[lay.x(k)], w[lay.u(k)]
         slack = uk[SLACK]
-        g.append(w[lay.x(k + 1)] - f_step(xk, uk))
+        # the floor under stage k (stage 1's for the measured state) scales the tyres' grip
+        grip = stage_ref(max(k, 1))[8]
+        g.append(w[lay.x(k + 1)] - f_step(xk, uk, grip))
         if k > 0:
             ref = stage_ref(k)
             lateral, lag = errors(xk, ref)
-            lo, hi, s_max = ref[5:]
+            lo, hi, s_max = ref[5:8]
+            # ETH's acceleration limits hold on the reference floor; a slipperier one shrinks
+            # the ellipse with the grip
+            ellipse = ca.fmin(grip, 1.0)
             lateral_front, _ = errors(xk, ref, front)
             cost += qc * lateral**2 + ql * lag**2 + qs * (slack + slack**2)
             g += [lateral - hi - slack, lo - lateral - slack, xk[S] - s_max - slack,
                   lateral_front - hi - slack, lo - lateral_front - slack,
                   xk[VX] - v_max - slack,
-                  (xk[VX] * xk[R] / a_lat) ** 2 + (xk[ACC] / a_long) ** 2 - 1
+                  (xk[VX] * xk[R] / (a_lat * ellipse)) ** 2
+                  + (xk[ACC] / (a_long * ellipse)) ** 2 - 1
                   - slack]
         cost += -qv * uk[VS] + rj * uk[JERK] ** 2 + rd * uk[DDELTA] ** 2
     lateral, lag = errors(w[lay.x(n)], stage_ref(n))

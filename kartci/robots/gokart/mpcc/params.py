@@ -53,6 +53,27 @@ class MpccWeights(Frozen):
                         "(soft constraints)")
 
 
+class MpccRecovery(Frozen):
+    """When the kart is out of control and how it recovers: brake straight (column centred)
+    until it slides no more, then re-plan from scratch."""
+
+    sideslip_deg: float = Field(20.0, gt=0.0, le=180.0, description="sideslip (heading vs "
+                                "direction of travel at the centre of mass) above this while "
+                                "faster than `moving_mps` is a loss of control, deg")
+    yaw_rate_excess_radps: float = Field(1.0, gt=0.0, le=100.0, description="a yaw rate this "
+                                         "far beyond the kinematic one (v tan(delta) / l) is a "
+                                         "loss of control, rad/s")
+    moving_mps: float = Field(2.0, ge=0.0, le=100.0, description="sideslip and yaw rate are "
+                              "judged above this speed, m/s")
+    stall_steps: int = Field(40, ge=1, le=100_000, description="control steps with progress "
+                             "below `stall_mps` (after the first plan) that count as stalled")
+    stall_mps: float = Field(0.1, ge=0.0, le=100.0, description="progress along the track "
+                             "slower than this is no progress, m/s")
+    recovered_deg: float = Field(5.0, gt=0.0, le=180.0, description="recovery ends when the "
+                                 "sideslip is below this (or the kart is slower than "
+                                 "`moving_mps`), deg")
+
+
 class MpccController(ControllerParams):
     """Model predictive contouring control (Liniger et al., REFERENCE.md) solved with CasADi.
     Obstacles and other karts narrow the track bounds along the predicted path."""
@@ -93,15 +114,34 @@ class MpccController(ControllerParams):
                                         description="front-wheel angle rate limit, "
                                         "rad/s")
     max_jerk_mps3: Size_m = Field(40.0, description="longitudinal jerk limit, m/s^3")
-    track_padding_m: Distance_m = Field(0.95, description="kept from each track edge by the "
-                                        "kart's centre line, m: half the kart's width plus a "
-                                        "margin (REFERENCE.md: ETH padding 0.5 m)")
-    obstacle_margin_m: Distance_m = Field(0.9, description="kept from an obstacle's edge, m")
-    front_check_m: Distance_m = Field(1.0, description="a point this far ahead of the CoG, "
-                                      "m, keeps the bounds too, so the nose does not cut corners")
-    kart_length_m: Size_m = Field(1.9, description="footprint length of other karts, m "
-                                  "(Table 3.1: vehicle length 2.07 m)")
-    kart_width_m: Size_m = Field(1.3, description="footprint width of other karts, m")
+    track_margin_m: Distance_m = Field(0.5,
+                                  description="kept between each track edge and the kart's "
+                                  "outline, m: the padding of the kart's centre line is the "
+                                  "outline's half width (0.69 m, the rear wheels) plus this "
+                                  "(REFERENCE.md: ETH padding 0.5 m)")
+    passing_margin_m: Distance_m = Field(0.1,
+                                    description="kept between a track edge and the kart's "
+                                    "outline beside a kart it passes, m: "
+                                    "`track_margin_m` gives way to clearing them (the hall's "
+                                    "4 m track leaves 0.81 m either side of the centre line "
+                                    "with the full margin, too little to pass a 1.38 m kart)")
+    obstacle_margin_m: Distance_m = Field(0.9,
+                                     description="kept from an obstacle's edge, m")
+    front_check_m: Distance_m = Field(1.0,
+                                 description="a point this far ahead of the CoG, "
+                                 "m, keeps the bounds too, so the nose does not cut corners")
+    max_column_rad: float = Field(0.65, gt=0.0, le=2.0,
+                                  description="steering-column angle range, +- rad. ETH's "
+                                  "MPCC uses +-0.5 rad (REFERENCE.md): a mean front-wheel angle "
+                                  "of 0.176 rad, a 6.8 m kinematic turning radius, where the "
+                                  "hall track's tightest turn has a 2.46 m centre-line radius "
+                                  "(s = 58 m; 0.81 m of room either side after the padding). "
+                                  "At 0.5 the kart laps alone (mpcc_lap) but runs wide into "
+                                  "the slower kart in multi_agent's east hairpin; 0.65 (0.224 "
+                                  "rad, 5.3 m) is the smallest of 0.5 / 0.65 / 0.8 that drives "
+                                  "every shipped MPCC scenario without a collision")
+    recovery: MpccRecovery = Field(MpccRecovery(), description="loss-of-control detection "
+                                   "and the recovery behaviour")
     method: MpccMethod = Field(MpccMethod.RTI, description="`rti`: real-time iterations, "
                                "`sqp_iterations` QPs per step with `qp_solver` (laps every "
                                "shipped scenario within 1 % of Ipopt at a third of its solve "

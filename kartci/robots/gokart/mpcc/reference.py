@@ -31,6 +31,33 @@ def obstacle_from_xy(track: Track, x: float, y: float, radius_m: float, speed_mp
     return Obstacle(float(s[0]), float(lat[0]), radius_m, speed_mps, follow_gap_m)
 
 
+@dataclass(frozen=True)
+class FrictionMap:
+    """The floor's friction as the kart's map knows it (the world's floor and zones): the
+    plant's `friction_at`, vectorised. `grip` is what the tyres' D is scaled by."""
+
+    floor: float  # friction coefficient outside every zone (dimensionless)
+    zones: tuple[tuple[float, float, float, float, float], ...] = ()  # x0, y0, x1, y1 m, mu
+    reference: float = 0.9  # friction at which the tyres' D applies, times 1 / tire_friction
+
+    @classmethod
+    def of(cls, world: object, reference: float) -> FrictionMap:
+        """The map of a world's parameters (`floor_friction`, `zones`; a world without them
+        is all reference floor)."""
+        zones = tuple((z.min_m[0], z.min_m[1], z.max_m[0], z.max_m[1], z.friction)
+                      for z in getattr(world, "zones", ()))
+        return cls(float(getattr(world, "floor_friction", reference)), zones, reference)
+
+    def grip(self, xy: np.ndarray) -> np.ndarray:
+        """The tyres' D scale at points (n, 2), m: the last zone holding a point wins."""
+        mu = np.full(len(xy), self.floor)
+        for x0, y0, x1, y1, f in self.zones:
+            inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+            mu = np.where(inside, f, mu)
+        out: np.ndarray = mu / self.reference
+        return out
+
+
 def _width(track: Track, s_m: np.ndarray, side: np.ndarray) -> np.ndarray:
     out: np.ndarray = np.interp(np.mod(s_m, track.length_m), track.s, side,
                                 period=track.length_m)
@@ -39,9 +66,11 @@ def _width(track: Track, s_m: np.ndarray, side: np.ndarray) -> np.ndarray:
 
 def stage_params(track: Track, s_bar: np.ndarray, step_s: float, padding_m: float,
                  obstacles: list[Obstacle], margin_m: float, kart_length_m: float,
-                 ) -> np.ndarray:
+                 squeeze_m: float = 0.0) -> np.ndarray:
     """Rows of [x_ref, y_ref, cos, sin, s_ref, lateral_lo, lateral_hi, s_max] for stages
-    1..N at predicted progress `s_bar` (m, unwrapped)."""
+    1..N at predicted progress `s_bar` (m, unwrapped). Beside a kart it passes the bound on the
+    passing side may come `squeeze_m` closer to the track's edge than `padding_m`: clearing the
+    kart matters more than the edge's margin."""
     n = len(s_bar)
     m = len(track.s)
     wrapped = np.mod(s_bar, track.length_m)
@@ -62,7 +91,10 @@ def stage_params(track: Track, s_bar: np.ndarray, step_s: float, padding_m: floa
             continue
         clear = ob.radius_m + margin_m
         left_lo, right_hi = ob.lateral_m + clear, ob.lateral_m - clear
-        room_left, room_right = hi - left_lo, right_hi - lo
+        # only beside a kart: a corridor squeezed past a static box in a bend can be too
+        # narrow to enter, and a plan that stops short of it is cheaper than its slack
+        squeeze = squeeze_m if ob.follow_gap_m > 0 else 0.0
+        room_left, room_right = hi + squeeze - left_lo, right_hi - lo + squeeze
         pass_left = room_left[near].min() >= room_right[near].min()
         if ob.follow_gap_m > 0 and max(room_left[near].min(), room_right[near].min()) < 0:
             # no way past: follow it
@@ -71,8 +103,10 @@ def stage_params(track: Track, s_bar: np.ndarray, step_s: float, padding_m: floa
             continue
         if pass_left:
             lo = np.where(near, np.maximum(lo, left_lo), lo)
+            hi = np.where(near, hi + squeeze, hi)
         else:
             hi = np.where(near, np.minimum(hi, right_hi), hi)
+            lo = np.where(near, lo - squeeze, lo)
     return np.column_stack([xy, np.cos(heading), np.sin(heading), s_ref, lo, hi, s_max])
 
 
