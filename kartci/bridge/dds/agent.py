@@ -16,6 +16,7 @@ rclpy starts: no UDP socket, so nothing leaves the host, and `-j N` runs do not 
 from __future__ import annotations
 
 import contextlib
+import json
 import socket
 import sys
 import tempfile
@@ -26,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci import project
-from kartci.atomic import write_json_atomic
+from kartci.atomic import write_text_atomic
 from kartci.bridge import ros2
 from kartci.bridge.agent import CLOCK, ExternalAgent, joystick, substitute
 from kartci.bridge.child import Child
@@ -40,7 +41,9 @@ from kartci.errors import RunError
 from kartci.logs.types import base_link, msg, typestore
 
 PROFILE = "fastdds_shm_only.xml"
-ROUND_TRIP = "dds_round_trip.json"  # <agent>.<this> in the run folder: wall-clock figures
+# <agent>.<this> in the run folder (kept there with the programs' logs): one JSON line of
+# wall-clock figures, so not in the deterministic metrics
+ROUND_TRIP = "dds_round_trip.log"
 CONNECT_TIMEOUT_S = 20.0  # s, for the relay to start its Python and connect
 
 
@@ -243,7 +246,8 @@ class DdsAgent(ExternalAgent):
         if self.domain is not None:
             self.domain.release()
         if self._run_dir is not None and self.round_trips_s:
-            write_json_atomic(self._run_dir / f"{self.name}.{ROUND_TRIP}", self.timing())
+            write_text_atomic(self._run_dir / f"{self.name}.{ROUND_TRIP}",
+                              json.dumps(self.timing(), sort_keys=True) + "\n")
         clean_zombies()
         (self._folder / "relay.sock").unlink(missing_ok=True)
         if self._folder.exists() and not any(self._folder.iterdir()):
