@@ -19,6 +19,7 @@ import pytest
 from helpers import ROOT, kartci
 from ros2python import ros_python_or_skip
 
+from kartci.bridge.dds.agent import dds_env
 from kartci.errors import RunError
 from kartci.scenario import load_scenario
 from kartci.sim import Session
@@ -154,3 +155,28 @@ def test_killed_dds_processes_leave_no_shared_memory(session: Session) -> None:
             session.step()
     session.close()
     assert fastdds_files() <= before
+
+
+def test_a_stack_started_by_hand_meets_kartci_on_its_domain(example: Path,
+                                                            ros_python: Path) -> None:
+    """No `command`: the team starts its node with the README's exports, kartci joins the
+    scenario's `domain_id` (outside the per-run ids)."""
+    env = {**os.environ, **dds_env(97, "kart0")}
+    node = subprocess.Popen(
+        [str(ros_python), "pure_pursuit_node.py", "--ros-args", "-r", "__ns:=/kart0", "-r",
+         "track:=/kartci/track", "-p", "use_sim_time:=true"], cwd=example, env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        spec = load_scenario("dds_pure_pursuit", [
+            "duration_s=1.0", "agents.kart0.controller.command=[]",
+            "agents.kart0.controller.domain_id=97"])
+        with Session(spec, example / "run.mcap") as s:
+            r = s.reset()
+            while not r.done:
+                r = s.step()
+            agent: Any = s.world.robots[0].agent
+            assert (agent.child, agent.domain_id) == (None, 97)
+            assert agent.timing()["ticks"] == 50 and agent.late == 0
+    finally:
+        node.send_signal(signal.SIGINT)  # rclpy's handler: a clean shutdown
+        node.wait(10)
