@@ -8,6 +8,7 @@ import fcntl
 from pathlib import Path
 
 import pytest
+from helpers import kartci
 
 from kartci.bridge.dds import env as ros_env
 from kartci.bridge.dds.agent import dds_env, profile_path
@@ -67,3 +68,11 @@ def test_a_missing_ros2_python_is_one_line(monkeypatch: pytest.MonkeyPatch,
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
     with pytest.raises(SpecError, match=r"run `kartci ros2 env` \(a venv in .*ros2-kilted\)"):
         ros_env.require_python()
+
+
+def test_ros2_commands_print_the_profile_and_name_a_missing_python(tmp_path: Path) -> None:
+    p = kartci("ros2", "profile")
+    assert (p.returncode, p.stdout) == (0, f"{profile_path()}\n")
+    p = kartci("ros2", "python", env={"KARTCI_ROS2_PYTHON": str(tmp_path / "python")})
+    assert (p.returncode, p.stdout) == (2, "")
+    assert p.stderr == f"kartci: error: KARTCI_ROS2_PYTHON={tmp_path / 'python'}: no such file\n"

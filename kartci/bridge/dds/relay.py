@@ -22,6 +22,7 @@ import contextlib
 import importlib
 import json
 import os
+import select
 import socket
 import struct
 import sys
@@ -148,18 +149,20 @@ class Relay:
                            + (f"; it has {seen}" if seen else "") + ")")
         return out
 
-    def wait_ready(self) -> None:
-        """Tell kartci what is missing whenever that changes, then `ready`."""
+    def wait_ready(self) -> bool:
+        """Tell kartci what is missing whenever that changes, then `ready` (True); False when
+        kartci has closed the socket meanwhile (it sends nothing before `ready`)."""
         last: list[str] | None = None
         while True:
             now = self.missing()
             if not now:
                 send(self.sock, self.lock, {"op": "ready"})
-                return
+                return True
             if now != last:
                 send(self.sock, self.lock, {"op": "missing", "what": now})
                 last = now
-            time.sleep(MISSING_PERIOD_S)
+            if select.select([self.sock], [], [], MISSING_PERIOD_S)[0]:
+                return False  # readable before `ready`: only its end-of-file can be there
 
     def tick(self, head: dict[str, Any], body: bytes) -> None:
         """Publish a tick's messages in kartci's order (sensors, then /clock)."""
@@ -189,7 +192,8 @@ def main() -> int:
     relay: Relay | None = None
     try:
         relay = Relay(sock, first[0])
-        relay.wait_ready()
+        if not relay.wait_ready():
+            return 0
         while (frame := receive(sock)) is not None and frame[0]["op"] == "tick":
             relay.tick(*frame)
     except Exception as err:  # any failure goes to kartci as one line, then exit 1
