@@ -8,7 +8,8 @@ import fcntl
 from pathlib import Path
 
 import pytest
-from helpers import kartci
+import yaml
+from helpers import ROOT, kartci
 
 from kartci.bridge.dds import env as ros_env
 from kartci.bridge.dds.agent import dds_env, profile_path
@@ -76,3 +77,16 @@ def test_ros2_commands_print_the_profile_and_name_a_missing_python(tmp_path: Pat
     p = kartci("ros2", "python", env={"KARTCI_ROS2_PYTHON": str(tmp_path / "python")})
     assert (p.returncode, p.stdout) == (2, "")
     assert p.stderr == f"kartci: error: KARTCI_ROS2_PYTHON={tmp_path / 'python'}: no such file\n"
+
+
+def test_zenoh_settings_with_dds_are_refused_in_one_line(tmp_path: Path) -> None:
+    spec = yaml.safe_load((ROOT / "examples" / "ros2_stack" / "scenarios" /
+                           "dds_pure_pursuit.yaml").read_text())
+    spec["agents"]["kart0"]["controller"].update(port=7447, connect=["tcp/127.0.0.1:7447"])
+    (tmp_path / "scenarios").mkdir()
+    (tmp_path / "kartci.toml").write_text('scenarios = ["scenarios"]\n')
+    (tmp_path / "scenarios" / "dds_port.yaml").write_text(yaml.safe_dump(spec))
+    p = kartci("run", "dds_port", "--out", tmp_path / "out", cwd=tmp_path)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert ("agent kart0: middleware dds does not use the Zenoh settings port, connect (the "
+            "stack meets kartci on its DDS domain, over shared memory)") in p.stdout + p.stderr

@@ -37,13 +37,14 @@ from kartci.bridge.dds.shm import Domain, clean_zombies
 from kartci.bridge.link import Inbox
 from kartci.bridge.params import ExternalController
 from kartci.core import AgentContext
-from kartci.errors import RunError
+from kartci.errors import RunError, SpecError
 from kartci.logs.types import base_link, msg, typestore
 
 PROFILE = "fastdds_shm_only.xml"
 # <agent>.<this> in the run folder (kept there with the programs' logs): one JSON line of
 # wall-clock figures, so not in the deterministic metrics
 ROUND_TRIP = "dds_round_trip.log"
+ZENOH_ONLY = {"port": None, "connect": (), "zenoh_mode": "peer", "allow_remote": False}
 CONNECT_TIMEOUT_S = 20.0  # s, for the relay to start its Python and connect
 
 
@@ -69,6 +70,11 @@ class DdsAgent(ExternalAgent):
     (inherited: `step`, the deadline, late ticks, decoding and applying the commands)."""
 
     def __init__(self, spec: ExternalController, ctx: AgentContext) -> None:
+        zenoh_only = [k for k, default in ZENOH_ONLY.items() if getattr(spec, k) != default]
+        if zenoh_only:
+            raise SpecError(f"agent {ctx.name}: middleware dds does not use the Zenoh "
+                            f"settings {', '.join(zenoh_only)} (the stack meets kartci on its "
+                            "DDS domain, over shared memory)")
         # the state ExternalAgent.__init__ sets, without its Zenoh session
         self.spec, self.name, self.period_s = spec, ctx.name, spec.period_s
         self.inputs: tuple[str, ...] = tuple(spec.publish)
