@@ -94,10 +94,10 @@ class DdsAgent(ExternalAgent):
         self._relay_ready = threading.Event()
         self._relay_error: str | None = None
         self._lock = threading.Lock()
-        self._folder = Path(tempfile.mkdtemp(prefix="kartci-dds-"))
         self._run_dir = ctx.run_dir
         self.round_trips_s: list[float] = []
         self.python = ros_env.require_python()
+        self._folder = Path(tempfile.mkdtemp(prefix="kartci-dds-"))  # the relay's socket
         clean_zombies()  # what killed runs before this one left
         self.domain = Domain() if spec.command else None
         self.domain_id = self.domain.id if self.domain else spec.domain_id
