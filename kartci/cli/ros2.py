@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 
 from kartci.bridge.dds import env as ros_env
-from kartci.bridge.dds.agent import profile_path
+from kartci.bridge.dds.env import profile_path
 from kartci.cli.common import app
 from kartci.errors import SpecError
 

@@ -19,7 +19,7 @@ import pytest
 from helpers import ROOT, kartci
 from ros2python import ros_python_or_skip
 
-from kartci.bridge.dds.agent import dds_env
+from kartci.bridge.dds.env import dds_env
 from kartci.errors import RunError
 from kartci.scenario import load_scenario
 from kartci.sim import Session

@@ -17,7 +17,7 @@ from ros2python import ros_python_or_skip
 
 from kartci.bridge import ros2
 from kartci.bridge.dds import relay as wire
-from kartci.bridge.dds.agent import dds_env
+from kartci.bridge.dds.env import dds_env
 from kartci.bridge.dds.shm import Domain
 
 HUMBLE_RANGE = "RIHS01_9430b1915b94d4268ff903679e8ecd09b6a67d331bd028738ec1eeb592891ebd"

@@ -12,7 +12,7 @@ import yaml
 from helpers import ROOT, kartci
 
 from kartci.bridge.dds import env as ros_env
-from kartci.bridge.dds.agent import dds_env, profile_path
+from kartci.bridge.dds.env import dds_env, profile_path
 from kartci.bridge.dds.shm import FIRST_DOMAIN, Domain, clean_zombies
 from kartci.errors import SpecError
 

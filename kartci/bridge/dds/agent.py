@@ -22,7 +22,6 @@ import sys
 import tempfile
 import threading
 import time
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +32,7 @@ from kartci.bridge.agent import CLOCK, ExternalAgent, joystick, substitute
 from kartci.bridge.child import Child
 from kartci.bridge.dds import env as ros_env
 from kartci.bridge.dds import relay as wire
+from kartci.bridge.dds.env import dds_env
 from kartci.bridge.dds.shm import Domain, clean_zombies
 from kartci.bridge.link import Inbox
 from kartci.bridge.params import ExternalController
@@ -40,29 +40,11 @@ from kartci.core import AgentContext
 from kartci.errors import RunError, SpecError
 from kartci.logs.types import base_link, msg, typestore
 
-PROFILE = "fastdds_shm_only.xml"
 # <agent>.<this> in the run folder (kept there with the programs' logs): one JSON line of
 # wall-clock figures, so not in the deterministic metrics
 ROUND_TRIP = "dds_round_trip.log"
 ZENOH_ONLY = {"port": None, "connect": (), "zenoh_mode": "peer", "allow_remote": False}
 CONNECT_TIMEOUT_S = 20.0  # s, for the relay to start its Python and connect
-
-
-def profile_path() -> Path:
-    """kartci's copy of the shared-memory-only Fast DDS profile (shipped in the package)."""
-    return Path(str(resources.files("kartci.bridge.dds").joinpath(PROFILE)))
-
-
-def dds_env(domain_id: int, namespace: str) -> dict[str, str]:
-    """What every DDS process of the run is told, before rclpy starts: Fast DDS (3.x and 2.x
-    variable names) with kartci's SHM-only profile, the run's domain, the agent's namespace."""
-    profile = str(profile_path())
-    return {"RMW_IMPLEMENTATION": "rmw_fastrtps_cpp",
-            "FASTDDS_DEFAULT_PROFILES_FILE": profile, "FASTRTPS_DEFAULT_PROFILES_FILE": profile,
-            "ROS_DOMAIN_ID": str(domain_id), "KARTCI_NAMESPACE": namespace,
-            # the wheels' .pth re-executes Python once to set LD_LIBRARY_PATH; a marker
-            # inherited from a ROS 2 process that started kartci would skip that
-            "_ROS_WHEELS_BOOTSTRAP_COMPLETE": ""}
 
 
 class DdsAgent(ExternalAgent):

@@ -11,6 +11,7 @@ import os
 import shutil
 import subprocess
 import sys
+from importlib import resources
 from pathlib import Path
 
 from kartci.cachedir import cache_dir
@@ -22,6 +23,7 @@ DISTRO = "kilted"
 # that every venv made from them has the same definitions (their RIHS01 hashes are tested)
 REQUIREMENTS = ("ros-rclpy[fastrtps]==9.1.2", "ros-std-msgs==5.5.1", "ros-sensor-msgs==5.5.1",
                 "ros-nav-msgs==5.5.1", "ros-geometry-msgs==5.5.1", "ros-rosgraph-msgs==2.3.0")
+PROFILE = "fastdds_shm_only.xml"  # shipped beside this module
 PROBE = "import rclpy, rmw_fastrtps_cpp, nav_msgs.msg, geometry_msgs.msg, rosgraph_msgs.msg"
 
 
@@ -100,3 +102,20 @@ def _run(argv: list[str], what: str) -> None:
         lines = (done.stderr or done.stdout).strip().splitlines()
         raise RunError(f"cannot {what} ({' '.join(argv[:3])} ...): "
                        f"{lines[-1] if lines else f'exit code {done.returncode}'}")
+
+
+def profile_path() -> Path:
+    """kartci's copy of the shared-memory-only Fast DDS profile (shipped in the package)."""
+    return Path(str(resources.files("kartci.bridge.dds").joinpath(PROFILE)))
+
+
+def dds_env(domain_id: int, namespace: str) -> dict[str, str]:
+    """What every DDS process of the run is told, before rclpy starts: Fast DDS (3.x and 2.x
+    variable names) with kartci's SHM-only profile, the run's domain, the agent's namespace."""
+    profile = str(profile_path())
+    return {"RMW_IMPLEMENTATION": "rmw_fastrtps_cpp",
+            "FASTDDS_DEFAULT_PROFILES_FILE": profile, "FASTRTPS_DEFAULT_PROFILES_FILE": profile,
+            "ROS_DOMAIN_ID": str(domain_id), "KARTCI_NAMESPACE": namespace,
+            # the wheels' .pth re-executes Python once to set LD_LIBRARY_PATH; a marker
+            # inherited from a ROS 2 process that started kartci would skip that
+            "_ROS_WHEELS_BOOTSTRAP_COMPLETE": ""}
