@@ -7,6 +7,7 @@ interpreter of their environment (to set LD_LIBRARY_PATH), so they live in a ven
 
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import subprocess
@@ -85,11 +86,16 @@ def base_python() -> str:
 
 
 def make(path: Path) -> Path:
-    """A venv at `path` with `REQUIREMENTS` (pip, from the configured index); its Python."""
+    """A venv at `path` with `REQUIREMENTS` (pip, from the configured index); its Python. One
+    process at a time per path (test workers may ask at once): the others wait, then find it."""
     python = venv_python(path)
-    if not python.exists():
-        _run([base_python(), "-m", "venv", str(path)], "make the venv")
-    _run([str(python), "-m", "pip", "install", "--quiet", *REQUIREMENTS], "install the wheels")
+    path.mkdir(parents=True, exist_ok=True)
+    with (path / ".kartci-make.lock").open("a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not python.exists():
+            _run([base_python(), "-m", "venv", str(path)], "make the venv")
+        _run([str(python), "-m", "pip", "install", "--quiet", *REQUIREMENTS],
+             "install the wheels")  # a few seconds when all are there at their pins
     why = probe(python)
     if why is not None:
         raise RunError(f"the ROS 2 venv at {path} does not import rclpy: {why}")
