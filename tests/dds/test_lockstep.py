@@ -180,3 +180,19 @@ def test_a_stack_started_by_hand_meets_kartci_on_its_domain(example: Path,
     finally:
         node.send_signal(signal.SIGINT)  # rclpy's handler: a clean shutdown
         node.wait(10)
+
+
+def test_paced_mode_runs_on_the_latest_command(example: Path) -> None:
+    """`mode: paced` over DDS: sim time held to real_time_factor, the latest answer applied,
+    no tick waited for (so none is late)."""
+    spec = load_scenario("dds_pure_pursuit", [
+        "duration_s=1.0", "agents.kart0.controller.mode=paced",
+        "agents.kart0.controller.real_time_factor=2.0"])
+    with Session(spec, example / "run.mcap") as s:
+        r = s.reset()
+        while not r.done:
+            r = s.step()
+        agent: Any = s.world.robots[0].agent
+        assert agent.late == 0
+        assert set(agent._latest) == {"/kart0/cmd_vel"}
+        assert agent._latest["/kart0/cmd_vel"].linear.x > 0.0
