@@ -11,6 +11,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -196,3 +197,66 @@ def test_paced_mode_runs_on_the_latest_command(example: Path) -> None:
         assert agent.late == 0
         assert set(agent._latest) == {"/kart0/cmd_vel"}
         assert agent._latest["/kart0/cmd_vel"].linear.x > 0.0
+
+
+def _children(pid: int) -> list[int]:
+    """Every descendant of `pid`."""
+    parents: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):
+            continue
+        parents.setdefault(ppid, []).append(int(stat.parent.name))
+    out, todo = [], [pid]
+    while todo:
+        kids = parents.get(todo.pop(), [])
+        out += kids
+        todo += kids
+    return out
+
+
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""
+
+
+def _alive(pid: int) -> bool:
+    """Running (not gone, not a zombie waiting for a container's init to reap it)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def test_a_killed_kartci_leaves_no_dds_process_nor_shared_memory(example: Path) -> None:
+    """SIGKILL to kartci mid-run: the relay and the stack see it (parent-death signal, the
+    socket's end) and shut down through rclpy, which removes their shared memory."""
+    before = fastdds_files()
+    top = subprocess.Popen([sys.executable, "-m", "kartci.cli", "run", "dds_pure_pursuit",
+                            "--out", str(example / "out")], cwd=example,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        dds: list[int] = []
+        for _ in range(600):  # until the stack answers (its node runs), at most 60 s
+            dds = [p for p in _children(top.pid) if "relay.py" in _cmdline(p)
+                   or "pure_pursuit_node.py" in _cmdline(p)]
+            if len(dds) == 2 and (example / "out").exists() and fastdds_files() - before:
+                break
+            time.sleep(0.1)
+        assert len(dds) == 2
+        kartci_pids = [top.pid] + [p for p in _children(top.pid) if p not in dds
+                                   and "kartci" in _cmdline(p)]
+        for pid in kartci_pids:
+            os.kill(pid, signal.SIGKILL)
+        top.wait()
+        for _ in range(200):
+            if not any(map(_alive, dds)):
+                break
+            time.sleep(0.05)
+        assert [p for p in dds if _alive(p)] == []
+        assert fastdds_files() <= before
+    finally:
+        top.kill()
