@@ -181,7 +181,7 @@ class Relay:
 
 
 def main() -> int:
-    """Serve kartci until it closes the socket (or sends `stop`)."""
+    """Serve kartci until it closes the socket (a frame other than `tick` also ends it)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--socket", required=True, help="kartci's Unix socket to connect to")
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
