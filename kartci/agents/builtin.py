@@ -26,9 +26,11 @@ def has_lidar(kind: RobotKind) -> bool:
     return "velodyne_points" in kind.publishes
 
 
-EXTERNAL = Controller("external", ExternalController, lazy("kartci.bridge.agent:ExternalAgent"),
-                      (), "a separate program (a ROS 2 stack) closed loop over Zenoh, "
-                      "rmw_zenoh conventions, in lockstep with sim time", commandable)
+EXTERNAL = Controller("external", ExternalController,
+                      lazy("kartci.bridge.middleware:external_agent"),
+                      (), "a separate program (a ROS 2 stack) closed loop over Zenoh "
+                      "(rmw_zenoh conventions) or DDS (rclpy in a relay process), in lockstep "
+                      "with sim time", commandable)
 
 LOCALIZATION = Node("localization", LocalizationParams,
                     lazy("kartci.localization.node:LocalizationNode"), (),

@@ -92,9 +92,16 @@ class ExternalController(ControllerParams):
         description="the stack's ROS 2 distribution: its message definitions (Range has "
         "`variance` from Jazzy on) and type hashes in keys and tokens (humble: "
         "TypeHashNotSupported, as rmw_zenoh on Humble writes); rolling uses Lyrical's definitions")
+    middleware: Literal["zenoh", "dds"] = Field(
+        "zenoh", exclude_if=lambda v: v == "zenoh",
+        description="how the stack is reached: zenoh (rmw_zenoh's conventions, kartci's own "
+        "session) or dds (Fast DDS through rclpy in a relay process under a ROS 2 Python: "
+        "`kartci ros2 env` or $KARTCI_ROS2_PYTHON; shared memory only, a domain id per run "
+        "when kartci starts the stack)")
     command: tuple[str, ...] = Field((), description="program kartci starts for the run "
                                      "(empty: start the stack yourself, connecting to "
                                      "`port`); `{python}` is kartci's Python, "
+                                     "`{ros_python}` the ROS 2 Python (dds), "
                                      "`{endpoint}` the bridge's Zenoh endpoint, `{root}` the "
                                      "project folder, `{domain_id}` the domain")
     cwd: str | None = Field(None, description="its working directory, relative to the project "

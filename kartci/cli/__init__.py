@@ -17,6 +17,7 @@ from kartci.cli import (  # noqa: F401  (importing a command module registers it
     maps,
     realdata,
     results,
+    ros2,
     run,
     scenarios,
 )

@@ -1,0 +1,212 @@
+"""The DDS side of the bridge: a program run under a ROS 2 Python (never kartci's), started by
+kartci with one end of a socket pair. It is a ROS 2 node (rclpy on Fast DDS) that publishes what
+kartci sends (sensor messages, then `/clock`) and sends back every command the stack publishes.
+
+It relays CDR bytes without decoding them: kartci serialises and deserialises, rclpy publishes
+raw (`Publisher.publish(bytes)`) and subscribes raw (`raw=True`), so a message here is the same
+bytes as on the Zenoh bridge. It checks each type's RIHS01 hash against the installed definition
+(`share/<pkg>/msg/<T>.json`) first, so a definition that differs (Humble's Range) is an error,
+not a payload 4 bytes short.
+
+The frames (both ways) are `<II` (header length, body length), a JSON header, a binary body. This
+module imports only the standard library at the top: kartci imports it for the framing; rclpy
+is imported in `main()` only, under the ROS 2 Python.
+
+    python relay.py --socket PATH      (kartci's Unix socket; kartci runs it)
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib
+import json
+import os
+import select
+import socket
+import struct
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+_FRAME = struct.Struct("<II")
+MATCH_TIMEOUT_S = 10.0  # s, for a new publisher to match the stack's subscriptions to its topic
+MISSING_PERIOD_S = 0.05  # s, between checks of the stack's graph while waiting for it
+
+
+def send(sock: socket.socket, lock: threading.Lock, head: dict[str, Any],
+         body: bytes = b"") -> None:
+    """One frame; `lock` keeps frames of several threads whole."""
+    data = json.dumps(head).encode()
+    with lock:
+        sock.sendall(_FRAME.pack(len(data), len(body)) + data + body)
+
+
+def _exactly(sock: socket.socket, n: int) -> bytes | None:
+    chunks, left = [], n
+    while left:
+        chunk = sock.recv(min(left, 1 << 20))
+        if not chunk:
+            return None
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
+def receive(sock: socket.socket) -> tuple[dict[str, Any], bytes] | None:
+    """The next frame (header, body), or None when the other side has closed."""
+    sizes = _exactly(sock, _FRAME.size)
+    if sizes is None:
+        return None
+    n_head, n_body = _FRAME.unpack(sizes)
+    head, body = _exactly(sock, n_head), _exactly(sock, n_body) if n_body else b""
+    if head is None or body is None:
+        return None
+    out: dict[str, Any] = json.loads(head)
+    return out, body
+
+
+def description(typename: str) -> Path:
+    """The installed type description `share/<pkg>/msg/<T>.json`: in $AMENT_PREFIX_PATH (a
+    sourced ROS 2 installation) or this Python's prefix (the ros-rclpy wheels' layout)."""
+    package, kind, name = typename.split("/")
+    prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    for prefix in [*prefixes, sys.prefix]:
+        path = Path(prefix) / "share" / package / kind / f"{name}.json"
+        if path.exists():
+            return path
+    raise RuntimeError(f"{typename}: no share/{package}/{kind}/{name}.json under "
+                       f"{', '.join([*prefixes, sys.prefix])} (is {package} installed?)")
+
+
+class Relay:
+    """One rclpy node: publishers for what kartci sends, raw subscriptions for the commands."""
+
+    def __init__(self, sock: socket.socket, start: dict[str, Any]) -> None:
+        import rclpy  # the ROS 2 Python only (this module is also imported by kartci)
+        from rclpy.qos import QoSProfile, ReliabilityPolicy  # the ROS 2 Python only
+
+        self.sock, self.lock = sock, threading.Lock()
+        self.qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        rclpy.init(args=[])
+        self.node = rclpy.create_node(start["node"])
+        self.pubs: dict[tuple[str, str], Any] = {}
+        self.commands = [(str(t), str(ty), str(h)) for t, ty, h in start["commands"]]
+        for topic, typename, hash_ in start["publishers"]:
+            self.publisher(topic, typename, hash_, wait=False)
+        self.subs = [self.node.create_subscription(
+            self.cls(typename, hash_), topic, self._sender(topic), self.qos, raw=True)
+            for topic, typename, hash_ in self.commands]
+        self.spinner = threading.Thread(target=rclpy.spin, args=(self.node,), daemon=True)
+        self.spinner.start()
+
+    def _sender(self, topic: str) -> Any:
+        def forward(payload: bytes) -> None:
+            with contextlib.suppress(OSError):  # kartci closed the socket: the relay ends
+                send(self.sock, self.lock, {"op": "cmd", "topic": topic}, payload)
+        return forward
+
+    def cls(self, typename: str, kartci_hash: str) -> Any:
+        """The message class of `pkg/msg/T`, after its installed hash is found equal."""
+        package, kind, name = typename.split("/")
+        path = description(typename)
+        installed = json.loads(path.read_text())["type_hashes"][0]["hash_string"]
+        if installed != kartci_hash:
+            raise RuntimeError(f"{typename}: kartci's definition ({kartci_hash}) differs from "
+                               f"the installed one ({installed}, {path})")
+        return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+    def publisher(self, topic: str, typename: str, hash_: str, wait: bool = True) -> Any:
+        """The publisher of (topic, type), declared on first use; a new one waits until it has
+        matched every subscription the graph shows on its topic (else its first messages could
+        go nowhere)."""
+        pub = self.pubs.get((topic, typename))
+        if pub is None:
+            pub = self.pubs[(topic, typename)] = self.node.create_publisher(
+                self.cls(typename, hash_), topic, self.qos)
+            deadline = time.monotonic() + MATCH_TIMEOUT_S
+            while wait and pub.get_subscription_count() < self.node.count_subscribers(topic):
+                if time.monotonic() > deadline:
+                    raise RuntimeError(f"the stack's subscription to {topic} never matched")
+                time.sleep(0.001)
+        return pub
+
+    def missing(self) -> list[str]:
+        """What the stack has not declared yet: a /clock subscription, its command publishers
+        (with kartci's type and hash), and their matches with this node."""
+        out = []
+        clock = self.pubs[("/clock", "rosgraph_msgs/msg/Clock")]
+        if clock.get_subscription_count() < 1:
+            out.append("subscription to /clock (rosgraph_msgs/msg/Clock)")
+        for (topic, typename, hash_), sub in zip(self.commands, self.subs, strict=True):
+            infos = self.node.get_publishers_info_by_topic(topic)
+            kinds = {(i.topic_type, str(i.topic_type_hash)) for i in infos}
+            if (typename, hash_) not in kinds or sub.get_publisher_count() < 1:
+                seen = ", ".join(sorted(f"{t} {h}" for t, h in kinds))
+                out.append(f"publisher of {topic} ({typename}"
+                           + (f"; it has {seen}" if seen else "") + ")")
+        return out
+
+    def wait_ready(self) -> bool:
+        """Tell kartci what is missing whenever that changes, then `ready` (True); False when
+        kartci has closed the socket meanwhile (it sends nothing before `ready`)."""
+        last: list[str] | None = None
+        while True:
+            now = self.missing()
+            if not now:
+                send(self.sock, self.lock, {"op": "ready"})
+                return True
+            if now != last:
+                send(self.sock, self.lock, {"op": "missing", "what": now})
+                last = now
+            if select.select([self.sock], [], [], MISSING_PERIOD_S)[0]:
+                return False  # readable before `ready`: only its end-of-file can be there
+
+    def tick(self, head: dict[str, Any], body: bytes) -> None:
+        """Publish a tick's messages in kartci's order (sensors, then /clock)."""
+        at = 0
+        for topic, typename, hash_, size in head["msgs"]:
+            self.publisher(topic, typename, hash_).publish(body[at:at + size])
+            at += size
+
+    def close(self) -> None:
+        """Destroy the node and shut rclpy down (Fast DDS removes its shared memory)."""
+        import rclpy  # the ROS 2 Python only
+
+        self.node.destroy_node()
+        rclpy.try_shutdown()
+        self.spinner.join(timeout=2.0)
+
+
+def main() -> int:
+    """Serve kartci until it closes the socket (a frame other than `tick` also ends it)."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--socket", required=True, help="kartci's Unix socket to connect to")
+    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    sock.connect(p.parse_args().socket)
+    first = receive(sock)
+    if first is None or first[0].get("op") != "start":
+        return 2
+    relay: Relay | None = None
+    try:
+        relay = Relay(sock, first[0])
+        if not relay.wait_ready():
+            return 0
+        while (frame := receive(sock)) is not None and frame[0]["op"] == "tick":
+            relay.tick(*frame)
+    except Exception as err:  # any failure goes to kartci as one line, then exit 1
+        lock = relay.lock if relay is not None else threading.Lock()
+        with contextlib.suppress(OSError):  # kartci is gone
+            send(sock, lock, {"op": "error", "message": f"{type(err).__name__}: {err}"})
+        print(f"relay: {type(err).__name__}: {err}", file=sys.stderr, flush=True)
+        return 1
+    finally:
+        if relay is not None:
+            relay.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
