@@ -36,6 +36,7 @@ class PurePursuit(Node):  # type: ignore[misc]  # rclpy is untyped where mypy ru
             self.declare_parameter("max_lateral_accel_mps2", 4.0).value)
         self.xy: np.ndarray | None = None
         self.kappa = np.zeros(0)
+        self.waiting: Odometry | None = None  # a pose that came before the track
         # subscriptions before the publisher: a simulator that waits for our publisher then
         # finds our subscriptions declared too
         self.create_subscription(String, "track", self.on_track, 10)
@@ -59,9 +60,17 @@ class PurePursuit(Node):  # type: ignore[misc]  # rclpy is untyped where mypy ru
         self.kappa = np.abs(2 * cross / np.maximum(sides, 1e-9))
         self.xy = xy
         self.get_logger().info(f"track: {len(rows)} points, {s[-1]:.1f} m")
+        if self.waiting is not None:
+            self.on_odom(self.waiting)
+            self.waiting = None
 
     def on_odom(self, m: Odometry) -> None:
-        """One command per pose."""
+        """One command per pose, once the track is known: DDS does not order messages of two
+        topics, so the first pose can come before the track; it is answered when the track
+        arrives (answering "stop" instead made the start depend on that race)."""
+        if self.xy is None:
+            self.waiting = m
+            return
         out = Twist()
         if self.xy is not None:
             p, q = m.pose.pose.position, m.pose.pose.orientation

@@ -38,7 +38,7 @@ from kartci.bridge.link import Inbox
 from kartci.bridge.params import ExternalController
 from kartci.core import AgentContext
 from kartci.errors import RunError, SpecError
-from kartci.logs.types import base_link, msg, typestore
+from kartci.logs.types import base_link, msg
 
 # <agent>.<this> in the run folder (kept there with the programs' logs): one JSON line of
 # wall-clock figures, so not in the deterministic metrics
@@ -120,8 +120,9 @@ class DdsAgent(ExternalAgent):
         sock.settimeout(None)
         wire.send(sock, self._lock, {
             "op": "start", "node": self.spec.node_name,
-            "publishers": [["/clock", CLOCK, ros2.type_hash(CLOCK)]],
-            "commands": [[t, ty, ros2.type_hash(ty)] for t, ty in self.commands.items()]})
+            "publishers": [["/clock", CLOCK, ros2.type_hash(CLOCK, self.spec.ros_distro)]],
+            "commands": [[t, ty, ros2.type_hash(ty, self.spec.ros_distro)]
+                         for t, ty in self.commands.items()]})
         return sock
 
     def _read(self) -> None:
@@ -197,15 +198,15 @@ class DdsAgent(ExternalAgent):
 
     def _publish(self, t_ns: int) -> None:
         """The tick's messages and then /clock, one frame to the relay, published in order."""
-        store = typestore()
+        distro = self.spec.ros_distro
         sec, nanosec = divmod(t_ns, 1_000_000_000)
         self._pending.append(("/clock", msg(CLOCK, clock=msg(
             "builtin_interfaces/msg/Time", sec=sec, nanosec=nanosec))))
         heads, bodies = [], []
         for topic, m in self._pending:
             typename = type(m).__msgtype__
-            data = bytes(store.serialize_cdr(m, typename))
-            heads.append([topic, typename, ros2.type_hash(typename), len(data)])
+            data = ros2.serialize(m, distro)
+            heads.append([topic, typename, ros2.type_hash(typename, distro), len(data)])
             bodies.append(data)
         self._pending.clear()
         try:
