@@ -3,6 +3,7 @@ scored, compared with the simulation, and used to fit the simulation's parameter
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -33,20 +34,38 @@ ProfileOpt = Annotated[Path | None, typer.Option(
     "default: the log's only odometry/pose topic and its only command topic.")]
 
 
+class AlignChoice(StrEnum):
+    """`--align`'s choices (kartci.metrics.alignment.Alignment's values)."""
+
+    NONE = "none"
+    SE3 = "se3"
+    SIM3 = "sim3"
+    ORIGIN = "origin"
+
+
 @app.command("score")
 def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
               baselines: BaselinesOpt = None, strict: StrictOpt = None,
-              allow_outside_paths: AllowOutsideOpt = False) -> None:
+              allow_outside_paths: AllowOutsideOpt = False,
+              align: Annotated[AlignChoice | None, typer.Option(
+                  help="Move the estimate onto the reference before APE / RPE: se3 / sim3 "
+                  "(Umeyama least squares, as evo -a / -as), origin (first poses equal, "
+                  "evo --align_origin) or none; default: the profile's (none).")] = None,
+              align_first: Annotated[int | None, typer.Option(
+                  "--align-first", min=2, help="Fit se3 / sim3 on the first N pose pairs "
+                  "only (evo --n_to_align).")] = None) -> None:
     """Score a recorded log with the same metric code as a run (duration, distance, speeds;
     laps, lap times and cross-track error with a track; localization error with an estimate),
     write the same reports and judge it against baselines/<profile name>.json."""
+    from kartci.metrics.alignment import Alignment  # CLI start-up: numpy, scipy
     from kartci.realdata.score import score_log  # CLI start-up: PyBullet, pandas (+0.7 s)
 
     out = out_dir(out, "score")
     with locked(out):
         clear_reports(out)
         base = baselines_dir(baselines)
-        result = score_log(log, profile, out, base, allow_outside_paths)
+        result = score_log(log, profile, out, base, allow_outside_paths,
+                           None if align is None else Alignment(align.value), align_first)
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "score", [result.name])

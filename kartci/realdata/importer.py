@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +17,7 @@ from kartci import core
 from kartci.errors import LogError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, header, msg, open_log, stamp_ns
 from kartci.logs.types import for_writing, yaw_of
+from kartci.metrics.alignment import Alignment
 from kartci.realdata.profile import Profile
 from kartci.scenario import Scenario
 from kartci.scenario.dispatch import context
@@ -37,7 +39,8 @@ def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
     the motion metrics and, with an estimate, the localization metrics."""
     metrics: dict[str, Any] = {"motion": {}}
     if profile.estimate is not None:
-        metrics["localization"] = {"topic": ROLE_TOPIC["estimate"]}
+        metrics["localization"] = {"topic": ROLE_TOPIC["estimate"], "align": profile.align,
+                                   "align_first": profile.align_first}
     world: dict[str, Any] = {"kind": "recorded", "description": profile.description}
     if profile.track is not None:
         world["track"] = profile.track
@@ -118,9 +121,17 @@ def _destinations(profile: Profile, types: dict[str, str]) -> dict[str, str]:
     return out
 
 
-def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Scenario:
-    """Write `dst` (a kartci run log) from `log` as the profile maps it; returns its scenario.
-    `types`: the message type of each role's topic (from `check_profile`)."""
+@dataclass(frozen=True)
+class Imported:
+    """What an import wrote: the recorded scenario, and what a reader should be told."""
+
+    scenario: Scenario
+    warnings: tuple[str, ...]
+
+
+def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Imported:
+    """Write `dst` (a kartci run log) from `log` as the profile maps it; returns its scenario
+    and warnings. `types`: the message type of each role's topic (from `check_profile`)."""
     ns = profile.agent
     copy = _destinations(profile, types)
     poses: dict[str, list[tuple[int, Any]]] = {"pose": [], "estimate": []}
@@ -130,12 +141,14 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
     other: list[tuple[str, int, Any]] = []
     frames = {role.topic: role.frame_id for role, _ in profile.roles().values()
               if role.frame_id is not None}
+    found: dict[str, str] = {}  # role -> the frame of its first message
     with open_log(log) as reader:
         store = for_writing(reader.typestore)
         for topic, t_ns, m in reader.messages([*pose_roles, *copy]):
             _check_frame(log, frames, topic, m)
             if topic in pose_roles:
                 poses[pose_roles[topic]].append((t_ns, m))
+                found.setdefault(pose_roles[topic], _frame(m))
             else:
                 other.append((copy[topic], t_ns, m))
     if not poses["pose"]:
@@ -155,7 +168,26 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
     with McapLogWriter(dst, store) as writer:
         for topic, t_ns, m in out:
             writer.write(topic, m, t_ns)
-    return scenario
+    return Imported(scenario, frame_warnings(profile, found))
+
+
+def _frame(m: Any) -> str:
+    return str(getattr(getattr(m, "header", None), "frame_id", "") or "").lstrip("/")
+
+
+def frame_warnings(profile: Profile, frames: dict[str, str]) -> tuple[str, ...]:
+    """A reference and an estimate in different frames compared without alignment: the APE
+    then measures the offset between the frames (odometry against AMCL's map: metres), not
+    the estimate. Told, with the fix; not refused (the frames may coincide by construction)."""
+    ref, est = frames.get("pose"), frames.get("estimate")
+    if profile.estimate is None or not ref or not est or ref == est:
+        return ()
+    if profile.align is not Alignment.NONE:
+        return ()
+    return (f"the reference {profile.pose.topic} is in frame '{ref}' and the estimate "
+            f"{profile.estimate.topic} in '{est}', compared without alignment: APE includes "
+            "the offset between the frames; align them with --align se3 (sim3 for an estimate "
+            "without scale, origin for the start pose) or `align:` in the profile",)
 
 
 def _check_frame(log: Path, frames: dict[str, str], topic: str, m: Any) -> None:

@@ -16,6 +16,7 @@ from kartci import project
 from kartci.core import Frozen
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
+from kartci.metrics.alignment import Alignment
 from kartci.scenario.models import Criterion
 from kartci.scenario.yamlio import read_yaml
 
@@ -59,6 +60,11 @@ class Profile(Frozen):
                             "PoseWithCovarianceStamped")
     estimate: TopicRole | None = Field(None, description="a pose estimate judged against the "
                                        "reference (localization error)")
+    align: Alignment = Field(Alignment.NONE, description="the estimate moved onto the "
+                             "reference before APE / RPE: none, se3, sim3 (Umeyama; evo -a, "
+                             "-as) or origin (evo --align_origin); `kartci score --align`")
+    align_first: int | None = Field(None, ge=2, description="se3 / sim3 fitted on the first "
+                                    "N pose pairs (evo --n_to_align); none: all")
     commands: CommandRole | None = Field(None, description="the command stream: Twist, "
                                          "TwistStamped, AckermannDriveStamped, Joy, KartCommand")
     imu: TopicRole | None = Field(None, description="sensor_msgs/Imu")
