@@ -93,6 +93,15 @@ def extract(src: Path, wanted: list[str], dst: Path) -> int:
     return n
 
 
+def recover(src: Path, dst: Path) -> int:
+    """Every readable message of every topic of `src` (damaged or not) into `dst`; returns the
+    count. What was lost is in the SalvagedLog warning; nothing readable is a LogError."""
+    wanted = [i.topic for i in topics(src) if i.count > 0]
+    if not wanted:
+        raise LogError(f"{src}: no message could be read; nothing written to {dst}")
+    return extract(src, wanted, dst)
+
+
 def _extract(src: Path, wanted: list[str], dst: Path) -> tuple[int, list[str]]:
     with open_log(src) as log:
         known = {i.topic for i in log.topics()}
@@ -139,6 +148,7 @@ __all__ = [
     "messages",
     "msg",
     "open_log",
+    "recover",
     "stamp_ns",
     "tables",
     "topics",
