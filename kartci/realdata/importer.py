@@ -15,10 +15,19 @@ import numpy as np
 
 from kartci import core
 from kartci.errors import LogError
-from kartci.logs import SCENARIO_TOPIC, McapLogWriter, header, msg, open_log, stamp_ns
+from kartci.logs import (
+    SCENARIO_TOPIC,
+    LogReader,
+    McapLogWriter,
+    header,
+    msg,
+    open_log,
+    stamp_ns,
+)
 from kartci.logs.types import for_writing, yaw_of
 from kartci.metrics.alignment import Alignment
-from kartci.realdata.profile import Profile
+from kartci.realdata.profile import PoseRole, Profile
+from kartci.realdata.tfchain import TF_TYPES, TfTree
 from kartci.scenario import Scenario
 from kartci.scenario.dispatch import context
 from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
@@ -129,28 +138,86 @@ class Imported:
     warnings: tuple[str, ...]
 
 
+@dataclass
+class _Collected:
+    """What the import read from the log: each pose role's (log time, message) pairs, the
+    copied messages (destination topic, log time, message), each pose role's frame."""
+
+    poses: dict[str, list[tuple[int, Any]]]
+    other: list[tuple[str, int, Any]]
+    frames: dict[str, str]
+
+
+def _pose_roles(profile: Profile) -> dict[str, PoseRole]:
+    return {"pose": profile.pose,
+            **({"estimate": profile.estimate} if profile.estimate is not None else {})}
+
+
+def _collect(log: Path, reader: LogReader, profile: Profile, types: dict[str, str]
+             ) -> _Collected:
+    copy = _destinations(profile, types)
+    roles = _pose_roles(profile)
+    by_topic = {r.topic: name for name, r in roles.items() if not r.is_tf}
+    tf_topics = {r.topic for r in roles.values() if r.is_tf}
+    if tf_topics:  # the static edges of the chain, wherever the log has them
+        tf_topics |= {i.topic for i in reader.topics()
+                      if i.topic.endswith("tf_static") and i.msgtype in TF_TYPES}
+    checks = {role.topic: role.frame_id for role, _ in profile.roles().values()
+              if role.frame_id is not None}
+    got = _Collected({name: [] for name in roles}, [], {})
+    tree = TfTree()
+    for topic, t_ns, m in reader.messages([*by_topic, *tf_topics, *copy]):
+        _check_frame(log, checks, topic, m)
+        if topic in tf_topics:
+            tree.add(m, static=topic.endswith("tf_static"))
+        elif topic in by_topic:
+            got.poses[by_topic[topic]].append((t_ns, m))
+            got.frames.setdefault(by_topic[topic], _frame(m))
+        else:
+            got.other.append((copy[topic], t_ns, m))
+    for name, role in roles.items():
+        if role.is_tf:
+            others = [p for other, p in got.poses.items() if other != name and p]
+            got.poses[name] = _tf_poses(log, tree, role, others[0] if others else None)
+            got.frames[name] = _frame_name(role.parent)
+    return got
+
+
+def _frame_name(name: str | None) -> str:
+    return (name or "").lstrip("/")
+
+
+def _tf_poses(log: Path, tree: TfTree, role: PoseRole, at: list[tuple[int, Any]] | None
+              ) -> list[tuple[int, Any]]:
+    """The TF chain's poses as PoseStamped, at the other trajectory's stamps (`at`), else at
+    the chain's own."""
+    parent, child = role.parent or "", role.child or ""
+    try:
+        stamps = (np.array([_stamp(m, t) for t, m in at], np.int64) if at
+                  else tree.stamps(parent, child))
+        t_ns, xyz, quat = tree.lookup(parent, child, stamps)
+    except LogError as err:
+        raise LogError(f"{log}: {err}") from err
+    if len(t_ns) == 0:
+        raise LogError(f"{log}: the TF chain from '{parent}' to '{child}' covers none of the "
+                       "other pose's stamps")
+    return [(int(t), msg("geometry_msgs/msg/PoseStamped", header=header(int(t), parent),
+                         pose=msg("geometry_msgs/msg/Pose",
+                                  position=msg("geometry_msgs/msg/Point", x=p[0], y=p[1],
+                                               z=p[2]),
+                                  orientation=msg("geometry_msgs/msg/Quaternion", x=q[0],
+                                                  y=q[1], z=q[2], w=q[3]))))
+            for t, p, q in zip(t_ns, xyz.tolist(), quat.tolist(), strict=True)]
+
+
 def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Imported:
     """Write `dst` (a kartci run log) from `log` as the profile maps it; returns its scenario
     and warnings. `types`: the message type of each role's topic (from `check_profile`)."""
     ns = profile.agent
-    copy = _destinations(profile, types)
-    poses: dict[str, list[tuple[int, Any]]] = {"pose": [], "estimate": []}
-    pose_roles = {profile.pose.topic: "pose"}
-    if profile.estimate is not None:
-        pose_roles[profile.estimate.topic] = "estimate"
-    other: list[tuple[str, int, Any]] = []
-    frames = {role.topic: role.frame_id for role, _ in profile.roles().values()
-              if role.frame_id is not None}
-    found: dict[str, str] = {}  # role -> the frame of its first message
     with open_log(log) as reader:
         store = for_writing(reader.typestore)
-        for topic, t_ns, m in reader.messages([*pose_roles, *copy]):
-            _check_frame(log, frames, topic, m)
-            if topic in pose_roles:
-                poses[pose_roles[topic]].append((t_ns, m))
-                found.setdefault(pose_roles[topic], _frame(m))
-            else:
-                other.append((copy[topic], t_ns, m))
+        got = _collect(log, reader, profile, types)
+    poses = got.poses
     if not poses["pose"]:
         raise LogError(f"{log}: {profile.pose.topic} holds no readable pose")
     t0 = min(t for t, _ in poses["pose"])
@@ -161,14 +228,14 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
     if profile.track is not None:
         out.append((TRACK_TOPIC, t0, msg("std_msgs/msg/String", data=_read(profile.track))))
     for role, name in (("pose", "odom"), ("estimate", "estimate")):
-        if poses[role]:
+        if poses.get(role):
             out += [(f"/{ns}/{name}", t, m) for t, m in odometry_of(poses[role], "map")]
-    out += other
+    out += got.other
     out.sort(key=lambda item: item[1])
     with McapLogWriter(dst, store) as writer:
         for topic, t_ns, m in out:
             writer.write(topic, m, t_ns)
-    return Imported(scenario, frame_warnings(profile, found))
+    return Imported(scenario, frame_warnings(profile, got.frames))
 
 
 def _frame(m: Any) -> str:
