@@ -110,8 +110,10 @@ def simreal_cmd(
 def calibrate_cmd(
     log: LogArg,
     params: Annotated[list[str], typer.Option(
-        "--params", help="A parameter to fit: model.NAME (the robot's model) or a full dotted "
-        "path, optionally =LO:HI bounds (default: half to twice its value). Repeat.")],
+        "--params", help="A parameter to fit: model.NAME (the robot's model), a full dotted "
+        "path, or profile.commands.NAME (the profile's base controller: wheel_radius_m, "
+        "max_speed_mps, max_accel_mps2, ...), optionally =LO:HI bounds (default: half to twice "
+        "its value). Repeat.")],
     profile: ProfileOpt = None,
     scenario: Annotated[str | None, typer.Option(
         help="Scenario whose world and robot are fitted (as for simreal).")] = None,
@@ -137,11 +139,11 @@ def calibrate_cmd(
     out = out_dir(out, "calibrate")
     fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out,
                         allow_outside_paths)
-    table = Table("parameter", "start", "fitted", "95 % interval",
+    table = Table("parameter", "start", "fitted", "95 % interval", "note",
                   title=f"calibration ({fit.evaluations} evaluations, {fit.method})",
                   title_justify="left")
-    for p, v, c in zip(fit.params, fit.values, fit.ci95, strict=True):
-        table.add_row(p.path, f"{p.start:.6g}", f"{v:.6g}", f"+- {c:.3g}")
+    for p, e in zip(fit.params, fit.estimates, strict=True):
+        table.add_row(p.path, f"{p.start:.6g}", f"{e.value:.6g}", e.interval(), e.note(p))
     out_console.print(table)
     div = Table("divergence", "before", "after", title_justify="left")
     for name, before in fit.before.items():
