@@ -24,7 +24,7 @@ from kartci.logs import (
     open_log,
     stamp_ns,
 )
-from kartci.logs.types import for_writing, yaw_of
+from kartci.logs.types import for_writing, typestore, yaw_of
 from kartci.metrics.alignment import Alignment
 from kartci.realdata.profile import PoseRole, Profile
 from kartci.realdata.tfchain import TF_TYPES, TfTree
@@ -97,22 +97,29 @@ def odometry_of(poses: list[tuple[int, Any]], frame: str) -> Iterator[tuple[int,
         yield t_log, _odom(int(ts[i]), frame, (x, y, z), (q.x, q.y, q.z, q.w), v)
 
 
+_ZEROS36 = np.zeros(36)  # every imported covariance (read-only: shared by the messages)
+
+
 def _odom(t_ns: int, frame: str, xyz: tuple[float, float, float],
           q: tuple[float, float, float, float], v: tuple[float, ...]) -> Any:
-    def vec(a: float, b: float, c: float) -> Any:
-        return msg("geometry_msgs/msg/Vector3", x=float(a), y=float(b), z=float(c))
-
-    pose = msg("geometry_msgs/msg/Pose",
-               position=msg("geometry_msgs/msg/Point", x=float(xyz[0]), y=float(xyz[1]),
-                            z=float(xyz[2])),
-               orientation=msg("geometry_msgs/msg/Quaternion", x=float(q[0]), y=float(q[1]),
-                               z=float(q[2]), w=float(q[3])))
-    twist = msg("geometry_msgs/msg/Twist", linear=vec(*v[:3]), angular=vec(*v[3:]))
-    zeros = np.zeros(36)
-    return msg("nav_msgs/msg/Odometry", header=header(t_ns, frame), child_frame_id="base_link",
-               pose=msg("geometry_msgs/msg/PoseWithCovariance", pose=pose, covariance=zeros),
-               twist=msg("geometry_msgs/msg/TwistWithCovariance", twist=twist,
-                         covariance=zeros))
+    """A nav_msgs/Odometry (the classes taken once: a long log builds tens of thousands)."""
+    t = typestore().types
+    vec = t["geometry_msgs/msg/Vector3"]
+    sec, nsec = divmod(t_ns, 1_000_000_000)
+    pose = t["geometry_msgs/msg/Pose"](
+        position=t["geometry_msgs/msg/Point"](x=float(xyz[0]), y=float(xyz[1]),
+                                              z=float(xyz[2])),
+        orientation=t["geometry_msgs/msg/Quaternion"](x=float(q[0]), y=float(q[1]),
+                                                      z=float(q[2]), w=float(q[3])))
+    twist = t["geometry_msgs/msg/Twist"](linear=vec(x=float(v[0]), y=float(v[1]),
+                                                    z=float(v[2])),
+                                         angular=vec(x=float(v[3]), y=float(v[4]),
+                                                     z=float(v[5])))
+    return t["nav_msgs/msg/Odometry"](
+        header=t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](
+            sec=sec, nanosec=nsec), frame_id=frame), child_frame_id="base_link",
+        pose=t["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=_ZEROS36),
+        twist=t["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=_ZEROS36))
 
 
 def _destinations(profile: Profile, types: dict[str, str]) -> dict[str, str]:
