@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -43,9 +44,10 @@ LIDAR_TOPIC = {"sensor_msgs/msg/LaserScan": "scan",
 MAX_DURATION_S = 3600.0  # a scenario's limit; longer logs are recorded as this long
 
 
-def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
+def imported_scenario(profile: Profile, duration_s: float, start: str = "") -> Scenario:
     """The scenario an imported log records: world and robot `recorded`, the profile's track,
-    the motion metrics and, with an estimate, the localization metrics."""
+    the motion metrics and, with an estimate, the localization metrics; `start`: what time 0 s
+    of the imported log is (said once, in the description)."""
     metrics: dict[str, Any] = {"motion": {}}
     if profile.estimate is not None:
         metrics["localization"] = {"topic": ROLE_TOPIC["estimate"], "align": profile.align,
@@ -54,8 +56,8 @@ def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
     if profile.track is not None:
         world["track"] = profile.track
     return Scenario.model_validate({
-        "name": profile.name, "description": profile.description or f"imported log "
-        f"({profile.name})", "world": world,
+        "name": profile.name, "description": (profile.description or f"imported log "
+                                              f"({profile.name})") + start, "world": world,
         "agents": {profile.agent: {"model": {"kind": "recorded"},
                                    "controller": {"type": "recorded"}}},
         "duration_s": min(max(duration_s, 1e-3), MAX_DURATION_S), "metrics": metrics,
@@ -75,10 +77,12 @@ def _stamp(m: Any, t_ns: int) -> int:
     return t if t > 0 else t_ns
 
 
-def odometry_of(poses: list[tuple[int, Any]], frame: str) -> Iterator[tuple[int, Any]]:
-    """nav_msgs/Odometry (ROS 2) for each pose message; the twist (in the body frame) is the
-    message's own for Odometry, else from finite differences of the poses."""
-    ts = np.array([_stamp(m, t) for t, m in poses], dtype=np.int64)
+def odometry_of(poses: list[tuple[int, Any]], frame: str,
+                start_ns: int = 0) -> Iterator[tuple[int, Any]]:
+    """nav_msgs/Odometry (ROS 2) for each pose message, stamps and log times `start_ns`
+    earlier; the twist (in the body frame) is the message's own for Odometry, else from finite
+    differences of the poses."""
+    ts = np.array([_stamp(m, t) - start_ns for t, m in poses], dtype=np.int64)
     xyz = np.array([_xyzq(m)[:3] for _, m in poses], dtype=float)
     yaw = np.unwrap([yaw_of(_xyzq(m)[3]) for _, m in poses])
     t_s = (ts - ts[0]) * 1e-9
@@ -94,7 +98,7 @@ def odometry_of(poses: list[tuple[int, Any]], frame: str) -> Iterator[tuple[int,
             c, s = math.cos(yaw[i]), math.sin(yaw[i])
             v = (c * vel[i, 0] + s * vel[i, 1], -s * vel[i, 0] + c * vel[i, 1], vel[i, 2],
                  0.0, 0.0, float(wz[i]))
-        yield t_log, _odom(int(ts[i]), frame, (x, y, z), (q.x, q.y, q.z, q.w), v)
+        yield t_log - start_ns, _odom(int(ts[i]), frame, (x, y, z), (q.x, q.y, q.z, q.w), v)
 
 
 _ZEROS36 = np.zeros(36)  # every imported covariance (read-only: shared by the messages)
@@ -227,22 +231,57 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
     poses = got.poses
     if not poses["pose"]:
         raise LogError(f"{log}: {profile.pose.topic} holds no readable pose")
-    t0 = min(t for t, _ in poses["pose"])
-    t1 = max(t for t, _ in poses["pose"])
-    scenario = imported_scenario(profile, (t1 - t0) * 1e-9)
+    start = _start_ns(got)  # one time base: seconds since the log's start
+    t0 = min(t for t, _ in poses["pose"]) - start
+    t1 = max(t for t, _ in poses["pose"]) - start
+    scenario = imported_scenario(profile, (t1 - t0) * 1e-9, _said(start))
     out: list[tuple[str, int, Any]] = [
         (SCENARIO_TOPIC, t0, msg("std_msgs/msg/String", data=scenario.model_dump_json()))]
     if profile.track is not None:
         out.append((TRACK_TOPIC, t0, msg("std_msgs/msg/String", data=_read(profile.track))))
     for role, name in (("pose", "odom"), ("estimate", "estimate")):
         if poses.get(role):
-            out += [(f"/{ns}/{name}", t, m) for t, m in odometry_of(poses[role], "map")]
-    out += got.other
+            out += [(f"/{ns}/{name}", t, m)
+                    for t, m in odometry_of(poses[role], "map", start)]
+    out += [(topic, t - start, _shifted(m, start)) for topic, t, m in got.other]
     out.sort(key=lambda item: item[1])
     with McapLogWriter(dst, store) as writer:
         for topic, t_ns, m in out:
             writer.write(topic, m, t_ns)
     return Imported(scenario, frame_warnings(profile, got.frames))
+
+
+def _header_ns(m: Any) -> int:
+    hdr = getattr(m, "header", None)
+    return stamp_ns(hdr) if hdr is not None else 0
+
+
+def _start_ns(got: _Collected) -> int:
+    """The imported log's start: its earliest log time or header stamp (unset stamps, 0,
+    aside)."""
+    times = [t for p in got.poses.values() for t, _ in p]
+    times += [_stamp(m, t) for p in got.poses.values() for t, m in p]
+    times += [t for _, t, _ in got.other]
+    times += [s for s in (_header_ns(m) for _, _, m in got.other) if s > 0]
+    return min(times)
+
+
+def _said(start_ns: int) -> str:
+    """Time 0 s of an imported log, in words: a date for wall-clock stamps, else the stamp
+    (a simulator's clock)."""
+    if start_ns >= 10**18:  # after 2001-09-09: a wall clock
+        when = datetime.fromtimestamp(start_ns // 10**9, UTC).strftime("%Y-%m-%dT%H:%M:%S")
+        return f"; t = 0 s is {when}.{start_ns % 10**9 // 10**6:03d}Z"
+    return f"; t = 0 s is stamp {start_ns * 1e-9:.3f} s"
+
+
+def _shifted(m: Any, start_ns: int) -> Any:
+    """A copied message with its header stamp `start_ns` earlier (unset stamps stay 0)."""
+    t = _header_ns(m)
+    if t > 0:
+        sec, nsec = divmod(max(t - start_ns, 0), 1_000_000_000)
+        m.header.stamp = typestore().types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec)
+    return m
 
 
 def _frame(m: Any) -> str:
