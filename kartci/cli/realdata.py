@@ -3,6 +3,7 @@ scored, compared with the simulation, and used to fit the simulation's parameter
 
 from __future__ import annotations
 
+import json
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -10,6 +11,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from kartci.atomic import write_text_atomic
 from kartci.cli.common import (
     AllowOutsideOpt,
     BaselinesOpt,
@@ -104,6 +106,26 @@ def simreal_cmd(
             result = require_baselines(result, out, base)
         write_manifest(out, "simreal", [result.name])
         finish([result], out)
+
+
+@app.command("localize")
+def localize_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None) -> None:
+    """Replay a real robot's lidar (LaserScan or PointCloud2), IMU and odometry open loop
+    through kartci's localization node, on a map built from the log's own scans at its
+    recorded poses (OUT/map.ply), and score the estimate against the log's pose (APE, as
+    evo_ape); writes OUT/localization.json."""
+    from kartci.realdata.lidarloc import replay_localization  # CLI start-up: small_gicp, scipy
+
+    out = out_dir(out, "localize")
+    r = replay_localization(log, profile, out)
+    doc = {"ape_rmse_m": r.ape.rmse, "ape_max_m": r.ape.max, "poses": r.ape.count,
+           "scans": r.scans, "estimates": r.estimates, "log_s": r.log_s,
+           "wall_s": round(r.wall_s, 3), "map_points": r.map_points}
+    write_text_atomic(out / "localization.json", json.dumps(doc, indent=2) + "\n")
+    out_console.print(f"{log.name}: {r.scans} scans over {r.log_s:.1f} s, {r.estimates} "
+                      f"estimates; APE against its odometry: RMSE {r.ape.rmse:.4f} m, max "
+                      f"{r.ape.max:.4f} m ({r.ape.count} poses); {r.wall_s:.1f} s wall; "
+                      f"wrote {out / 'localization.json'}", highlight=False)
 
 
 @app.command("calibrate")
