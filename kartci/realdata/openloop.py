@@ -59,7 +59,8 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
     if scenario is None and (kind.robots or kind.fits is not None):
         raise SpecError(f"{log}: {name} runs on {' or '.join(kind.kinds()) or 'no registered'} "
                         "robots, and a foreign log's robot is none of them (its kind is "
-                        "`recorded`); `kartci score` judges its recorded streams instead")
+                        "`recorded`); `kartci localize` replays its lidar, IMU and odometry "
+                        "through localization, `kartci score` judges its recorded streams")
     return kind.build(params, ctx), namespace
 
 
