@@ -37,17 +37,31 @@ def kartci(*args: str | Path, cwd: Path | None = None,
 
 
 BIN = Path(sys.executable).parent
+# evo (GPL) is never a dependency of kartci: its command line is run from its own environment,
+# named by KARTCI_EVO (its bin folder) or found at .venv-evo (made by .ci/run) or /tmp/venv-evo
+EVO_DIRS = [Path(p) for p in (os.environ.get("KARTCI_EVO", ""),) if p] + [
+    ROOT / ".venv-evo" / "bin", Path("/tmp/venv-evo/bin"), BIN]
+
+
+def evo_exe(tool: str) -> str:
+    """The path of evo's `tool` (evo_ape, evo_rpe), or the test skips saying how to get it."""
+    for folder in EVO_DIRS:
+        if (folder / tool).is_file():
+            return str(folder / tool)
+    found = shutil.which(tool)
+    if found is None:
+        pytest.skip(f"{tool} not found (KARTCI_EVO, .venv-evo, /tmp/venv-evo, PATH): "
+                    "python3 -m venv .venv-evo && .venv-evo/bin/python -m pip install evo")
+    return found
 
 
 def evo(tmp: Path, tool: str, *args: str) -> dict[str, float]:
     """Run evo_ape / evo_rpe on tmp/ref.txt and tmp/est.txt; its saved statistics."""
-    exe = BIN / tool
-    if not exe.exists() and shutil.which(tool) is None:
-        pytest.skip(f"{tool} not installed (it comes with the dev extras: pip install -e '.[dev]')")
+    exe = evo_exe(tool)
     out = tmp / "res.zip"
     out.unlink(missing_ok=True)
     env = {**os.environ, "HOME": str(tmp), "MPLBACKEND": "Agg"}  # evo keeps settings in ~/.evo
-    proc = subprocess.run([str(exe if exe.exists() else tool), "tum", "ref.txt", "est.txt", *args,
+    proc = subprocess.run([exe, "tum", "ref.txt", "est.txt", *args,
                            "--save_results", str(out), "--no_warnings"],
                           cwd=tmp, env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -139,6 +139,21 @@ def extract(
     out_console.print(f"wrote {out}: {n} messages", highlight=False)
 
 
+@app.command()
+def recover(
+    log: Annotated[Path, typer.Argument(help="A damaged or truncated log: .mcap, .bag or "
+                                            "rosbag2 folder.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="The new .mcap file.")],
+) -> None:
+    """Write every message that can still be read from a damaged log into a new MCAP file
+    (as `mcap recover` does): a cut chunk is stream-decompressed up to the cut; what was lost
+    is said in a warning."""
+    from kartci.logs import recover as salvage_log  # CLI start-up: the log readers
+
+    n = salvage_log(log, out)
+    out_console.print(f"wrote {out}: {n} messages", highlight=False)
+
+
 def _open_loop(log: Path, agent: str | None, ns: str | None, reference: Path | None,
                tolerance: list[str], out: Path) -> None:
     from kartci.realdata.openloop import open_loop  # CLI start-up: PyBullet, scipy (+0.7 s)

@@ -3,12 +3,15 @@ scored, compared with the simulation, and used to fit the simulation's parameter
 
 from __future__ import annotations
 
+import json
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.table import Table
 
+from kartci.atomic import write_text_atomic
 from kartci.cli.common import (
     AllowOutsideOpt,
     BaselinesOpt,
@@ -33,20 +36,38 @@ ProfileOpt = Annotated[Path | None, typer.Option(
     "default: the log's only odometry/pose topic and its only command topic.")]
 
 
+class AlignChoice(StrEnum):
+    """`--align`'s choices (kartci.metrics.alignment.Alignment's values)."""
+
+    NONE = "none"
+    SE3 = "se3"
+    SIM3 = "sim3"
+    ORIGIN = "origin"
+
+
 @app.command("score")
 def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
               baselines: BaselinesOpt = None, strict: StrictOpt = None,
-              allow_outside_paths: AllowOutsideOpt = False) -> None:
+              allow_outside_paths: AllowOutsideOpt = False,
+              align: Annotated[AlignChoice | None, typer.Option(
+                  help="Move the estimate onto the reference before APE / RPE: se3 / sim3 "
+                  "(Umeyama least squares, as evo -a / -as), origin (first poses equal, "
+                  "evo --align_origin) or none; default: the profile's (none).")] = None,
+              align_first: Annotated[int | None, typer.Option(
+                  "--align-first", min=2, help="Fit se3 / sim3 on the first N pose pairs "
+                  "only (evo --n_to_align).")] = None) -> None:
     """Score a recorded log with the same metric code as a run (duration, distance, speeds;
     laps, lap times and cross-track error with a track; localization error with an estimate),
     write the same reports and judge it against baselines/<profile name>.json."""
+    from kartci.metrics.alignment import Alignment  # CLI start-up: numpy, scipy
     from kartci.realdata.score import score_log  # CLI start-up: PyBullet, pandas (+0.7 s)
 
     out = out_dir(out, "score")
     with locked(out):
         clear_reports(out)
         base = baselines_dir(baselines)
-        result = score_log(log, profile, out, base, allow_outside_paths)
+        result = score_log(log, profile, out, base, allow_outside_paths,
+                           None if align is None else Alignment(align.value), align_first)
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "score", [result.name])
@@ -87,12 +108,34 @@ def simreal_cmd(
         finish([result], out)
 
 
+@app.command("localize")
+def localize_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None) -> None:
+    """Replay a real robot's lidar (LaserScan or PointCloud2), IMU and odometry open loop
+    through kartci's localization node, on a map built from the log's own scans at its
+    recorded poses (OUT/map.ply), and score the estimate against the log's pose (APE, as
+    evo_ape); writes OUT/localization.json."""
+    from kartci.realdata.lidarloc import replay_localization  # CLI start-up: small_gicp, scipy
+
+    out = out_dir(out, "localize")
+    r = replay_localization(log, profile, out)
+    doc = {"ape_rmse_m": r.ape.rmse, "ape_max_m": r.ape.max, "poses": r.ape.count,
+           "scans": r.scans, "estimates": r.estimates, "log_s": r.log_s,
+           "wall_s": round(r.wall_s, 3), "map_points": r.map_points}
+    write_text_atomic(out / "localization.json", json.dumps(doc, indent=2) + "\n")
+    out_console.print(f"{log.name}: {r.scans} scans over {r.log_s:.1f} s, {r.estimates} "
+                      f"estimates; APE against its odometry: RMSE {r.ape.rmse:.4f} m, max "
+                      f"{r.ape.max:.4f} m ({r.ape.count} poses); {r.wall_s:.1f} s wall; "
+                      f"wrote {out / 'localization.json'}", highlight=False)
+
+
 @app.command("calibrate")
 def calibrate_cmd(
     log: LogArg,
     params: Annotated[list[str], typer.Option(
-        "--params", help="A parameter to fit: model.NAME (the robot's model) or a full dotted "
-        "path, optionally =LO:HI bounds (default: half to twice its value). Repeat.")],
+        "--params", help="A parameter to fit: model.NAME (the robot's model), a full dotted "
+        "path, or profile.commands.NAME (the profile's base controller: wheel_radius_m, "
+        "max_speed_mps, max_accel_mps2, ...), optionally =LO:HI bounds (default: half to twice "
+        "its value). Repeat.")],
     profile: ProfileOpt = None,
     scenario: Annotated[str | None, typer.Option(
         help="Scenario whose world and robot are fitted (as for simreal).")] = None,
@@ -118,11 +161,11 @@ def calibrate_cmd(
     out = out_dir(out, "calibrate")
     fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out,
                         allow_outside_paths)
-    table = Table("parameter", "start", "fitted", "95 % interval",
+    table = Table("parameter", "start", "fitted", "95 % interval", "note",
                   title=f"calibration ({fit.evaluations} evaluations, {fit.method})",
                   title_justify="left")
-    for p, v, c in zip(fit.params, fit.values, fit.ci95, strict=True):
-        table.add_row(p.path, f"{p.start:.6g}", f"{v:.6g}", f"+- {c:.3g}")
+    for p, e in zip(fit.params, fit.estimates, strict=True):
+        table.add_row(p.path, f"{p.start:.6g}", f"{e.value:.6g}", e.interval(), e.note(p))
     out_console.print(table)
     div = Table("divergence", "before", "after", title_justify="left")
     for name, before in fit.before.items():

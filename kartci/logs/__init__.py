@@ -4,6 +4,9 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+from rosbags.convert.converter import STATIC_MSGTYPE_RENAMES, migrate_message
+from rosbags.typesys.store import Typestore
+
 from kartci.errors import LogError
 from kartci.logs.damage import describe
 from kartci.logs.reader import (
@@ -42,6 +45,27 @@ def _check_output(src: Path, dst: Path) -> None:
         raise LogError(f"{dst}: is a folder; give the path of the .mcap file to write")
 
 
+# ROS 1 message types renamed in ROS 2 (rosbags.convert's table, and its migration of the
+# fields): written under the ROS 2 name, so ROS 2 tools read the copy
+ROS1_RENAMES = {**STATIC_MSGTYPE_RENAMES,
+                "rosgraph_msgs/msg/Log": "rcl_interfaces/msg/Log"}
+# ROS 1 Log levels (1, 2, 4, 8, 16) -> ROS 2's (10, 20, 30, 40, 50)
+_LOG_LEVELS = {1: 10, 2: 20, 4: 30, 8: 40, 16: 50}
+
+
+def ros2_message(m: Any, src: Typestore, dst: Typestore, cache: dict[str, object]) -> Any:
+    """`m` as its ROS 2 type when ROS 2 renamed it (ROS1_RENAMES), else `m` itself."""
+    name = ROS1_RENAMES.get(m.__msgtype__)
+    if name is None or name not in dst.fielddefs:
+        return m
+    out: Any = migrate_message(src, dst, m.__msgtype__, name, cache, m)
+    if name == "rcl_interfaces/msg/Log":  # the header's stamp; the level's new scale
+        out.stamp = dst.types["builtin_interfaces/msg/Time"](
+            sec=m.header.stamp.sec, nanosec=m.header.stamp.nanosec)
+        out.level = _LOG_LEVELS.get(int(m.level), int(m.level))
+    return out
+
+
 def _write(out: McapLogWriter, log: LogReader, topic: str, m: Any, t_ns: int) -> None:
     try:
         out.write(topic, m, t_ns)
@@ -53,7 +77,8 @@ def _write(out: McapLogWriter, log: LogReader, topic: str, m: Any, t_ns: int) ->
 
 
 def extract(src: Path, wanted: list[str], dst: Path) -> int:
-    """Copy some topics of any log into a new MCAP file (ROS 2 types); returns the count.
+    """Copy some topics of any log into a new MCAP file (ROS 2 types, ROS 1 names renamed as
+    ROS1_RENAMES says); returns the count.
 
     Types that only the log defines (a ROS 1 bag's turtlesim/msg/Pose) are written with the
     log's own definitions. The file appears only when the copy is complete (see
@@ -66,6 +91,15 @@ def extract(src: Path, wanted: list[str], dst: Path) -> int:
     for text in notes:
         warn_salvaged(text)
     return n
+
+
+def recover(src: Path, dst: Path) -> int:
+    """Every readable message of every topic of `src` (damaged or not) into `dst`; returns the
+    count. What was lost is in the SalvagedLog warning; nothing readable is a LogError."""
+    wanted = [i.topic for i in topics(src) if i.count > 0]
+    if not wanted:
+        raise LogError(f"{src}: no message could be read; nothing written to {dst}")
+    return extract(src, wanted, dst)
 
 
 def _extract(src: Path, wanted: list[str], dst: Path) -> tuple[int, list[str]]:
@@ -89,9 +123,10 @@ def _extract(src: Path, wanted: list[str], dst: Path) -> tuple[int, list[str]]:
 def _copy(log: LogReader, wanted: list[str], out: McapLogWriter) -> int:
     """The messages copied; none is an error (raised inside `with out`, so no file appears)."""
     n = 0
+    cache: dict[str, object] = {}
     with out:
         for topic, t_ns, m in log.messages(wanted):
-            _write(out, log, topic, m, t_ns)
+            _write(out, log, topic, ros2_message(m, log.typestore, out.store, cache), t_ns)
             n += 1
         if n == 0:
             prefix = f"{log.path}: "
@@ -113,6 +148,7 @@ __all__ = [
     "messages",
     "msg",
     "open_log",
+    "recover",
     "stamp_ns",
     "tables",
     "topics",

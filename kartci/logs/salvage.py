@@ -105,11 +105,21 @@ def _mcap_chunk_records(chunk: Any) -> Iterator[Any]:
     data = _inflate(chunk.compression, chunk.data, chunk.uncompressed_size)
     if chunk.uncompressed_crc and zlib.crc32(data) != chunk.uncompressed_crc:
         raise _DamagedError("a chunk fails its CRC check")
+    yield from _records(data, partial=False)
+
+
+def _records(data: bytes, partial: bool) -> Iterator[Any]:
+    """The schema, channel and message records in a chunk's bytes; `partial`: the bytes are the
+    readable start of a cut chunk, and the record cut off ends the walk quietly."""
     stream = ReadDataStream(BytesIO(data))
     while stream.count < len(data):
+        if partial and stream.count + 9 > len(data):
+            return
         opcode, length = stream.read1(), stream.read8()
         end = stream.count + length
         if end > len(data):
+            if partial:
+                return
             raise _DamagedError("a record runs past the end of its chunk")
         if opcode == 0x03:
             yield Schema.read(stream)
@@ -122,6 +132,50 @@ def _mcap_chunk_records(chunk: Any) -> Iterator[Any]:
         if stream.count > end:
             raise _DamagedError("a record's fields run past its length")
         stream.read(end - stream.count)
+
+
+_CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc, name length
+
+
+def _stream_inflate(compression: str, data: bytes, size: int) -> bytes:
+    """As much of a cut chunk as decompresses: zstd and lz4 frames give up their blocks as
+    they arrive (stream decompression), so every whole block before the cut is recovered."""
+    if compression in ("", "none"):
+        return data[:size]
+    if compression == "zstd":
+        return bytes(zstd.ZstdDecompressor().decompress(data, max_length=size))
+    if compression == "lz4":
+        return bytes(lz4.frame.LZ4FrameDecompressor().decompress(data, max_length=size))
+    raise _DamagedError(f"unknown chunk compression {compression!r}")
+
+
+def _cut_chunk(f: BinaryIO, at: int, size: int, state: _McapState) -> str | None:
+    """The messages of a chunk record starting at byte `at` that the file's end cuts off,
+    by stream decompression; None when no chunk starts there. Returns what was lost, in
+    words (messages estimated from the chunk's size and the recovered messages' mean)."""
+    f.seek(at)
+    head = f.read(_CHUNK_HEAD.size)
+    if len(head) < _CHUNK_HEAD.size or head[0] != 0x06:
+        return None
+    _, _, _, _, full, _, name_len = _CHUNK_HEAD.unpack(head)
+    compression = f.read(min(name_len, 16)).decode("ascii", errors="replace")
+    f.seek(8, 1)  # the records' compressed length: the file ends before it
+    before = len(state.into.found)
+    try:
+        raw = _stream_inflate(compression, f.read(max(0, size - f.tell())), full)
+        for rec in _records(raw, partial=True):
+            state.take(rec)
+    except Exception:  # a damaged frame raises anything: keep what came before it
+        pass
+    got = len(state.into.found) - before
+    used = sum(len(d) + 31 for _, _, d in state.into.found[before:])  # message records' bytes
+    where = f"the file ends inside a chunk at byte {size}"
+    if got == 0:
+        return (f"{where} ({compression or 'uncompressed'}, {full} bytes unpacked): none of "
+                "its messages could be recovered (the cut falls in its first block)")
+    lost = round(max(0, full - used) / (used / got))
+    return (f"{where}: {count_of(got, 'message')} recovered from it by stream "
+            f"decompression, about {count_of(lost, 'message')} lost with its rest")
 
 
 @dataclass
@@ -166,12 +220,15 @@ def read_mcap(path: Path, part: int, into: Salvage) -> None:
         records = StreamReader(f, emit_chunks=True, record_size_limit=size).records
         data_ended = False
         while True:
+            at = f.tell()  # the stream reads exactly: here the next record starts
             try:
                 rec = next(records)
             except StopIteration:
                 break
             except Exception as err:  # damaged framing raises anything
-                into.problems.append(_stopped(f, size, err, data_ended, "summary"))
+                stopped = _stopped(f, size, err, data_ended, "summary")
+                cut = None if data_ended else _cut_chunk(f, at, size, state)
+                into.problems.append(cut or stopped)
                 break
             data_ended = data_ended or isinstance(rec, DataEnd)
             state.take(rec)

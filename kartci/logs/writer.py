@@ -25,7 +25,7 @@ class McapLogWriter:
 
     def __init__(self, path: Path, store: Typestore | None = None) -> None:
         self.path = path
-        self._store = store if store is not None else typestore()
+        self.store = store if store is not None else typestore()
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".partial")
         self._tmp = Path(tmp)
@@ -45,7 +45,7 @@ class McapLogWriter:
         if cid is None:
             sid = self._schemas.get(typename)
             if sid is None:
-                text, _ = self._store.generate_msgdef(typename, ros_version=2)
+                text, _ = self.store.generate_msgdef(typename, ros_version=2)
                 sid = self._writer.register_schema(typename, "ros2msg", text.encode())
                 self._schemas[typename] = sid
             cid = self._writer.register_channel(
@@ -58,7 +58,7 @@ class McapLogWriter:
         once, transient-local, like /tf_static)."""
         typename = message.__msgtype__
         cid = self._channel(topic, typename, latched)
-        data = self._store.serialize_cdr(message, typename)
+        data = self.store.serialize_cdr(message, typename)
         seq = self._seq.get(cid, 0)
         self._seq[cid] = seq + 1
         self._writer.add_message(cid, log_time=t_ns, data=bytes(data), publish_time=t_ns,

@@ -1,5 +1,7 @@
 """Localization errors from the log: the estimate (`localization/odom`) against ground truth
-(`odom`), associated by stamp and compared without alignment (both are in the map frame), with
+(`odom`), associated by stamp and compared without alignment (both are in the map frame) unless
+`align` says otherwise (an imported log's estimate in another frame: `kartci.metrics.alignment`),
+with
 evo's APE / RPE conventions (`kartci.metrics.trajectory`), plus how the estimate converged from
 its initial guess and how often and how long it diverged."""
 
@@ -14,6 +16,7 @@ from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.core.params import Duration_s, Period_s, Size_m
 from kartci.errors import LogError
 from kartci.metrics import ScoreContext
+from kartci.metrics.alignment import Alignment, align
 from kartci.metrics.trajectory import (
     DeltaUnit,
     Relation,
@@ -43,11 +46,19 @@ class LocalizationMetricsParams(MetricParams):
                                 "this does not end a divergence event (noise around the "
                                 "threshold is one event, not two; 0.1 s: one 10 Hz lidar "
                                 "correction), s")
+    # left out of dumps at their defaults: existing scenarios keep their baseline hashes
+    align: Alignment = Field(Alignment.NONE, exclude_if=lambda v: v is Alignment.NONE,
+                             description="the estimate moved onto the reference first: none, "
+                             "se3 / sim3 (Umeyama least squares; evo -a / -as) or origin "
+                             "(first poses equal; evo --align_origin)")
+    align_first: int | None = Field(None, ge=2, le=10**9, exclude_if=lambda v: v is None,
+                                    description="se3 / sim3 fitted on the first N pose pairs "
+                                    "only (evo --n_to_align); none: all")
 
 
 DEFS: dict[str, MetricDef] = {
     "ape_rmse_m": MetricDef("m", Direction.LOWER, 0.002, 0.2, "APE translation RMSE of the "
-                            "localization estimate (evo_ape, no alignment)"),
+                            "localization estimate (evo_ape; aligned as `align` says)"),
     "ape_mean_m": MetricDef("m", Direction.LOWER, 0.002, 0.2, "APE translation mean"),
     "ape_max_m": MetricDef("m", Direction.LOWER, 0.005, 0.2, "APE translation max"),
     "ape_rot_rmse_deg": MetricDef("deg", Direction.LOWER, 0.05, 0.2, "APE rotation RMSE "
@@ -86,6 +97,7 @@ def localization_metrics(ctx: ScoreContext, params: LocalizationMetricsParams) -
         return []
     ref, est = associate(_trajectory(ctx, params.reference_topic),
                          _trajectory(ctx, params.topic), params.max_diff_s)
+    est, _ = align(ref, est, params.align, params.align_first)
     err = ape_errors(ref, est)
     rot = ape_errors(ref, est, Relation.ROTATION_DEG)
     out = [Metric("ape_rmse_m", float(np.sqrt(np.mean(err**2))), "m"),

@@ -8,6 +8,13 @@ recorded sample of every window: x and y error (m), yaw error (rad, weighted 1 m
 and yaw-rate residuals (weighted 0.2 s). Uncertainty: the Gauss-Newton covariance
 s^2 (J^T J)^-1 at the optimum, s^2 = sum of squared residuals / (samples - parameters), given
 as 95 % intervals (1.96 sigma); samples within a window are correlated, so these are optimistic.
+A parameter the divergence does not change with, or whose effect another parameter's mimics
+(J^T J singular), has no interval: it is "not identifiable from this log", with the reason. A
+value at (within 0.1 % of the range from) one of its bounds is flagged with that bound: the
+optimum may lie beyond it, and the model may be missing something (a speed limit) that the
+parameter absorbs. Parameters `profile.commands.NAME` are the profile's base-controller
+kinematics and limits (a differential drive's wheel radius, separation, speed and acceleration
+limits), fitted the same way.
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ import math
 import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -45,17 +53,52 @@ class Param:
     hi: float
 
 
+class Bound(Enum):
+    """Which bound a fitted value sits at."""
+
+    LOWER = "lower"
+    UPPER = "upper"
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One fitted value: its 95 % interval half-width (None: not identifiable, `why`) and the
+    bound it sits at, if any."""
+
+    value: float
+    ci95: float | None
+    why: str = ""
+    bound: Bound | None = None
+
+    def interval(self) -> str:
+        """The interval as printed: a number, or why there is none."""
+        return f"+- {self.ci95:.3g}" if self.ci95 is not None else (
+            f"not identifiable from this log: {self.why}")
+
+    def note(self, p: Param) -> str:
+        """The bound flag, as printed."""
+        if self.bound is None:
+            return ""
+        at = p.lo if self.bound is Bound.LOWER else p.hi
+        return f"at its {self.bound.value} bound {at:g}: widen it, or the model lacks something"
+
+
 @dataclass(frozen=True)
 class Fit:
-    """What a calibration found: values, 95 % intervals, divergence before and after."""
+    """What a calibration found: values with intervals and bound flags, divergence before and
+    after."""
 
     params: tuple[Param, ...]
-    values: tuple[float, ...]
-    ci95: tuple[float, ...]
+    estimates: tuple[Estimate, ...]
     before: dict[str, float]
     after: dict[str, float]
     evaluations: int
     method: str = "scipy.optimize.least_squares (trf, bounded, 1 % forward differences)"
+
+    @property
+    def values(self) -> tuple[float, ...]:
+        """The fitted values, in the order of `params`."""
+        return tuple(e.value for e in self.estimates)
 
     def overrides(self) -> list[str]:
         """The fitted values as `--set` overrides."""
@@ -64,9 +107,10 @@ class Fit:
     def to_json(self) -> dict[str, Any]:
         """A plain JSON document of the fit."""
         return {"method": self.method, "evaluations": self.evaluations,
-                "params": {p.path: {"start": p.start, "bounds": [p.lo, p.hi], "value": v,
-                                    "ci95": c}
-                           for p, v, c in zip(self.params, self.values, self.ci95, strict=True)},
+                "params": {p.path: {"start": p.start, "bounds": [p.lo, p.hi], "value": e.value,
+                                    "ci95": e.ci95, "not_identifiable": e.why or None,
+                                    "at_bound": e.bound.value if e.bound else None}
+                           for p, e in zip(self.params, self.estimates, strict=True)},
                 "before": self.before, "after": self.after}
 
 
@@ -79,17 +123,25 @@ def _lookup(data: Any, path: str) -> Any:
     return data
 
 
-def parse_params(setup: SimSetup, given: Sequence[str]) -> tuple[Param, ...]:
-    """`model.NAME` (the agent's model) or a full dotted path, optionally `=LO:HI`; default
-    bounds: half to twice the starting value."""
+PROFILE = "profile."  # parameters of the import profile rather than the scenario
+
+
+def parse_params(setup: SimSetup, given: Sequence[str],
+                 profile: Profile | None = None) -> tuple[Param, ...]:
+    """`model.NAME` (the agent's model), a full dotted path or `profile.commands.NAME` (the
+    profile's), optionally `=LO:HI`; default bounds: half to twice the starting value."""
     agent = next(iter(setup.scenario.agents))
     data = setup.scenario.model_dump(mode="json")
+    data["profile"] = profile.model_dump(mode="json") if profile is not None else {}
     out = []
     for item in given:
         key, _, bounds = item.partition("=")
         key = key.strip()
-        path = key if key.startswith("agents.") else f"agents.{agent}.{key}"
+        path = key if key.startswith(("agents.", PROFILE)) else f"agents.{agent}.{key}"
         value = _lookup(data, path)
+        if value is None and path.startswith(PROFILE):
+            raise SpecError(f"--params {key}: the profile sets no value to start from; set "
+                            "one in the profile")
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise SpecError(f"--params {key}: {value!r} is not a number")
         lo, hi = (0.5 * value, 2.0 * value) if not bounds else _bounds(key, bounds)
@@ -123,9 +175,12 @@ class Objective:
         self.calls = 0
 
     def setup(self, values: Sequence[float]) -> SimSetup:
-        """The scenario with these parameter values."""
-        sets = [f"{p.path}={float(v)!r}" for p, v in zip(self.params, values, strict=True)]
-        return sim_setup(self.profile, self.scenario, [*self.base, *sets])
+        """The scenario (and profile) with these parameter values."""
+        pairs = list(zip(self.params, values, strict=True))
+        sets = [f"{p.path}={float(v)!r}" for p, v in pairs if not p.path.startswith(PROFILE)]
+        profile = with_values(self.profile, {p.path.removeprefix(PROFILE): float(v)
+                                             for p, v in pairs if p.path.startswith(PROFILE)})
+        return sim_setup(profile, self.scenario, [*self.base, *sets])
 
     def runs(self, values: Sequence[float]) -> dict[str, Any]:
         """Windowed and whole-log runs with these values."""
@@ -164,6 +219,20 @@ class Objective:
         return divergence(t, self.drive_at(t), sim_w, ta, self.drive_at(ta), sim_a)
 
 
+def with_values(profile: Profile, values: dict[str, float]) -> Profile:
+    """The profile with these dotted fields (`commands.max_speed_mps`) set."""
+    if not values:
+        return profile
+    data = profile.model_dump()
+    for path, value in values.items():
+        *parents, last = path.split(".")
+        node = data
+        for part in parents:
+            node = node[part]
+        node[last] = value
+    return Profile.model_validate(data)
+
+
 def calibrate(objective: Objective) -> Fit:
     """Fit the objective's parameters; divergence before (start values) and after."""
     params = objective.params
@@ -172,21 +241,53 @@ def calibrate(objective: Objective) -> Fit:
     result = least_squares(objective, np.ones(len(params)), bounds=(lo, hi), method="trf",
                            diff_step=0.01, x_scale=1.0, xtol=1e-4, ftol=1e-6, max_nfev=60)
     values = [float(s * p.start) for s, p in zip(result.x, params, strict=True)]
-    ci = _ci95(result.jac, result.fun, params)
+    estimates = estimate(result.jac, result.fun, params, values)
     before = objective.metrics([p.start for p in params])
     after = objective.metrics(values)
-    return Fit(params, tuple(values), ci, before, after, objective.calls)
+    return Fit(params, estimates, before, after, objective.calls)
 
 
-def _ci95(jac: np.ndarray, fun: np.ndarray, params: tuple[Param, ...]) -> tuple[float, ...]:
+def _at_bound(p: Param, value: float) -> Bound | None:
+    tol = 1e-3 * (p.hi - p.lo)
+    return (Bound.LOWER if value <= p.lo + tol else Bound.UPPER if value >= p.hi - tol
+            else None)
+
+
+def _unidentifiable(jac: np.ndarray, params: tuple[Param, ...]) -> dict[int, str]:
+    """Why some parameters have no interval: the divergence does not change with one (a zero
+    Jacobian column), or another's effect mimics it (columns nearly parallel)."""
+    norms = np.linalg.norm(jac, axis=0)
+    why = {i: "the divergence does not change with it (the log does not excite it)"
+           for i in range(len(params)) if norms[i] <= 1e-12 * max(float(norms.max()), 1e-300)}
+    unit = jac / np.where(norms > 0, norms, 1.0)
+    moving = [i for i in range(len(params)) if i not in why]
+    parallel = {i: next((j for j in moving if j != i
+                         and abs(float(unit[:, i] @ unit[:, j])) > 1 - 1e-9), None)
+                for i in moving}
+    why.update({i: f"its effect cannot be told apart from {params[j].path}'s (fix one of them)"
+                for i, j in parallel.items() if j is not None})
+    return why
+
+
+def estimate(jac: np.ndarray, fun: np.ndarray, params: tuple[Param, ...],
+             values: Sequence[float]) -> tuple[Estimate, ...]:
+    """Each value with its Gauss-Newton 95 % interval, or why it has none, and its bound."""
     m, n = jac.shape
     s2 = float(fun @ fun) / max(m - n, 1)
-    try:
-        cov = np.linalg.inv(jac.T @ jac) * s2
-    except np.linalg.LinAlgError:
-        return tuple(math.inf for _ in params)
-    return tuple(float(1.96 * math.sqrt(max(cov[i, i], 0.0)) * p.start)
-                 for i, p in enumerate(params))
+    why = _unidentifiable(jac, params)
+    free = [i for i in range(n) if i not in why]
+    sigma = np.full(n, math.nan)
+    if free:
+        sub = jac[:, free]
+        try:
+            cov = np.linalg.inv(sub.T @ sub) * s2
+            sigma[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        except np.linalg.LinAlgError:
+            why.update({i: "the fit's curvature is singular in it" for i in free})
+    return tuple(Estimate(float(v), None if i in why or not math.isfinite(sigma[i])
+                          else float(1.96 * sigma[i] * p.start), why.get(i, ""),
+                          _at_bound(p, float(v)))
+                 for i, (p, v) in enumerate(zip(params, values, strict=True)))
 
 
 def overlay_yaml(fit: Fit, log: str) -> str:
@@ -194,8 +295,9 @@ def overlay_yaml(fit: Fit, log: str) -> str:
     lines = [f"# kartci calibrate of {log}: {fit.method}",
              f"# windowed APE {fit.before['simreal_ape_window_rmse_m']:.4g} m -> "
              f"{fit.after['simreal_ape_window_rmse_m']:.4g} m"]
-    for p, v, c in zip(fit.params, fit.values, fit.ci95, strict=True):
-        lines.append(f"{p.path}: {json.dumps(v)}  # start {p.start:g}, 95 % +- {c:.3g}")
+    for p, e in zip(fit.params, fit.estimates, strict=True):
+        note = "; ".join(x for x in (e.interval(), e.note(p)) if x)
+        lines.append(f"{p.path}: {json.dumps(e.value)}  # start {p.start:g}, 95 % {note}")
     return "\n".join(lines) + "\n"
 
 
@@ -208,7 +310,7 @@ def calibrate_log(log: Path, profile_path: Path | None, scenario: str | None,
     types = {role: i.msgtype for role, i in info.items()}
     setup = sim_setup(profile, scenario, overrides)
     check_commands(setup, profile, types)
-    params = parse_params(setup, names)
+    params = parse_params(setup, names, profile)
     with tempfile.TemporaryDirectory() as tmp:
         imported = Path(tmp) / "imported.mcap"
         import_log(log, profile, types, imported)

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from dataclasses import dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -14,9 +16,19 @@ import numpy as np
 
 from kartci import core
 from kartci.errors import LogError
-from kartci.logs import SCENARIO_TOPIC, McapLogWriter, header, msg, open_log, stamp_ns
-from kartci.logs.types import for_writing, yaw_of
-from kartci.realdata.profile import Profile
+from kartci.logs import (
+    SCENARIO_TOPIC,
+    LogReader,
+    McapLogWriter,
+    header,
+    msg,
+    open_log,
+    stamp_ns,
+)
+from kartci.logs.types import for_writing, typestore, yaw_of
+from kartci.metrics.alignment import Alignment
+from kartci.realdata.profile import PoseRole, Profile
+from kartci.realdata.tfchain import TF_TYPES, TfTree
 from kartci.scenario import Scenario
 from kartci.scenario.dispatch import context
 from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
@@ -32,18 +44,20 @@ LIDAR_TOPIC = {"sensor_msgs/msg/LaserScan": "scan",
 MAX_DURATION_S = 3600.0  # a scenario's limit; longer logs are recorded as this long
 
 
-def imported_scenario(profile: Profile, duration_s: float) -> Scenario:
+def imported_scenario(profile: Profile, duration_s: float, start: str = "") -> Scenario:
     """The scenario an imported log records: world and robot `recorded`, the profile's track,
-    the motion metrics and, with an estimate, the localization metrics."""
+    the motion metrics and, with an estimate, the localization metrics; `start`: what time 0 s
+    of the imported log is (said once, in the description)."""
     metrics: dict[str, Any] = {"motion": {}}
     if profile.estimate is not None:
-        metrics["localization"] = {"topic": ROLE_TOPIC["estimate"]}
+        metrics["localization"] = {"topic": ROLE_TOPIC["estimate"], "align": profile.align,
+                                   "align_first": profile.align_first}
     world: dict[str, Any] = {"kind": "recorded", "description": profile.description}
     if profile.track is not None:
         world["track"] = profile.track
     return Scenario.model_validate({
-        "name": profile.name, "description": profile.description or f"imported log "
-        f"({profile.name})", "world": world,
+        "name": profile.name, "description": (profile.description or f"imported log "
+                                              f"({profile.name})") + start, "world": world,
         "agents": {profile.agent: {"model": {"kind": "recorded"},
                                    "controller": {"type": "recorded"}}},
         "duration_s": min(max(duration_s, 1e-3), MAX_DURATION_S), "metrics": metrics,
@@ -63,10 +77,12 @@ def _stamp(m: Any, t_ns: int) -> int:
     return t if t > 0 else t_ns
 
 
-def odometry_of(poses: list[tuple[int, Any]], frame: str) -> Iterator[tuple[int, Any]]:
-    """nav_msgs/Odometry (ROS 2) for each pose message; the twist (in the body frame) is the
-    message's own for Odometry, else from finite differences of the poses."""
-    ts = np.array([_stamp(m, t) for t, m in poses], dtype=np.int64)
+def odometry_of(poses: list[tuple[int, Any]], frame: str,
+                start_ns: int = 0) -> Iterator[tuple[int, Any]]:
+    """nav_msgs/Odometry (ROS 2) for each pose message, stamps and log times `start_ns`
+    earlier; the twist (in the body frame) is the message's own for Odometry, else from finite
+    differences of the poses."""
+    ts = np.array([_stamp(m, t) - start_ns for t, m in poses], dtype=np.int64)
     xyz = np.array([_xyzq(m)[:3] for _, m in poses], dtype=float)
     yaw = np.unwrap([yaw_of(_xyzq(m)[3]) for _, m in poses])
     t_s = (ts - ts[0]) * 1e-9
@@ -82,25 +98,32 @@ def odometry_of(poses: list[tuple[int, Any]], frame: str) -> Iterator[tuple[int,
             c, s = math.cos(yaw[i]), math.sin(yaw[i])
             v = (c * vel[i, 0] + s * vel[i, 1], -s * vel[i, 0] + c * vel[i, 1], vel[i, 2],
                  0.0, 0.0, float(wz[i]))
-        yield t_log, _odom(int(ts[i]), frame, (x, y, z), (q.x, q.y, q.z, q.w), v)
+        yield t_log - start_ns, _odom(int(ts[i]), frame, (x, y, z), (q.x, q.y, q.z, q.w), v)
+
+
+_ZEROS36 = np.zeros(36)  # every imported covariance (read-only: shared by the messages)
 
 
 def _odom(t_ns: int, frame: str, xyz: tuple[float, float, float],
           q: tuple[float, float, float, float], v: tuple[float, ...]) -> Any:
-    def vec(a: float, b: float, c: float) -> Any:
-        return msg("geometry_msgs/msg/Vector3", x=float(a), y=float(b), z=float(c))
-
-    pose = msg("geometry_msgs/msg/Pose",
-               position=msg("geometry_msgs/msg/Point", x=float(xyz[0]), y=float(xyz[1]),
-                            z=float(xyz[2])),
-               orientation=msg("geometry_msgs/msg/Quaternion", x=float(q[0]), y=float(q[1]),
-                               z=float(q[2]), w=float(q[3])))
-    twist = msg("geometry_msgs/msg/Twist", linear=vec(*v[:3]), angular=vec(*v[3:]))
-    zeros = np.zeros(36)
-    return msg("nav_msgs/msg/Odometry", header=header(t_ns, frame), child_frame_id="base_link",
-               pose=msg("geometry_msgs/msg/PoseWithCovariance", pose=pose, covariance=zeros),
-               twist=msg("geometry_msgs/msg/TwistWithCovariance", twist=twist,
-                         covariance=zeros))
+    """A nav_msgs/Odometry (the classes taken once: a long log builds tens of thousands)."""
+    t = typestore().types
+    vec = t["geometry_msgs/msg/Vector3"]
+    sec, nsec = divmod(t_ns, 1_000_000_000)
+    pose = t["geometry_msgs/msg/Pose"](
+        position=t["geometry_msgs/msg/Point"](x=float(xyz[0]), y=float(xyz[1]),
+                                              z=float(xyz[2])),
+        orientation=t["geometry_msgs/msg/Quaternion"](x=float(q[0]), y=float(q[1]),
+                                                      z=float(q[2]), w=float(q[3])))
+    twist = t["geometry_msgs/msg/Twist"](linear=vec(x=float(v[0]), y=float(v[1]),
+                                                    z=float(v[2])),
+                                         angular=vec(x=float(v[3]), y=float(v[4]),
+                                                     z=float(v[5])))
+    return t["nav_msgs/msg/Odometry"](
+        header=t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](
+            sec=sec, nanosec=nsec), frame_id=frame), child_frame_id="base_link",
+        pose=t["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=_ZEROS36),
+        twist=t["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=_ZEROS36))
 
 
 def _destinations(profile: Profile, types: dict[str, str]) -> dict[str, str]:
@@ -118,44 +141,166 @@ def _destinations(profile: Profile, types: dict[str, str]) -> dict[str, str]:
     return out
 
 
-def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Scenario:
-    """Write `dst` (a kartci run log) from `log` as the profile maps it; returns its scenario.
-    `types`: the message type of each role's topic (from `check_profile`)."""
-    ns = profile.agent
+@dataclass(frozen=True)
+class Imported:
+    """What an import wrote: the recorded scenario, and what a reader should be told."""
+
+    scenario: Scenario
+    warnings: tuple[str, ...]
+
+
+@dataclass
+class _Collected:
+    """What the import read from the log: each pose role's (log time, message) pairs, the
+    copied messages (destination topic, log time, message), each pose role's frame."""
+
+    poses: dict[str, list[tuple[int, Any]]]
+    other: list[tuple[str, int, Any]]
+    frames: dict[str, str]
+
+
+def _pose_roles(profile: Profile) -> dict[str, PoseRole]:
+    return {"pose": profile.pose,
+            **({"estimate": profile.estimate} if profile.estimate is not None else {})}
+
+
+def _collect(log: Path, reader: LogReader, profile: Profile, types: dict[str, str]
+             ) -> _Collected:
     copy = _destinations(profile, types)
-    poses: dict[str, list[tuple[int, Any]]] = {"pose": [], "estimate": []}
-    pose_roles = {profile.pose.topic: "pose"}
-    if profile.estimate is not None:
-        pose_roles[profile.estimate.topic] = "estimate"
-    other: list[tuple[str, int, Any]] = []
-    frames = {role.topic: role.frame_id for role, _ in profile.roles().values()
+    roles = _pose_roles(profile)
+    by_topic = {r.topic: name for name, r in roles.items() if not r.is_tf}
+    tf_topics = {r.topic for r in roles.values() if r.is_tf}
+    if tf_topics:  # the static edges of the chain, wherever the log has them
+        tf_topics |= {i.topic for i in reader.topics()
+                      if i.topic.endswith("tf_static") and i.msgtype in TF_TYPES}
+    checks = {role.topic: role.frame_id for role, _ in profile.roles().values()
               if role.frame_id is not None}
+    got = _Collected({name: [] for name in roles}, [], {})
+    tree = TfTree()
+    for topic, t_ns, m in reader.messages([*by_topic, *tf_topics, *copy]):
+        _check_frame(log, checks, topic, m)
+        if topic in tf_topics:
+            tree.add(m, static=topic.endswith("tf_static"))
+        elif topic in by_topic:
+            got.poses[by_topic[topic]].append((t_ns, m))
+            got.frames.setdefault(by_topic[topic], _frame(m))
+        else:
+            got.other.append((copy[topic], t_ns, m))
+    for name, role in roles.items():
+        if role.is_tf:
+            others = [p for other, p in got.poses.items() if other != name and p]
+            got.poses[name] = _tf_poses(log, tree, role, others[0] if others else None)
+            got.frames[name] = _frame_name(role.parent)
+    return got
+
+
+def _frame_name(name: str | None) -> str:
+    return (name or "").lstrip("/")
+
+
+def _tf_poses(log: Path, tree: TfTree, role: PoseRole, at: list[tuple[int, Any]] | None
+              ) -> list[tuple[int, Any]]:
+    """The TF chain's poses as PoseStamped, at the other trajectory's stamps (`at`), else at
+    the chain's own."""
+    parent, child = role.parent or "", role.child or ""
+    try:
+        stamps = (np.array([_stamp(m, t) for t, m in at], np.int64) if at
+                  else tree.stamps(parent, child))
+        t_ns, xyz, quat = tree.lookup(parent, child, stamps)
+    except LogError as err:
+        raise LogError(f"{log}: {err}") from err
+    if len(t_ns) == 0:
+        raise LogError(f"{log}: the TF chain from '{parent}' to '{child}' covers none of the "
+                       "other pose's stamps")
+    return [(int(t), msg("geometry_msgs/msg/PoseStamped", header=header(int(t), parent),
+                         pose=msg("geometry_msgs/msg/Pose",
+                                  position=msg("geometry_msgs/msg/Point", x=p[0], y=p[1],
+                                               z=p[2]),
+                                  orientation=msg("geometry_msgs/msg/Quaternion", x=q[0],
+                                                  y=q[1], z=q[2], w=q[3]))))
+            for t, p, q in zip(t_ns, xyz.tolist(), quat.tolist(), strict=True)]
+
+
+def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Imported:
+    """Write `dst` (a kartci run log) from `log` as the profile maps it; returns its scenario
+    and warnings. `types`: the message type of each role's topic (from `check_profile`)."""
+    ns = profile.agent
     with open_log(log) as reader:
         store = for_writing(reader.typestore)
-        for topic, t_ns, m in reader.messages([*pose_roles, *copy]):
-            _check_frame(log, frames, topic, m)
-            if topic in pose_roles:
-                poses[pose_roles[topic]].append((t_ns, m))
-            else:
-                other.append((copy[topic], t_ns, m))
+        got = _collect(log, reader, profile, types)
+    poses = got.poses
     if not poses["pose"]:
         raise LogError(f"{log}: {profile.pose.topic} holds no readable pose")
-    t0 = min(t for t, _ in poses["pose"])
-    t1 = max(t for t, _ in poses["pose"])
-    scenario = imported_scenario(profile, (t1 - t0) * 1e-9)
+    start = _start_ns(got)  # one time base: seconds since the log's start
+    t0 = min(t for t, _ in poses["pose"]) - start
+    t1 = max(t for t, _ in poses["pose"]) - start
+    scenario = imported_scenario(profile, (t1 - t0) * 1e-9, _said(start))
     out: list[tuple[str, int, Any]] = [
         (SCENARIO_TOPIC, t0, msg("std_msgs/msg/String", data=scenario.model_dump_json()))]
     if profile.track is not None:
         out.append((TRACK_TOPIC, t0, msg("std_msgs/msg/String", data=_read(profile.track))))
     for role, name in (("pose", "odom"), ("estimate", "estimate")):
-        if poses[role]:
-            out += [(f"/{ns}/{name}", t, m) for t, m in odometry_of(poses[role], "map")]
-    out += other
+        if poses.get(role):
+            out += [(f"/{ns}/{name}", t, m)
+                    for t, m in odometry_of(poses[role], "map", start)]
+    out += [(topic, t - start, _shifted(m, start)) for topic, t, m in got.other]
     out.sort(key=lambda item: item[1])
     with McapLogWriter(dst, store) as writer:
         for topic, t_ns, m in out:
             writer.write(topic, m, t_ns)
-    return scenario
+    return Imported(scenario, frame_warnings(profile, got.frames))
+
+
+def _header_ns(m: Any) -> int:
+    hdr = getattr(m, "header", None)
+    return stamp_ns(hdr) if hdr is not None else 0
+
+
+def _start_ns(got: _Collected) -> int:
+    """The imported log's start: its earliest log time or header stamp (unset stamps, 0,
+    aside)."""
+    times = [t for p in got.poses.values() for t, _ in p]
+    times += [_stamp(m, t) for p in got.poses.values() for t, m in p]
+    times += [t for _, t, _ in got.other]
+    times += [s for s in (_header_ns(m) for _, _, m in got.other) if s > 0]
+    return min(times)
+
+
+def _said(start_ns: int) -> str:
+    """Time 0 s of an imported log, in words: a date for wall-clock stamps, else the stamp
+    (a simulator's clock)."""
+    if start_ns >= 10**18:  # after 2001-09-09: a wall clock
+        when = datetime.fromtimestamp(start_ns // 10**9, UTC).strftime("%Y-%m-%dT%H:%M:%S")
+        return f"; t = 0 s is {when}.{start_ns % 10**9 // 10**6:03d}Z"
+    return f"; t = 0 s is stamp {start_ns * 1e-9:.3f} s"
+
+
+def _shifted(m: Any, start_ns: int) -> Any:
+    """A copied message with its header stamp `start_ns` earlier (unset stamps stay 0)."""
+    t = _header_ns(m)
+    if t > 0:
+        sec, nsec = divmod(max(t - start_ns, 0), 1_000_000_000)
+        m.header.stamp = typestore().types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec)
+    return m
+
+
+def _frame(m: Any) -> str:
+    return str(getattr(getattr(m, "header", None), "frame_id", "") or "").lstrip("/")
+
+
+def frame_warnings(profile: Profile, frames: dict[str, str]) -> tuple[str, ...]:
+    """A reference and an estimate in different frames compared without alignment: the APE
+    then measures the offset between the frames (odometry against AMCL's map: metres), not
+    the estimate. Told, with the fix; not refused (the frames may coincide by construction)."""
+    ref, est = frames.get("pose"), frames.get("estimate")
+    if profile.estimate is None or not ref or not est or ref == est:
+        return ()
+    if profile.align is not Alignment.NONE:
+        return ()
+    return (f"the reference {profile.pose.topic} is in frame '{ref}' and the estimate "
+            f"{profile.estimate.topic} in '{est}', compared without alignment: APE includes "
+            "the offset between the frames; align them with --align se3 (sim3 for an estimate "
+            "without scale, origin for the start pose) or `align:` in the profile",)
 
 
 def _check_frame(log: Path, frames: dict[str, str], topic: str, m: Any) -> None:

@@ -16,7 +16,7 @@ import numpy as np
 from kartci import core
 from kartci.core import AgentContext, RobotParams
 from kartci.errors import LogError, SpecError
-from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, open_log, tables
+from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, open_log, tables, topics
 from kartci.logs.types import for_writing
 from kartci.metrics import recorded_scenario
 from kartci.realdata.builtin import RecordedRobot
@@ -35,8 +35,10 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
     kind = lookup(name)
     params: Any = None
     model: RobotParams = RecordedRobot()
+    info = topics(log)  # a missing or unreadable file is its own one-line error
     try:
-        scenario = recorded_scenario(tables(log, [SCENARIO_TOPIC]), log)
+        scenario = (recorded_scenario(tables(log, [SCENARIO_TOPIC]), log)
+                    if any(i.topic == SCENARIO_TOPIC for i in info) else None)
     except LogError:
         scenario = None
     if scenario is not None:
@@ -48,11 +50,18 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
                 params = spec.controller
             params = spec.nodes.get(name, params)
     if namespace is None:
-        raise SpecError(f"{log}: not a kartci run log; name the robot's namespace (--ns)")
+        listed = ", ".join(f"{i.topic} ({i.msgtype})" for i in info) or "none"
+        raise SpecError(f"{log}: not a kartci run log (no {SCENARIO_TOPIC}); name the robot's "
+                        f"namespace its {name} inputs are under (--ns); topics: {listed}")
     if params is None:
         params = kind.params(type=name) if isinstance(kind, core.Controller) else kind.params()
     ctx = AgentContext(namespace, model, ())
-    return kind.factory(params, ctx), namespace
+    if scenario is None and (kind.robots or kind.fits is not None):
+        raise SpecError(f"{log}: {name} runs on {' or '.join(kind.kinds()) or 'no registered'} "
+                        "robots, and a foreign log's robot is none of them (its kind is "
+                        "`recorded`); `kartci localize` replays its lidar, IMU and odometry "
+                        "through localization, `kartci score` judges its recorded streams")
+    return kind.build(params, ctx), namespace
 
 
 @dataclass
@@ -75,7 +84,8 @@ def replay(agent: Any, namespace: str, log: Path, dst: Path) -> dict[str, int]:
         found = {i.topic for i in reader.topics()}
     missing = sorted(set(full) - found)
     if missing:
-        raise SpecError(f"{log}: the agent reads {', '.join(missing)}, which the log lacks")
+        raise SpecError(f"{log}: the agent reads {', '.join(missing)}, which the log lacks "
+                        f"(it has {', '.join(sorted(found)) or 'no topics'})")
     period_ns = round(agent.period_s * 1e9)
     counts: dict[str, int] = {}
     with McapLogWriter(dst, store) as out:

@@ -24,22 +24,58 @@ from kartci.sim.session import build_world
 Converter = Callable[[str, Any, int], list[tuple[str, Any]]]
 
 
-def diff_drive(role: CommandRole) -> Converter:
+def _clamp(value: float, limit: float | None) -> float:
+    return value if limit is None else min(max(value, -limit), limit)
+
+
+class DiffDrive:
     """Twist -> wheel speeds as a differential-drive base controller does, with the real
     robot's own kinematics (the profile's), so the simulated wheels' radius and separation can
-    differ from them and be calibrated."""
-    def convert(topic: str, m: Any, t_ns: int) -> list[tuple[str, Any]]:
+    differ from them and be calibrated; the profile's speed and acceleration limits applied as
+    the controller's speed limiter does (clamp the command, then its change per tick). With an
+    acceleration limit the command is re-sent every control tick, so the wheels ramp."""
+
+    def __init__(self, role: CommandRole) -> None:
+        self.role = role
+        self.every_tick = role.max_accel_mps2 is not None or role.max_yaw_accel_radps2 is not None
+        self._last: tuple[float, float, int] | None = None  # v m/s, w rad/s, t ns
+
+    def reset(self, v_mps: float, w_radps: float) -> None:
+        """A new window: the robot moves as recorded; ramps start from there."""
+        self._last = (v_mps, w_radps, 0)  # the window's first tick is at sim time 0
+
+    def _limit(self, v: float, w: float, t_ns: int) -> tuple[float, float]:
+        r = self.role
+        v, w = _clamp(v, r.max_speed_mps), _clamp(w, r.max_yaw_rate_radps)
+        if self._last is not None and self.every_tick:
+            dt = max(t_ns - self._last[2], 0) * 1e-9
+            dv, dw = (None if a is None else a * dt
+                      for a in (r.max_accel_mps2, r.max_yaw_accel_radps2))
+            v = self._last[0] + _clamp(v - self._last[0], dv)
+            w = self._last[1] + _clamp(w - self._last[1], dw)
+        self._last = (v, w, t_ns)
+        return v, w
+
+    def __call__(self, topic: str, m: Any, t_ns: int) -> list[tuple[str, Any]]:
+        """The wheel-speed command of a cmd_vel (nothing for other topics)."""
         if topic != "cmd_vel":
             return []
         tw = m.twist if hasattr(m, "twist") else m
         v, w = float(tw.linear.x), float(tw.angular.z)
-        half = role.wheel_separation_m / 2
-        speeds = np.array([(v - w * half) / role.wheel_radius_m,
-                           (v + w * half) / role.wheel_radius_m])
+        if self.every_tick or self.role.max_speed_mps is not None or (
+                self.role.max_yaw_rate_radps is not None):
+            v, w = self._limit(v, w, t_ns)
+        half = self.role.wheel_separation_m / 2
+        speeds = np.array([(v - w * half) / self.role.wheel_radius_m,
+                           (v + w * half) / self.role.wheel_radius_m])
         return [("wheel_cmd", msg("sensor_msgs/msg/JointState", header=header(t_ns, "base_link"),
                                   name=["left_wheel_hinge", "right_wheel_hinge"],
                                   position=np.zeros(0), velocity=speeds, effort=np.zeros(0)))]
-    return convert
+
+
+def diff_drive(role: CommandRole) -> Converter:
+    """The converter of a differential drive's Twist commands (DiffDrive)."""
+    return DiffDrive(role)
 
 
 def as_recorded(topic: str, m: Any, t_ns: int) -> list[tuple[str, Any]]:
@@ -60,10 +96,14 @@ class Feeder:
         self.convert = convert
         self.t0_s = 0.0
         self.last = -1
+        self.every_tick = bool(getattr(convert, "every_tick", False))
 
-    def start(self, t0_s: float) -> None:
-        """Sim time 0 is now log time `t0_s`."""
+    def start(self, t0_s: float, speed_mps: float = 0.0, yaw_rate_radps: float = 0.0) -> None:
+        """Sim time 0 is now log time `t0_s`, where the robot moves as given."""
         self.t0_s, self.last = t0_s, -1
+        reset = getattr(self.convert, "reset", None)
+        if reset is not None:
+            reset(speed_mps, yaw_rate_radps)
 
     def on_message(self, topic: str, message: Any) -> None:
         """Reads nothing."""
@@ -71,7 +111,7 @@ class Feeder:
     def step(self, t_ns: int) -> list[tuple[str, Any]]:
         """The newest command at or before this tick, once."""
         i = bisect.bisect_right(self.times, self.t0_s + t_ns * 1e-9 + 1e-9) - 1
-        if i < 0 or i == self.last:
+        if i < 0 or (i == self.last and not self.every_tick):
             return []
         self.last = i
         _, topic, m = self.commands[i]
@@ -102,7 +142,7 @@ class Plant:
         real = self.drive.at(t0_s)
         robot: Any = self.robot
         robot.reinitialise(real[0], real[1], real[2], math.hypot(real[3], real[4]), real[5])
-        self.feeder.start(t0_s)
+        self.feeder.start(t0_s, real[3], real[5])
         steps = round((t1_s - t0_s) / self.dt_s)
         out = np.empty((steps + 1, 7))
         out[0] = (0.0, *real[:3], *real[3:])

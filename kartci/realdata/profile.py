@@ -10,12 +10,14 @@ import re
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, ValidationError
+from pydantic import Field, ValidationError, model_validator
 
 from kartci import project
 from kartci.core import Frozen
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
+from kartci.metrics.alignment import Alignment
+from kartci.realdata.tfchain import TF_TYPES
 from kartci.scenario.models import Criterion
 from kartci.scenario.yamlio import read_yaml
 
@@ -36,6 +38,25 @@ class TopicRole(Frozen):
     frame_id: str | None = Field(None, description="expected header frame_id; none: any")
 
 
+class PoseRole(TopicRole):
+    """A pose topic, or a TF chain: `topic: /tf` with the `parent` and `child` frames (any
+    chain of /tf and /tf_static edges between them, sampled at the other pose's stamps)."""
+
+    parent: str | None = Field(None, description="TF: the frame the pose is in (map)")
+    child: str | None = Field(None, description="TF: the frame whose pose it is (base_link)")
+
+    @model_validator(mode="after")
+    def _both_frames(self) -> PoseRole:
+        if (self.parent is None) != (self.child is None):
+            raise ValueError("a TF pose names both `parent` and `child`")
+        return self
+
+    @property
+    def is_tf(self) -> bool:
+        """Whether this pose comes from TF (parent and child given) rather than a topic."""
+        return self.parent is not None
+
+
 class CommandRole(TopicRole):
     """The command stream and how the real robot turned it into actuation."""
 
@@ -45,6 +66,18 @@ class CommandRole(TopicRole):
                                   "(differential drive)")
     wheel_separation_m: float = Field(0.15, gt=0.0, description="wheel separation the real "
                                       "robot's base controller uses, m (differential drive)")
+    # the base controller's limits (ros2_controllers' diff_drive_controller has the same):
+    # without them a fitted wheel radius absorbs a speed the real robot never reached
+    max_speed_mps: float | None = Field(None, gt=0.0, le=100.0, description="largest |forward "
+                                        "speed| the base controller commands, m/s; none: no "
+                                        "limit (differential drive)")
+    max_accel_mps2: float | None = Field(None, gt=0.0, le=1000.0, description="largest change "
+                                         "of the commanded speed, m/s^2; none: no limit")
+    max_yaw_rate_radps: float | None = Field(None, gt=0.0, le=100.0, description="largest "
+                                             "|commanded yaw rate|, rad/s; none: no limit")
+    max_yaw_accel_radps2: float | None = Field(None, gt=0.0, le=1000.0, description="largest "
+                                               "change of the commanded yaw rate, rad/s^2; "
+                                               "none: no limit")
 
 
 class Profile(Frozen):
@@ -55,10 +88,16 @@ class Profile(Frozen):
     description: str = Field("", description="one line about the log")
     agent: str = Field("robot", pattern=r"^[a-z0-9_]+$", description="the robot's namespace "
                        "in the imported run log")
-    pose: TopicRole = Field(description="the reference pose: nav_msgs/Odometry, PoseStamped or "
-                            "PoseWithCovarianceStamped")
-    estimate: TopicRole | None = Field(None, description="a pose estimate judged against the "
-                                       "reference (localization error)")
+    pose: PoseRole = Field(description="the reference pose: nav_msgs/Odometry, PoseStamped, "
+                           "PoseWithCovarianceStamped, or a TF chain (topic /tf, parent, "
+                           "child)")
+    estimate: PoseRole | None = Field(None, description="a pose estimate judged against the "
+                                      "reference (localization error); a topic or a TF chain")
+    align: Alignment = Field(Alignment.NONE, description="the estimate moved onto the "
+                             "reference before APE / RPE: none, se3, sim3 (Umeyama; evo -a, "
+                             "-as) or origin (evo --align_origin); `kartci score --align`")
+    align_first: int | None = Field(None, ge=2, description="se3 / sim3 fitted on the first "
+                                    "N pose pairs (evo --n_to_align); none: all")
     commands: CommandRole | None = Field(None, description="the command stream: Twist, "
                                          "TwistStamped, AckermannDriveStamped, Joy, KartCommand")
     imu: TopicRole | None = Field(None, description="sensor_msgs/Imu")
@@ -77,8 +116,9 @@ class Profile(Frozen):
 
     def roles(self) -> dict[str, tuple[TopicRole, tuple[str, ...]]]:
         """Every topic the profile names, with the message types its role accepts."""
-        out: dict[str, tuple[TopicRole, tuple[str, ...]]] = {"pose": (self.pose, POSE_TYPES)}
-        for name, role, types in (("estimate", self.estimate, POSE_TYPES),
+        out: dict[str, tuple[TopicRole, tuple[str, ...]]] = {"pose": (self.pose,
+                                                                     _pose_types(self.pose))}
+        for name, role, types in (("estimate", self.estimate, _pose_types(self.estimate)),
                                   ("commands", self.commands, COMMAND_TYPES),
                                   ("imu", self.imu, IMU_TYPES),
                                   ("lidar", self.lidar, LIDAR_TYPES),
@@ -86,6 +126,10 @@ class Profile(Frozen):
             if role is not None:
                 out[name] = (role, types)
         return out
+
+
+def _pose_types(role: PoseRole | None) -> tuple[str, ...]:
+    return TF_TYPES if role is not None and role.is_tf else POSE_TYPES
 
 
 def load_profile(path: Path, allow_outside: bool = False) -> Profile:
@@ -117,7 +161,7 @@ def auto_profile(log: Path, info: list[TopicInfo]) -> Profile:
         raise SpecError(f"{log}: {what} with messages (topics: {listed}); "
                         "name the pose in a profile (--profile)")
     cmds = [i for i in info if i.msgtype in COMMAND_TYPES and i.count > 0]
-    return Profile(name=name, pose=TopicRole(topic=poses[0].topic),
+    return Profile(name=name, pose=PoseRole(topic=poses[0].topic),
                    commands=CommandRole(topic=cmds[0].topic) if len(cmds) == 1 else None)
 
 
@@ -133,8 +177,10 @@ def check_profile(log: Path, profile: Profile) -> dict[str, TopicInfo]:
             raise SpecError(f"{log}: profile {profile.name}: {name} topic {role.topic} is not in "
                             f"the log (topics: {listed})")
         if found.msgtype not in types:
+            tf = (" (a TF pose: `topic: /tf` with `parent` and `child` frames)"
+                  if name in ("pose", "estimate") else "")
             raise SpecError(f"{log}: profile {profile.name}: {name} topic {role.topic} is "
-                            f"{found.msgtype}; a {name} topic is one of {', '.join(types)}")
+                            f"{found.msgtype}; a {name} topic is one of {', '.join(types)}{tf}")
         if found.count == 0:
             raise SpecError(f"{log}: profile {profile.name}: {name} topic {role.topic} has no "
                             "messages")

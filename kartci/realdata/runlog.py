@@ -4,7 +4,7 @@ marked failed on any error (an earlier good result is never destroyed)."""
 from __future__ import annotations
 
 import shutil
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -14,19 +14,21 @@ from kartci.runner.run import failure_text, mark_failed, score
 from kartci.verdict import write_json_atomic
 
 
-def write_result(folder: Path, name: str, make_log: Callable[[Path], object],
+def write_result(folder: Path, name: str, make_log: Callable[[Path], Sequence[str]],
                  facts: dict[str, Any]) -> None:
-    """`make_log(path)` writes the run log; it is scored into metrics.json and, with `facts`
-    as run.json, moved into `folder` (never through a symlink leading out of OUT)."""
+    """`make_log(path)` writes the run log and returns its warnings; it is scored into
+    metrics.json and, with `facts` and the warnings as run.json, moved into `folder` (never
+    through a symlink leading out of OUT)."""
     check_inside(folder.parent, [folder.name])
     folder.mkdir(parents=True, exist_ok=True)
     mark_failed(folder, name, UNFINISHED)
     run = RunFolder(folder)
     stage = run.new_stage()
     try:
-        make_log(stage.log)
+        warnings = list(make_log(stage.log))
         score(stage.path)
-        write_json_atomic(stage.run_record, {**facts, "log": str(run.log)})
+        write_json_atomic(stage.run_record, {**facts, "log": str(run.log),
+                                             **({"warnings": warnings} if warnings else {})})
         run.adopt(stage)
         run.error.unlink(missing_ok=True)
     except BaseException as err:

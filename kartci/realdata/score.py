@@ -8,24 +8,30 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from kartci.metrics.alignment import Alignment
 from kartci.realdata import simreal
 from kartci.realdata.importer import import_log
-from kartci.realdata.profile import resolve_profile
+from kartci.realdata.profile import Profile, resolve_profile
 from kartci.realdata.runlog import write_result
 from kartci.runner.run import evaluate
 from kartci.verdict.result import ScenarioResult
 
 
 def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
-              allow_outside_paths: bool = False) -> ScenarioResult:
+              allow_outside_paths: bool = False, align: Alignment | None = None,
+              align_first: int | None = None) -> ScenarioResult:
     """Import `log` into OUT/<profile name>/run.mcap, compute metrics.json from it and judge it
-    against `baselines/<profile name>.json`. Bad input (profile, missing topics, a profile's
-    track outside the project without `allow_outside_paths`) raises before anything is
-    written."""
+    against `baselines/<profile name>.json`. `align` / `align_first` replace the profile's
+    (the estimate's alignment onto the reference). Bad input (profile, missing topics, a
+    profile's track outside the project without `allow_outside_paths`) raises before anything
+    is written."""
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
+    update = {k: v for k, v in (("align", align), ("align_first", align_first))
+              if v is not None}
+    profile = Profile.model_validate({**profile.model_dump(), **update})
     types = {role: i.msgtype for role, i in info.items()}
     folder = out / profile.name
-    write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst),
+    write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst).warnings,
                  {"imported_from": str(log.resolve()), "profile": profile.name})
     return evaluate(folder, baselines)
 
@@ -41,8 +47,12 @@ def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
     simreal.check_commands(setup, profile, types)
     name = f"{profile.name}_simreal"
     t0 = time.perf_counter()
-    write_result(out / name, name,
-                 lambda dst: simreal.simreal_log(log, profile, types, setup, window_s, dst),
+
+    def make(dst: Path) -> tuple[str, ...]:
+        simreal.simreal_log(log, profile, types, setup, window_s, dst)
+        return ()
+
+    write_result(out / name, name, make,
                  {"imported_from": str(log.resolve()), "profile": profile.name,
                   "scenario": setup.scenario.name, "overrides": list(setup.overrides),
                   "window_s": window_s})

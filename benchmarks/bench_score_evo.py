@@ -1,0 +1,151 @@
+"""`kartci score` against `evo_ape` on the same file, side by side: wall time of each command as a
+user runs it (a fresh process, start-up included), median of repeats, on a Nav2-like rosbag2
+(MCAP) log: AMCL's pose (`map`) at 20 Hz and wheel odometry (`odom`) at 50 Hz, SE(3)-aligned
+(`--align se3` / `-a`). Both APE RMSEs are printed too: they must agree. Asserts nothing.
+
+evo is GPL and never a kartci dependency: its CLI runs from its own venv (KARTCI_EVO=DIR/bin,
+else .venv-evo/bin, else /tmp/venv-evo/bin).
+
+    .venv/bin/python benchmarks/bench_score_evo.py [--minutes 10] [--repeats 3] [--json OUT]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import zipfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+from scipy.spatial.transform import Rotation
+
+from kartci.bench import Better, Record
+
+ROOT = Path(__file__).resolve().parents[1]
+PROFILE = "name: nav2\npose: {topic: /amcl_pose}\nestimate: {topic: /odom}\n"
+
+
+def evo_bin() -> Path:
+    """The folder of evo's scripts."""
+    for folder in (os.environ.get("KARTCI_EVO", ""), ROOT / ".venv-evo" / "bin",
+                   "/tmp/venv-evo/bin"):
+        if folder and (Path(folder) / "evo_ape").is_file():
+            return Path(folder)
+    sys.exit("evo_ape not found: python3 -m venv .venv-evo && .venv-evo/bin/python -m pip "
+             "install evo")
+
+
+def write_log(path: Path, minutes: float) -> int:
+    """A robot driving loops for `minutes`: odometry drifting in `odom`, AMCL noisy in `map`
+    (odom is map turned 0.4 rad and shifted); returns the message count."""
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    t = store.types
+    rng = np.random.default_rng(0)
+    count = 0
+
+    def pose(ts: float, p: np.ndarray, yaw: float) -> tuple[int, tuple[Any, Any]]:
+        ns = 10**9 * 1000 + round(ts * 1e9)
+        q = Rotation.from_euler("z", yaw).as_quat()
+        hdr = (t["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9),
+               t["geometry_msgs/msg/PoseWithCovariance"](
+                   pose=t["geometry_msgs/msg/Pose"](
+                       position=t["geometry_msgs/msg/Point"](x=p[0], y=p[1], z=0.0),
+                       orientation=t["geometry_msgs/msg/Quaternion"](x=q[0], y=q[1], z=q[2],
+                                                                     w=q[3])),
+                   covariance=np.zeros(36)))
+        return ns, hdr
+
+    with Writer(path, version=8, storage_plugin=StoragePlugin.MCAP) as w:
+        amcl = w.add_connection("/amcl_pose", "geometry_msgs/msg/PoseWithCovarianceStamped",
+                                typestore=store)
+        odom = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=store)
+        zero = t["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+        twist = t["geometry_msgs/msg/TwistWithCovariance"](
+            twist=t["geometry_msgs/msg/Twist"](linear=zero, angular=zero),
+            covariance=np.zeros(36))
+        turn = Rotation.from_euler("z", 0.4)
+        for k in range(round(minutes * 60 * 50)):  # 50 Hz; AMCL every 2.5th tick (20 Hz)
+            ts = k / 50
+            truth = np.array([8 * np.cos(0.05 * ts), 5 * np.sin(0.1 * ts), 0.0])
+            yaw = 0.05 * ts
+            drift = np.array([0.002 * ts, -0.001 * ts, 0.0])
+            ns, (stamp, cov) = pose(ts, turn.apply(truth) + drift, yaw + 0.4)
+            header = t["std_msgs/msg/Header"](stamp=stamp, frame_id="odom")
+            m = t["nav_msgs/msg/Odometry"](header=header, child_frame_id="base_link",
+                                           pose=cov, twist=twist)
+            w.write(odom, ns, store.serialize_cdr(m, "nav_msgs/msg/Odometry"))
+            count += 1
+            if k % 5 in (0, 2):
+                ns, (stamp, cov) = pose(ts, truth + rng.normal(0, 0.05, 3) * [1, 1, 0], yaw)
+                header = t["std_msgs/msg/Header"](stamp=stamp, frame_id="map")
+                a = t["geometry_msgs/msg/PoseWithCovarianceStamped"](header=header, pose=cov)
+                w.write(amcl, ns, store.serialize_cdr(
+                    a, "geometry_msgs/msg/PoseWithCovarianceStamped"))
+                count += 1
+    return count
+
+
+def timed(cmd: list[str], env: dict[str, str]) -> float:
+    """Wall seconds of one command, which must succeed."""
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{proc.stdout}{proc.stderr}")
+    return wall
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--minutes", type=float, default=10.0, help="log length, min")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", type=Path, help="also write the figures to this file")
+    args = parser.parse_args()
+    evo = evo_bin()
+    record = Record("bench_score_evo")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        log = folder / "nav2"
+        n = write_log(log, args.minutes)
+        profile = folder / "nav2.yaml"
+        profile.write_text(PROFILE, encoding="utf-8")
+        (folder / "bl").mkdir()
+        env = {**os.environ, "HOME": str(folder), "MPLBACKEND": "Agg"}  # evo's ~/.evo
+        kartci = [sys.executable, "-m", "kartci.cli", "score", str(log), "--profile",
+                  str(profile), "--align", "se3", "--baselines", str(folder / "bl")]
+        evo_ape = [str(evo / "evo_ape"), "bag2", str(log), "/amcl_pose", "/odom", "-a",
+                   "--no_warnings"]
+        runs: dict[str, Callable[[int], list[str]]] = {
+            "kartci score": lambda i: [*kartci, "--out", str(folder / f"out{i}")],
+            "evo_ape": lambda i: [*evo_ape, "--save_results", str(folder / f"evo{i}.zip")]}
+        print(f"{args.minutes:g} min log, {n} messages; wall s per command (fresh process)")
+        medians = {}
+        for name, make in runs.items():
+            samples = [timed(make(i), env) for i in range(args.repeats)]
+            medians[name] = statistics.median(samples)
+            record.add(f"{name} wall", "s", samples, Better.LOWER)
+            print(f"  {name:26s} median {medians[name]:6.2f}  "
+                  f"({', '.join(f'{s:.2f}' for s in samples)})")
+        with zipfile.ZipFile(folder / "evo0.zip") as z:
+            evo_rmse = json.loads(z.read("stats.json"))["rmse"]
+        doc = json.loads((folder / "out0" / "nav2" / "metrics.json").read_text())
+        ours = doc["metrics"]["ape_rmse_m"]["value"]
+        print(f"APE RMSE: kartci {ours:.9f} m, evo {evo_rmse:.9f} m "
+              f"(difference {abs(ours - evo_rmse):.2e})")
+        print(f"kartci score / evo_ape: {medians['kartci score'] / medians['evo_ape']:.2f}x")
+    if args.json:
+        record.save(args.json)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,204 @@
+"""Open-loop replay of a real robot's log through kartci's localization node: the recorded
+lidar (LaserScan as a planar cloud, or PointCloud2), IMU and odometry (its forward speed as the
+wheel speeds of the node's odometry model) fed on log time, the estimate scored against the
+log's own pose with evo's APE. Without a map, one is built from the log itself: every scan
+placed at the recorded pose, voxel-thinned (so the score measures how well registration and
+the filter follow the recorded motion, not the map's truth)."""
+
+from __future__ import annotations
+
+import math
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from kartci.core import NODES, ROBOTS, AgentContext
+from kartci.errors import SpecError
+from kartci.logs import header, messages, msg
+from kartci.metrics.trajectory import ErrorStats, Trajectory, ape, associate
+from kartci.pointcloud import cloud_xyz, voxel_downsample, write_ply
+from kartci.realdata.importer import import_log
+from kartci.realdata.profile import resolve_profile
+from kartci.track import TRACK_TOPIC
+
+MAP_VOXEL_M = 0.05  # a small robot's scans: a few cm between points
+
+
+@dataclass(frozen=True)
+class LocReplay:
+    """What the replay gave: the estimate's APE against the log's pose, and its cost."""
+
+    ape: ErrorStats  # m
+    scans: int
+    estimates: int
+    log_s: float
+    wall_s: float
+    map_points: int
+
+
+def scan_points(m: Any) -> np.ndarray:
+    """A LaserScan's valid returns as points (N, 3) in its frame (z 0), or a PointCloud2's."""
+    if m.__msgtype__ == "sensor_msgs/msg/PointCloud2":
+        return cloud_xyz(m)
+    r = np.asarray(m.ranges, float)
+    a = float(m.angle_min) + float(m.angle_increment) * np.arange(len(r))
+    ok = np.isfinite(r) & (r >= float(m.range_min)) & (r <= float(m.range_max))
+    return np.column_stack([r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok]), np.zeros(ok.sum())])
+
+
+def _cloud(t_ns: int, xyz: np.ndarray) -> Any:
+    """A PointCloud2 (x, y, z float32) of these points, as the node reads a lidar."""
+    fields = [msg("sensor_msgs/msg/PointField", name=n, offset=4 * i, datatype=7, count=1)
+              for i, n in enumerate("xyz")]
+    data = np.ascontiguousarray(xyz, dtype="<f4").tobytes()
+    return msg("sensor_msgs/msg/PointCloud2", header=header(t_ns, "velodyne_link"), height=1,
+               width=len(xyz), fields=fields, is_bigendian=False, point_step=12,
+               row_step=12 * len(xyz), data=np.frombuffer(data, np.uint8), is_dense=True)
+
+
+@dataclass(frozen=True)
+class _Recorded:
+    t_ns: np.ndarray
+    pose: np.ndarray  # x, y, yaw (unwrapped) per odometry message
+    speed: np.ndarray  # forward m/s
+    imu: list[tuple[int, Any]]
+    scans: list[tuple[int, np.ndarray]]
+
+    def at(self, t_ns: int) -> tuple[float, float, float]:
+        return tuple(float(np.interp(t_ns, self.t_ns, self.pose[:, k]))  # type: ignore[return-value]
+                     for k in range(3))
+
+
+def _read(imported: Path, ns: str) -> _Recorded:
+    odom, imu, scans = [], [], []
+    for topic, _, m in messages(imported, [f"/{ns}/odom", f"/{ns}/imu", f"/{ns}/scan",
+                                           f"/{ns}/velodyne_points"]):
+        stamp = int(m.header.stamp.sec) * 1_000_000_000 + int(m.header.stamp.nanosec)
+        if topic.endswith("/odom"):
+            p, q = m.pose.pose.position, m.pose.pose.orientation
+            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            odom.append((stamp, p.x, p.y, yaw, m.twist.twist.linear.x))
+        elif topic.endswith("/imu"):
+            imu.append((stamp, m))
+        else:
+            scans.append((stamp, scan_points(m)))
+    rows = np.array(odom, float)
+    rows[:, 3] = np.unwrap(rows[:, 3])
+    return _Recorded(rows[:, 0].astype(np.int64), rows[:, 1:4], rows[:, 4], imu, scans)
+
+
+def build_map(rec: _Recorded, path: Path) -> int:
+    """Every scan at the recorded pose of its stamp, thinned; written as PLY. Points."""
+    parts = []
+    for t_ns, xyz in rec.scans:
+        x, y, yaw = rec.at(t_ns)
+        c, s = math.cos(yaw), math.sin(yaw)
+        parts.append(np.column_stack([x + c * xyz[:, 0] - s * xyz[:, 1],
+                                      y + s * xyz[:, 0] + c * xyz[:, 1], xyz[:, 2]]))
+    cloud = voxel_downsample(np.vstack(parts), MAP_VOXEL_M)
+    write_ply(path, cloud, "kartci: a map built from the log's own scans at its recorded poses")
+    return len(cloud)
+
+
+def _start_track(x: float, y: float, yaw: float) -> str:
+    """A 5 m circle through the first recorded pose, tangent to its heading: the node's
+    initial guess is the track's pose 0 m along."""
+    r = 5.0
+    cx, cy = x - r * math.sin(yaw), y + r * math.cos(yaw)
+    a0 = math.atan2(y - cy, x - cx)
+    rows = [f"{cx + r * math.cos(a0 + k * math.tau / 64):.6f},"
+            f"{cy + r * math.sin(a0 + k * math.tau / 64):.6f},1.0,1.0" for k in range(64)]
+    return "# x_m,y_m,w_tr_right_m,w_tr_left_m\n" + "\n".join(rows) + "\n"
+
+
+def _node(map_ply: Path, ns: str, min_range_m: float) -> tuple[Any, Any]:
+    """The localization node on the log's map, and the wheel odometry model its kind uses."""
+    node = NODES.get("localization")
+    kinds = node.kinds()
+    if not kinds:
+        raise SpecError("no registered robot kind has the wheel odometry localization reads")
+    kind = ROBOTS.get(kinds[0])
+    model = kind.params.model_validate({"kind": kinds[0]})
+    params = node.params.model_validate({
+        "map": str(map_ply), "deskew": False, "sensor_height_m": 0.0,
+        "min_range_m": min_range_m, "scan_voxel_m": MAP_VOXEL_M, "map_voxel_m": MAP_VOXEL_M,
+        "max_correspondence_m": 0.3, "registration_std_m": 0.02, "registration_std_rad": 0.01,
+        "initial": {"error_xy_m": (0.0, 0.0), "error_yaw_rad": 0.0, "std_xy_m": 0.05,
+                    "std_yaw_rad": 0.02}})
+    assert kind.odometry is not None  # node.kinds() lists only kinds with odometry
+    return node.build(params, AgentContext(ns, model, ())), kind.odometry(model)
+
+
+def _check_streams(profile: Any, log: Path) -> None:
+    missing = [f"{role} ({what})" for role, what in (("lidar", "LaserScan or PointCloud2"),
+                                                      ("imu", "sensor_msgs/Imu"))
+               if getattr(profile, role) is None]
+    if missing:
+        raise SpecError(f"{log}: localization reads the lidar, the IMU and the odometry; "
+                        f"profile {profile.name} names no {' and no '.join(missing)} topic")
+
+
+def replay_localization(log: Path, profile_path: Path | None, out: Path) -> LocReplay:
+    """Replay `log` through the localization node open loop (see the module docstring); the
+    built map goes to OUT/map.ply."""
+    t_wall = time.perf_counter()
+    profile, info = resolve_profile(log, profile_path)
+    _check_streams(profile, log)
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        imported = Path(tmp) / "imported.mcap"
+        import_log(log, profile, {r: i.msgtype for r, i in info.items()}, imported)
+        rec = _read(imported, profile.agent)
+    n_map = build_map(rec, out / "map.ply")
+    agent, wheels = _node(out / "map.ply", profile.agent, 0.12)
+    agent.on_message(TRACK_TOPIC, msg("std_msgs/msg/String",
+                                      data=_start_track(*rec.pose[0])))
+    est = _run(agent, rec, wheels)
+    ref = Trajectory.planar(rec.t_ns * 1e-9, rec.pose[:, 0], rec.pose[:, 1], rec.pose[:, 2])
+    r, e = associate(ref, est, max_diff_s=0.02)
+    return LocReplay(ape(r, e), len(rec.scans), len(est), float(rec.t_ns[-1] - rec.t_ns[0])
+                     * 1e-9, time.perf_counter() - t_wall, n_map)
+
+
+def _run(agent: Any, rec: _Recorded, wheels: Any) -> Trajectory:
+    """Feed the log in time order, stepping the node every period; its estimates."""
+    feed: list[tuple[int, int, str, Any]] = [(t, 0, "imu", m) for t, m in rec.imu]
+    feed += [(t, 1, "velodyne_points", xyz) for t, xyz in rec.scans]
+    feed += [(int(t), 2, "joint_states", float(v)) for t, v in zip(rec.t_ns, rec.speed,
+                                                                    strict=True)]
+    feed.sort(key=lambda f: (f[0], f[1]))
+    period = round(agent.period_s * 1e9)
+    tick = feed[0][0] - feed[0][0] % period
+    rows: list[tuple[float, float, float, float]] = []
+    for t_ns, _, topic, value in feed:
+        while tick < t_ns:
+            rows += _estimates(agent.step(tick))
+            tick += period
+        agent.on_message(topic, _message(topic, value, t_ns, wheels))
+    t, x, y, yaw = (np.array(c) for c in zip(*rows, strict=True))
+    return Trajectory.planar(t, x, y, np.unwrap(yaw))
+
+
+def _message(topic: str, value: Any, t_ns: int, wheels: Any) -> Any:
+    if topic == "velodyne_points":
+        return _cloud(t_ns, value)
+    if topic == "joint_states":
+        spin = value / wheels.radius_m
+        return msg("sensor_msgs/msg/JointState", header=header(t_ns, "base_link"),
+                   name=list(wheels.joints), position=np.zeros(len(wheels.joints)),
+                   velocity=np.full(len(wheels.joints), spin), effort=np.zeros(0))
+    return value
+
+
+def _estimates(outbox: list[tuple[str, Any]]) -> list[tuple[float, float, float, float]]:
+    out = []
+    for topic, m in outbox:
+        if topic == "localization/odom":
+            p, q = m.pose.pose.position, m.pose.pose.orientation
+            out.append((int(m.header.stamp.sec) + int(m.header.stamp.nanosec) * 1e-9, p.x, p.y,
+                        math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))))
+    return out
