@@ -37,6 +37,7 @@ extensions = [
 myst_enable_extensions = ["colon_fence", "deflist"]
 myst_heading_anchors = 3  # [text](page.md#a-heading) links, checked like any reference
 source_suffix = {".md": "markdown"}
+smartquotes = False  # names, paths and quotes read as typed (and as the tests grep them)
 exclude_patterns = ["_build", "_ext"]
 root_doc = "index"
 

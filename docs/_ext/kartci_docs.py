@@ -125,7 +125,8 @@ def _param_row(p: Any, ctx: Any) -> list[str | list[nodes.Node]]:
         cell.extend([nodes.Text(", ")] if i else [])
         cell.append(nodes.literal(name, name))
     kind = "" if getattr(p, "is_flag", False) else p.display_type(ctx).strip("<>")
-    extra = " (repeatable)" if p.multiple else " (required)" if p.required else ""
+    extra = (" (repeatable)" if p.multiple and "repeatable" not in (p.help or "") else
+             " (required)" if p.required else "")
     return [cell, f"`{kind}`" if kind else "flag", _default(p), (p.help or "") + extra]
 
 
@@ -172,7 +173,8 @@ class MetricsDirective(Directive):
                     for name, d in mset.defs.items()]
             out.append(section(
                 f"metric-set-{mset.name}", f"`{mset.name}`",
-                para(f"{mset.description or '(no description)'} Applies to: {applies}; "
+                para(f"{(mset.description or '(no description)').rstrip('.')}. Applies to: "
+                     f"{applies}; "
                      f"{params}; source: `{core.METRICS.sources.get(mset.name, '?')}`."),
                 table(["metric", "unit", "better", "default tolerance", "definition"], rows,
                       [18, 6, 8, 14, 54])))
