@@ -25,6 +25,8 @@ from sphinx.application import Sphinx
 
 from kartci import core, project
 from kartci.cli import app
+from kartci.project import ProjectConfig
+from kartci.realdata.profile import Profile
 from kartci.scenario import load_scenario
 from kartci.scenario.schema import scenario_schema
 
@@ -207,7 +209,7 @@ def _type_cell(node: Mapping[str, Any]) -> list[nodes.Node]:
     out: list[nodes.Node] = []
     for i, word in enumerate(re.split(r"( \| |list of |map of )", text)):
         if i % 2 == 0 and word in _DEFS:
-            ref = nodes.reference(word, "", refid=nodes.make_id(f"schema-{word}"))
+            ref = nodes.reference(word, "", refid=nodes.make_id(f"{_DEFS_OF[0]}-{word}"))
             ref.append(nodes.literal(word, word))
             out.append(ref)
         elif word:
@@ -215,7 +217,8 @@ def _type_cell(node: Mapping[str, Any]) -> list[nodes.Node]:
     return out
 
 
-_DEFS: set[str] = set()
+_DEFS: set[str] = set()  # the `$defs` of the schema being drawn, and its name (link targets)
+_DEFS_OF = ["scenario"]
 
 
 def _bounds(node: Mapping[str, Any]) -> str:
@@ -266,21 +269,32 @@ _HEADERS = ["field", "type", "default", "bounds", "meaning"]
 _WIDTHS = [14, 16, 10, 12, 48]
 
 
+def file_schemas() -> dict[str, Mapping[str, Any]]:
+    """The JSON Schema of each file kartci reads, by the name the directive takes: scenario
+    files (`kartci schema`), import profiles, and the project file (`kartci.toml`)."""
+    return {"scenario": scenario_schema(), "profile": Profile.model_json_schema(),
+            "project": ProjectConfig.model_json_schema()}
+
+
 class SchemaDirective(Directive):
-    """The scenario file's JSON Schema (`kartci schema`) as tables: the top level and its
-    inline forms, then every model it refers to."""
+    """A file's JSON Schema as tables (argument: `scenario`, `profile` or `project`): the top
+    level and its inline forms, then every model it refers to."""
+
+    optional_arguments = 1
 
     def run(self) -> list[nodes.Node]:
         """The top-level sections, then one per `$defs` model."""
-        schema = scenario_schema()
+        which = self.arguments[0] if self.arguments else "scenario"
+        schema = file_schemas()[which]
         defs: Mapping[str, Any] = schema.get("$defs", {})
         _DEFS.clear()
         _DEFS.update(defs)
+        _DEFS_OF[0] = which
         out: list[nodes.Node] = []
         for where, obj in objects(schema, ""):
-            title = f"`{where}`" if where else "The scenario file (top level)"
+            title = f"`{where}`" if where else f"The {which} file (top level)"
             body = [para(obj["description"])] if "description" in obj else []
-            out.append(section(f"schema-path-{where or 'top'}", title, *body,
+            out.append(section(f"{which}-path-{where or 'top'}", title, *body,
                                table(_HEADERS, schema_rows(obj), _WIDTHS)))
         for name, model in defs.items():
             parts: list[nodes.Node] = []
@@ -293,7 +307,7 @@ class SchemaDirective(Directive):
                 if where:
                     parts.append(para(f"`{where}`:"))
                 parts.append(table(_HEADERS, schema_rows(obj), _WIDTHS))
-            out.append(section(f"schema-{name}", f"`{name}`", *parts))
+            out.append(section(f"{which}-{name}", f"`{name}`", *parts))
         return out
 
 

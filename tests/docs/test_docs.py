@@ -317,6 +317,17 @@ def test_every_scenario_field_is_in_the_reference(site: Path) -> None:
     assert sorted(fields - shown) == []
 
 
+def test_every_profile_and_project_field_is_in_the_reference(site: Path) -> None:
+    from kartci.project import ProjectConfig
+    from kartci.realdata.profile import Profile
+
+    for page, model in (("profile", Profile), ("project", ProjectConfig)):
+        shown = _literals(site / "reference" / f"{page}.html")
+        fields = set(_properties(model.model_json_schema()))
+        assert len(fields) > 5, page
+        assert sorted(fields - shown) == [], page
+
+
 def test_every_builtin_scenario_is_in_the_reference(site: Path) -> None:
     from kartci import project
 
