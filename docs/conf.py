@@ -1,10 +1,11 @@
 """Sphinx configuration of kartci's documentation site.
 
 Why Sphinx + MyST + furo: pages stay Markdown (as README.md and docs/tutorial.md are), while
-Sphinx gives what the reference needs from the code itself: autodoc over the docstrings,
-sphinx-click over the typer app, and small directives of our own (`_ext/kartci_docs.py`) over
-the metric registry, the scenario JSON Schema and the built-in scenarios. rosbags and
-Gymnasium, tools kartci's users already read, use the same stack. Build strictly:
+Sphinx gives what the reference needs from the code itself: autodoc over the docstrings, and
+small directives of our own (`_ext/kartci_docs.py`) over the command line (typer's click
+group; sphinx-click rejects typer's vendored click), the metric registry, the scenario,
+profile and project JSON Schemas and the built-in scenarios. rosbags and Gymnasium, tools
+kartci's users already read, use the same stack. Build strictly:
 
     sphinx-build -W --keep-going -n -b html docs OUT
 
