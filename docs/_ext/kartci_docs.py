@@ -247,11 +247,20 @@ def objects(node: Mapping[str, Any], where: str) -> Iterator[tuple[str, Mapping[
             yield from objects(prop, f"{where}.{name}" if where else name)
     for key in ("anyOf", "oneOf", "allOf"):
         for i, sub in enumerate(node.get(key, ())):
-            yield from objects(sub, f"{where} (form {i + 1})" if "properties" in sub else where)
+            yield from objects(sub, _form(where, sub, i) if "properties" in sub else where)
     for key in ("items", "additionalProperties"):
         sub = node.get(key)
         if isinstance(sub, dict):
             yield from objects(sub, f"{where}[]" if key == "items" else f"{where}.<name>")
+
+
+def _form(where: str, sub: Mapping[str, Any], i: int) -> str:
+    """A name for one of the shapes a field takes: by its kind, and whether it names a file."""
+    props = sub["properties"]
+    kind = props.get("kind", {}).get("const") or props.get("type", {}).get("const")
+    if kind is None:
+        return f"{where} (form {i + 1})"
+    return f"{where} ({kind}, {'a file with some keys replaced' if 'from' in props else 'in full'})"
 
 
 def schema_fields(schema: Mapping[str, Any]) -> set[str]:
