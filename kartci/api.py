@@ -132,7 +132,7 @@ def accept_baselines(run: RunResult | str | Path, names: Sequence[str] = (), *,
     ```python
     result = kartci.run("line_straight", out="reports/latest")
     for accepted in kartci.accept_baselines(result):
-        print("\n".join(accepted.lines()))
+        print("\\n".join(accepted.lines()))
     ```
 
     Args:

@@ -108,7 +108,8 @@ class ScenarioResult:
 
     @property
     def replaced_agents(self) -> dict[str, str]:
-        """Agents driven by an object handed to the Python API, by name: the object's class."""
+        """Agents driven by an object handed to the Python API, by name, each with the object's
+        class."""
         return dict(self.run.get("replaced_agents") or {})
 
     def value(self, name: str) -> float:

@@ -1,0 +1,344 @@
+"""The documentation site (docs/): it builds strictly, a broken reference fails it, its examples
+run, and its generated reference shows every command, option, metric and scenario field.
+
+What runs on a page (docs/index.md says the same to its readers):
+
+- every ```` ```console ```` block, in order, in one empty folder per page: a `$ ` line is a
+  command (ending in `\\` continues it); a `# exit N` comment wants exit code N, else 0; every
+  other non-empty line must appear in what that command printed (whitespace, the tables'
+  box drawing and emoji collapsed);
+- a ```` ```{code-block} LANG ```` with `:caption: PATH` and `:class: file` is written to PATH;
+- a ```` ```{code-block} python ```` with `:class: run` runs with Python in that folder.
+
+Building the site takes about 20 s here (one build, shared by the reference checks); running
+the pages' examples takes about 4 minutes and the broken-reference builds 40 s, so those are
+`long` (`KARTCI_LONG=1`, which .ci/run's second pytest sets).
+"""
+
+from __future__ import annotations
+
+import html
+import os
+import re
+import shlex
+import shutil
+import stat
+import subprocess
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+import typer
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCS = ROOT / "docs"
+FENCE = re.compile(r"^(?P<ticks>```+)(?P<info>[^\n`]*)\n(?P<body>.*?)^(?P=ticks)[ \t]*$",
+                   re.MULTILINE | re.DOTALL)
+OPTION = re.compile(r"^:([\w-]+):[ \t]*(.*)$")
+EXIT = re.compile(r"#\s*exit\s+(\d+)\s*$")
+# the tables' box drawing and the verdicts' emoji: a table cell reads as its words
+BOX = re.compile("[\u2500-\u257f\u2600-\u27bf\ufe0f\U0001f000-\U0001ffff]")
+
+long_only = pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
+                               reason="builds the site or runs every page: set KARTCI_LONG=1")
+
+
+@dataclass(frozen=True)
+class Block:
+    """One fenced block of a page: its language, directive options, text and line."""
+
+    page: Path
+    line: int
+    lang: str
+    options: dict[str, str] = field(default_factory=dict)
+    text: str = ""
+
+    @property
+    def where(self) -> str:
+        return f"{self.page.relative_to(ROOT)}:{self.line}"
+
+    @property
+    def classes(self) -> set[str]:
+        return set(self.options.get("class", "").split())
+
+
+def blocks(page: Path) -> list[Block]:
+    text = page.read_text(encoding="utf-8")
+    out = []
+    for m in FENCE.finditer(text):
+        info = m.group("info").strip()
+        body = m.group("body")
+        options: dict[str, str] = {}
+        if info.startswith("{code-block}"):
+            lang = info.removeprefix("{code-block}").strip()
+            lines = body.splitlines(keepends=True)
+            while lines and (opt := OPTION.match(lines[0].rstrip("\n"))):
+                options[opt.group(1)] = opt.group(2).strip()
+                lines.pop(0)
+            body = "".join(lines).lstrip("\n")
+        else:
+            lang = info.split()[0] if info else ""
+        out.append(Block(page, text.count("\n", 0, m.start()) + 1, lang, options, body))
+    return out
+
+
+def pages() -> list[Path]:
+    return sorted(p for p in DOCS.rglob("*.md") if "_build" not in p.parts)
+
+
+def runnable(page: Path) -> list[Block]:
+    return [b for b in blocks(page) if b.lang == "console" or "file" in b.classes
+            or (b.lang == "python" and "run" in b.classes)]
+
+
+RUN_PAGES = [p for p in pages() if runnable(p)]
+
+
+# --- quick checks of the blocks ------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Command:
+    text: str
+    expect: int
+    output: tuple[str, ...]
+
+
+def commands(block: Block) -> list[Command]:
+    """A console block's commands, each with its exit code and expected output lines."""
+    out: list[Command] = []
+    lines = block.text.splitlines()
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        assert line.startswith("$ "), f"{block.where}: output before any command: {line!r}"
+        cmd = line[2:]
+        while cmd.endswith("\\") and i + 1 < len(lines):
+            i += 1
+            cmd = cmd[:-1] + " " + lines[i].strip()
+        i += 1
+        expected: list[str] = []
+        while i < len(lines) and not lines[i].startswith("$ "):
+            if lines[i].strip() and lines[i].strip() != "...":
+                expected.append(" ".join(lines[i].split()))
+            i += 1
+        m = EXIT.search(cmd)
+        out.append(Command(cmd, int(m.group(1)) if m else 0, tuple(expected)))
+    return out
+
+
+def test_the_site_has_runnable_pages() -> None:
+    names = {p.relative_to(DOCS).as_posix() for p in RUN_PAGES}
+    assert {"getting-started.md", "howto/scenario.md", "howto/python.md"} <= names
+
+
+@pytest.mark.parametrize("page", RUN_PAGES, ids=lambda p: p.relative_to(DOCS).as_posix())
+def test_runnable_blocks_are_well_formed(page: Path) -> None:
+    for b in runnable(page):
+        if b.lang == "console":
+            assert commands(b), f"{b.where}: a console block without a command"
+        elif "file" in b.classes:
+            assert b.options.get("caption"), f"{b.where}: a file block names no path"
+            assert not Path(b.options["caption"]).is_absolute(), b.where
+        else:
+            compile(b.text, b.where, "exec")
+
+
+# --- the pages' examples run ---------------------------------------------------------------
+
+def _environment(tmp_path: Path) -> dict[str, str]:
+    """A `kartci` command from this checkout, and nothing that points kartci elsewhere."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    shim = bin_dir / "kartci"
+    shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m kartci.cli "$@"\n',
+                    encoding="utf-8")
+    shim.chmod(shim.stat().st_mode | stat.S_IXUSR)
+    drop = ("KARTCI_ROOT", "CI", "GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY", "COLUMNS")
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    # `python` is this interpreter, whose environment has kartci's pytest plugin installed
+    env["PATH"] = os.pathsep.join([str(bin_dir), str(Path(sys.executable).parent),
+                                   env.get("PATH", "")])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
+    env["COLUMNS"] = "200"  # tables as wide as the expected lines, not a terminal's 80
+    return env
+
+
+def run_page(page: Path, tmp_path: Path) -> None:
+    """Every runnable block of `page`, in order, in `tmp_path/work`."""
+    env = _environment(tmp_path)
+    work = tmp_path / "work"
+    work.mkdir()
+    for b in runnable(page):
+        if "file" in b.classes:
+            path = work / b.options["caption"]
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(b.text, encoding="utf-8")
+            continue
+        steps = ([Command(b.text, 0, ())] if b.lang == "python" else commands(b))
+        for c in steps:
+            argv = [sys.executable, "-c", c.text] if b.lang == "python" else ["bash", "-c",
+                                                                              c.text]
+            p = subprocess.run(argv, cwd=work, env=env, capture_output=True, text=True,
+                               timeout=600)
+            said = " ".join(BOX.sub(" ", p.stdout + "\n" + p.stderr).split())
+            where = f"{b.where}: {c.text}\nexit {p.returncode}\n{p.stdout[-3000:]}\n{p.stderr}"
+            assert p.returncode == c.expect, where
+            assert "Traceback" not in p.stdout + p.stderr, where
+            for line in c.output:
+                assert line in said, f"{where}\nexpected in the output: {line!r}"
+
+
+@long_only
+@pytest.mark.long
+@pytest.mark.parametrize("page", RUN_PAGES, ids=lambda p: p.relative_to(DOCS).as_posix())
+def test_page_examples_run(page: Path, tmp_path: Path) -> None:
+    run_page(page, tmp_path)
+
+
+# --- the strict build --------------------------------------------------------------------------
+
+def build(src: Path, out: Path) -> subprocess.CompletedProcess[str]:
+    """`sphinx-build -W --keep-going -n -b html SRC OUT`, as .ci/run runs it."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p)}
+    return subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-n", "-q",
+                           "-b", "html", str(src), str(out)], env=env, capture_output=True,
+                          text=True, timeout=900)
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("site")
+    p = build(DOCS, out)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr
+    assert not p.stderr.strip(), p.stderr  # -q: anything on stderr is a warning
+    return out
+
+
+def _copy_docs(tmp_path: Path) -> Path:
+    """docs/ and the CHANGELOG it includes, copied as they lie beside each other."""
+    shutil.copytree(DOCS, tmp_path / "docs", ignore=shutil.ignore_patterns("_build"))
+    shutil.copy(ROOT / "CHANGELOG.md", tmp_path / "CHANGELOG.md")
+    return tmp_path / "docs"
+
+
+@long_only
+@pytest.mark.long
+@pytest.mark.parametrize(("broken", "warning"), [
+    ("[the next step](howto/no-such-page.md)", "howto/no-such-page.md"),
+    ("{py:func}`kartci.no_such_function`", "kartci.no_such_function"),
+])
+def test_a_broken_link_or_reference_fails_the_build(tmp_path: Path, broken: str,
+                                                     warning: str) -> None:
+    docs = _copy_docs(tmp_path)
+    page = docs / "getting-started.md"
+    page.write_text(page.read_text(encoding="utf-8") + f"\nSee {broken}.\n", encoding="utf-8")
+    p = build(docs, tmp_path / "out")
+    assert p.returncode != 0
+    problems = [line for line in p.stderr.splitlines() if "WARNING" in line or "ERROR" in line]
+    assert len(problems) == 1, p.stderr
+    assert "getting-started.md" in problems[0] and warning in problems[0], problems
+
+
+# --- the generated reference is complete ------------------------------------------------------
+
+def _literals(page: Path) -> set[str]:
+    """Every inline literal's text on a built page (docutils splits them at spaces)."""
+    text = page.read_text(encoding="utf-8")
+    return {html.unescape(m) for m in re.findall(r'<span class="pre">([^<]*)</span>', text)}
+
+
+def _commands(command: typer.core.TyperGroup | object, path: str,
+              ctx: object = None) -> Iterator[tuple[str, object]]:
+    """Walk the click group typer builds, independently of the docs extension's walk."""
+    cmd: object = command
+    context = cmd.context_class(cmd, info_name=path.rsplit(" ", 1)[-1],  # type: ignore[attr-defined]
+                                parent=ctx)
+    yield path, cmd
+    for name in getattr(cmd, "list_commands", lambda _: [])(context):
+        sub = cmd.get_command(context, name)  # type: ignore[attr-defined]
+        if not sub.hidden:
+            yield from _commands(sub, f"{path} {name}", context)
+
+
+def test_every_command_and_option_is_in_the_reference(site: Path) -> None:
+    from kartci.cli import app
+
+    page = (site / "reference" / "cli.html").read_text(encoding="utf-8")
+    shown = _literals(site / "reference" / "cli.html")
+    walked = list(_commands(typer.main.get_command(app), "kartci"))
+    assert len(walked) > 20
+    for path, cmd in walked:
+        assert f'id="cli-{path.replace(" ", "-")}"' in page, path
+        for param in cmd.params:  # type: ignore[attr-defined]
+            if param.hidden:
+                continue
+            names = ([param.name.upper()] if param.param_type_name == "argument"
+                     else [*param.opts, *param.secondary_opts])
+            for name in names:
+                assert name in shown or f"{name}..." in shown, f"{path} {name}"
+
+
+def test_every_registered_metric_is_in_the_reference(site: Path) -> None:
+    from kartci import core
+
+    shown = _literals(site / "reference" / "metrics.html")
+    sets = core.METRICS.all()
+    assert len(sets) >= 9
+    for mset in sets:
+        assert mset.name in shown, mset.name
+        for name, d in mset.defs.items():
+            assert name in shown, f"{mset.name}.{name}"
+            assert d.description.split("`")[0][:40] in html.unescape(
+                (site / "reference" / "metrics.html").read_text(encoding="utf-8")), name
+
+
+def _properties(node: object) -> Iterator[str]:
+    """Every property name anywhere in a JSON Schema."""
+    if isinstance(node, dict):
+        props = node.get("properties")
+        if isinstance(props, dict):
+            yield from props
+        for value in node.values():
+            yield from _properties(value)
+    elif isinstance(node, list):
+        for value in node:
+            yield from _properties(value)
+
+
+def test_every_scenario_field_is_in_the_reference(site: Path) -> None:
+    from kartci.scenario.schema import scenario_schema
+
+    shown = _literals(site / "reference" / "schema.html")
+    fields = set(_properties(scenario_schema()))
+    assert len(fields) > 150
+    assert sorted(fields - shown) == []
+
+
+def test_every_profile_and_project_field_is_in_the_reference(site: Path) -> None:
+    from kartci.project import ProjectConfig
+    from kartci.realdata.profile import Profile
+
+    for page, model in (("profile", Profile), ("project", ProjectConfig)):
+        shown = _literals(site / "reference" / f"{page}.html")
+        fields = set(_properties(model.model_json_schema()))
+        assert len(fields) > 5, page
+        assert sorted(fields - shown) == [], page
+
+
+def test_every_builtin_scenario_is_in_the_reference(site: Path) -> None:
+    from kartci import project
+
+    shown = _literals(site / "reference" / "scenarios.html")
+    names = {p.stem for p in project.BUILTIN_SCENARIOS.glob("*.yaml")}
+    assert len(names) > 15
+    assert sorted(names - shown) == []
+
+
+def test_the_changelog_and_the_kept_pages_are_in_the_site(site: Path) -> None:
+    for page in ("changelog.html", "tutorial.html", "line_tracker_study.html",
+                 "getting-started.html"):
+        assert (site / page).is_file(), page
+    assert "Unreleased" in (site / "changelog.html").read_text(encoding="utf-8")
