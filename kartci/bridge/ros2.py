@@ -1,7 +1,7 @@
 """rmw_zenoh's wire conventions: key expressions, DDS type names, RIHS01 type hashes, the
-attachment, GIDs and liveliness tokens (ros2/rmw_zenoh `docs/design.md`, see the README's bridge
-section for the commit they were taken from), and the message definitions of the ROS 2
-distribution the stack runs.
+attachment, GIDs and liveliness tokens (ros2/rmw_zenoh `docs/design.md`; docs/howto/ros2-zenoh.md
+names the commit they were taken from), and the message definitions of the ROS 2 distribution
+the stack runs.
 
 Pure functions of names, numbers and messages, no Zenoh import: the conventions are tested on
 their own.
