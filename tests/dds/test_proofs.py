@@ -35,6 +35,7 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from kartci.bridge import ros2
 from kartci.logs.types import typestore
 
 ROS_SIDE = Path(__file__).with_name("ros_side.py")
@@ -142,9 +143,16 @@ def kilted() -> Typestore:
     return get_typestore(Stores.ROS2_KILTED)
 
 
-STORES: dict[str, Callable[[], Typestore]] = {"kartci": typestore, "rosbags_kilted": kilted}
-EXPECTED_CDR = {"kartci": DISTRO_CDR, "rosbags_kilted": set()}
-EXPECTED_HASH = {"kartci": DISTRO_CDR | CHAR_HASH, "rosbags_kilted": CHAR_HASH}
+def bridge_kilted() -> Typestore:
+    """The definitions the bridges send with `ros_distro: kilted` (kartci.bridge.ros2)."""
+    return ros2.typestore(ros2.Distro.KILTED)
+
+
+STORES: dict[str, Callable[[], Typestore]] = {"kartci": typestore, "rosbags_kilted": kilted,
+                                              "bridge_kilted": bridge_kilted}
+EXPECTED_CDR = {"kartci": DISTRO_CDR, "rosbags_kilted": set(), "bridge_kilted": set()}
+EXPECTED_HASH = {"kartci": DISTRO_CDR | CHAR_HASH, "rosbags_kilted": CHAR_HASH,
+                 "bridge_kilted": CHAR_HASH}
 
 
 @pytest.fixture(scope="module")
