@@ -105,8 +105,8 @@ def test_a_start_beside_the_track_is_refused_where_the_track_is_known(tmp_path: 
     p = kartci("run", "kart_manual", "--set", "duration_s=0.1", "--set",
                "agents.kart0.start.lateral_m=50", "--out", tmp_path / "out")
     assert p.returncode == 2
-    assert ("error: start.lateral_m: 50 m is off the track track.csv at along_m 0 m: it must "
-            "be within -2.00 m .. 2.00 m of the centreline there") in p.stdout + p.stderr
+    assert ("ERROR: start.lateral_m: 50 m is off the track track.csv at along_m 0 m: it must "
+            "be within -2.00 m .. 2.00 m of the centreline there") in p.stdout
 
 
 def test_an_agent_name_that_is_not_a_ros_name_is_refused(tmp_path: Path) -> None:

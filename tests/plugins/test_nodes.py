@@ -79,8 +79,8 @@ def test_a_node_runs_before_the_controller_of_its_robot(counter: Any) -> None:
 
 
 def test_node_names_and_parameters_are_validated(counter: Any) -> None:
-    with pytest.raises(SpecError, match=r"agents\.lt0\.nodes\.test_countr: unknown node "
-                                        r"'test_countr'.*test_counter"):
+    with pytest.raises(SpecError, match=r"agents\.lt0\.nodes\.test_countr( \(from --set\))?: "
+                                        r"unknown node 'test_countr'.*test_counter"):
         load_scenario("line_straight", ["agents.lt0.nodes={test_countr: {}}"])
     with pytest.raises(SpecError, match=r"agents\.lt0\.nodes\.test_counter\.start"):
         load_scenario("line_straight", ["agents.lt0.nodes={test_counter: {start: many}}"])

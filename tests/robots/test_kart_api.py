@@ -1,6 +1,6 @@
-"""The kart's public API for a team's own controller (README "Extending": the kart's API):
-`kartci.robots.gokart` exports the command, the steering map, the outline and the parameter
-set, and the map and its inverse agree."""
+"""The kart's public API for a team's own controller (docs/howto/extending.md, the kart's API):
+`kartci.robots.gokart` exports the command, the steering map and the parameter set, its
+`outline` module the outline from the URDF, and the map and its inverse agree."""
 
 from __future__ import annotations
 
@@ -11,13 +11,17 @@ from kartci.project import BUILTIN_MODELS
 from kartci.scenario.yamlio import read_yaml
 
 DOCUMENTED = {"KartInput", "wheel_angles", "column_for_wheel_angle", "steer_for_turn_rate",
-              "STEERING_RATIO", "speed_to_pedals", "FOOTPRINT_M", "GokartModel",
+              "STEERING_RATIO", "speed_to_pedals", "GokartModel",
               "axle_distance_m", "KartSensors"}
 
 
 def test_the_documented_kart_api_is_exported() -> None:
+    from kartci.robots.gokart import outline
+
     assert set(kart.__all__) >= DOCUMENTED
     assert all(hasattr(kart, name) for name in kart.__all__)
+    assert {"outline", "half_width_m", "footprint_m"} <= set(dir(outline))
+    assert kart.FOOTPRINT_M == outline.footprint_m(kart.GokartModel())  # the deprecated name
 
 
 @pytest.mark.parametrize("wheel_rad", [-0.4, -0.1, 0.0, 0.2, 0.4])
