@@ -61,22 +61,16 @@ def joystick(agent: str, model: RobotParams, mapping: str) -> JoyCommand:
 class ExternalAgent:
     """The bridge for one agent: a Zenoh node, the stack's process, the lockstep."""
 
+    inputs: tuple[str, ...]
+    _pending: list[tuple[str, Any]]
+    _wall0: float | None
+    _latest: dict[str, Any]
+    child: Child | None
+
     def __init__(self, spec: ExternalController, ctx: AgentContext) -> None:
-        self.spec, self.name, self.period_s = spec, ctx.name, spec.period_s
-        self.inputs: tuple[str, ...] = tuple(spec.publish)
-        self.frame = base_link(ctx.name)
-        self.joystick = joystick(ctx.name, ctx.model, spec.mapping) if any(
-            c.type == "sensor_msgs/msg/Joy" for c in spec.commands) else None
-        self.commands = {self._full(c.topic): c.type for c in spec.commands}
-        self.late = self._late_in_row = 0
-        self._pending: list[tuple[str, Any]] = []
+        self._lockstep_state(spec, ctx)
         self._pubs: dict[tuple[str, str], Publisher] = {}
         self._tokens: set[str] = set()
-        self._ready = False
-        self._wall0: float | None = None
-        self._latest: dict[str, Any] = {}
-        self.child: Child | None = None
-        self.inbox = Inbox()
         session, self.endpoint = open_listening(
             spec.port, connect=spec.connect, router=spec.zenoh_mode == "router",
             allow_remote=spec.allow_remote)
@@ -91,6 +85,22 @@ class ExternalAgent:
         except BaseException:
             self.close()
             raise
+
+    def _lockstep_state(self, spec: ExternalController, ctx: AgentContext) -> None:
+        """What the lockstep needs whatever the middleware (the DDS agent sets it too)."""
+        self.spec, self.name, self.period_s = spec, ctx.name, spec.period_s
+        self.inputs = tuple(spec.publish)
+        self.frame = base_link(ctx.name)
+        self.joystick = joystick(ctx.name, ctx.model, spec.mapping) if any(
+            c.type == "sensor_msgs/msg/Joy" for c in spec.commands) else None
+        self.commands = {self._full(c.topic): c.type for c in spec.commands}
+        self.late = self._late_in_row = 0
+        self._pending = []
+        self._ready = False
+        self._wall0 = None
+        self._latest = {}
+        self.child = None
+        self.inbox = Inbox()
 
     def _pusher(self, topic: str) -> Callable[[bytes], None]:
         def push(payload: bytes) -> None:

@@ -28,17 +28,16 @@ from typing import Any
 from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.bridge import ros2
-from kartci.bridge.agent import CLOCK, ExternalAgent, joystick, substitute
+from kartci.bridge.agent import CLOCK, ExternalAgent, substitute
 from kartci.bridge.child import Child
 from kartci.bridge.dds import env as ros_env
 from kartci.bridge.dds import relay as wire
 from kartci.bridge.dds.env import dds_env
 from kartci.bridge.dds.shm import Domain, clean_zombies
-from kartci.bridge.link import Inbox
 from kartci.bridge.params import ExternalController
 from kartci.core import AgentContext
 from kartci.errors import RunError, SpecError
-from kartci.logs.types import base_link, msg
+from kartci.logs.types import msg
 
 # <agent>.<this> in the run folder (kept there with the programs' logs): one JSON line of
 # wall-clock figures, so not in the deterministic metrics
@@ -57,21 +56,8 @@ class DdsAgent(ExternalAgent):
             raise SpecError(f"agent {ctx.name}: middleware dds does not use the Zenoh "
                             f"settings {', '.join(zenoh_only)} (the stack meets kartci on its "
                             "DDS domain, over shared memory)")
-        # the state ExternalAgent.__init__ sets, without its Zenoh session
-        self.spec, self.name, self.period_s = spec, ctx.name, spec.period_s
-        self.inputs: tuple[str, ...] = tuple(spec.publish)
-        self.frame = base_link(ctx.name)
-        self.joystick = joystick(ctx.name, ctx.model, spec.mapping) if any(
-            c.type == "sensor_msgs/msg/Joy" for c in spec.commands) else None
-        self.commands = {self._full(c.topic): c.type for c in spec.commands}
-        self.late = self._late_in_row = 0
-        self._pending: list[tuple[str, Any]] = []
-        self._ready = False
-        self._wall0: float | None = None
-        self._latest: dict[str, Any] = {}
-        self.child: Child | None = None
+        self._lockstep_state(spec, ctx)  # ExternalAgent's, without its Zenoh session
         self.relay: Child | None = None
-        self.inbox = Inbox()
         self._missing_now = ["an answer from the DDS relay"]
         self._relay_ready = threading.Event()
         self._relay_error: str | None = None
