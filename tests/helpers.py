@@ -5,7 +5,9 @@ from __future__ import annotations
 import json
 import os
 import re
+import shlex
 import shutil
+import stat
 import subprocess
 import sys
 import zipfile
@@ -125,3 +127,20 @@ def bullet_gaps_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.array(out)
     finally:
         pb.disconnect(physicsClientId=client)
+
+
+def kartci_shell_env(tmp_path: Path, *then: str) -> dict[str, str]:
+    """The environment of a page's or tutorial's shell commands: a `kartci` command from this
+    checkout first on PATH (a shim in tmp_path/bin), then the folders `then`, and nothing that
+    points kartci elsewhere."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    shim = bin_dir / "kartci"
+    shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m kartci.cli "$@"\n',
+                    encoding="utf-8")
+    shim.chmod(shim.stat().st_mode | stat.S_IXUSR)
+    drop = ("KARTCI_ROOT", "CI", "GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY")
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    env["PATH"] = os.pathsep.join([str(bin_dir), *then, env.get("PATH", "")])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
+    return env

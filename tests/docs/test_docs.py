@@ -20,9 +20,7 @@ from __future__ import annotations
 import html
 import os
 import re
-import shlex
 import shutil
-import stat
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -31,6 +29,7 @@ from pathlib import Path
 
 import pytest
 import typer
+from helpers import kartci_shell_env
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
@@ -148,20 +147,10 @@ def test_runnable_blocks_are_well_formed(page: Path) -> None:
 # --- the pages' examples run ---------------------------------------------------------------
 
 def _environment(tmp_path: Path) -> dict[str, str]:
-    """A `kartci` command from this checkout, and nothing that points kartci elsewhere."""
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    shim = bin_dir / "kartci"
-    shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m kartci.cli "$@"\n',
-                    encoding="utf-8")
-    shim.chmod(shim.stat().st_mode | stat.S_IXUSR)
-    drop = ("KARTCI_ROOT", "CI", "GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY", "COLUMNS")
-    env = {k: v for k, v in os.environ.items() if k not in drop}
-    # `python` is this interpreter, whose environment has kartci's pytest plugin installed
-    env["PATH"] = os.pathsep.join([str(bin_dir), str(Path(sys.executable).parent),
-                                   env.get("PATH", "")])
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
-    env["COLUMNS"] = "200"  # tables as wide as the expected lines, not a terminal's 80
+    """The shell's environment with `python` this interpreter (its environment has kartci's
+    pytest plugin) and tables as wide as the expected lines."""
+    env = kartci_shell_env(tmp_path, str(Path(sys.executable).parent))
+    env["COLUMNS"] = "200"  # not a terminal's 80
     return env
 
 

@@ -17,18 +17,16 @@ from __future__ import annotations
 
 import importlib
 import json
-import os
 import re
 import shlex
-import stat
 import subprocess
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
+from helpers import kartci_shell_env
 
 ROOT = Path(__file__).resolve().parents[2]
 TUTORIAL = ROOT / "docs" / "tutorial.md"
@@ -83,23 +81,8 @@ def test_excerpts_match_the_repository() -> None:
             assert not line.strip() or line in text, f"{b.where}: {line!r} not in the file"
 
 
-def _environment(tmp_path: Path) -> dict[str, str]:
-    """A `kartci` command from this checkout, and nothing that would point kartci elsewhere."""
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    shim = bin_dir / "kartci"
-    shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m kartci.cli "$@"\n',
-                    encoding="utf-8")
-    shim.chmod(shim.stat().st_mode | stat.S_IXUSR)
-    drop = ("KARTCI_ROOT", "CI", "GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY")
-    env = {k: v for k, v in os.environ.items() if k not in drop}
-    env["PATH"] = os.pathsep.join([str(bin_dir), env.get("PATH", "")])
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
-    return env
-
-
 def test_the_tutorial_runs(tmp_path: Path) -> None:
-    env = _environment(tmp_path)
+    env = kartci_shell_env(tmp_path)
     home = tmp_path / "work"
     home.mkdir()
     cwd = home
