@@ -26,7 +26,7 @@ SCRIPT = "tools/check_release.sh"
 
 def test_ci_and_the_release_workflow_run_the_same_check() -> None:
     ci = (ROOT / ".ci" / "run").read_text().splitlines()
-    assert f"PYTHON=.venv/bin/python {SCRIPT}" in ci
+    assert any(line.startswith(f"PYTHON=.venv/bin/python {SCRIPT} ") for line in ci)
     steps = RELEASE["jobs"]["check"]["steps"]
     runs = [s["run"] for s in steps if "run" in s]
     assert runs[:2] == ["python -m pip install -q -c constraints.txt build twine",
