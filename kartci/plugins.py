@@ -1,7 +1,7 @@
 """Deprecated: import from `kartci.core` (the contracts and the registries); `ScoreContext`
 from `kartci.metrics`.
 
-The public path plugin authors use (docs/howto/extending.md, docs/tutorial.md, examples/): every
+The public path plugin authors use (docs/howto/plugins.md, docs/tutorial.md, examples/): every
 name here is `kartci.core`'s own object (`kartci.core.__all__`, the one list of them), so
 registering through either path is the same. Nothing in kartci imports this module.
 """

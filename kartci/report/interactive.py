@@ -1,7 +1,7 @@
 """The interactive side of report.html: each scenario's figures as JSON, drawn in the browser by
 uPlot (vendored in kartci/data/report, MIT, ~50 kB, inlined once per report) and kartci's own
 script. uPlot rather than plotly: plotly.js alone is 4.8 MB, a report of the default suite with
-uPlot is well under that in all (see docs/howto/reports.md)."""
+uPlot is well under that in all (see docs/howto/report.md)."""
 
 from __future__ import annotations
 

@@ -8,11 +8,15 @@ What runs on a page (docs/index.md says the same to its readers):
   other non-empty line must appear in what that command printed (whitespace, the tables'
   box drawing and emoji collapsed);
 - a ```` ```{code-block} LANG ```` with `:caption: PATH` and `:class: file` is written to PATH;
-- a ```` ```{code-block} python ```` with `:class: run` runs with Python in that folder.
+- a ```` ```{code-block} python ```` with `:class: run` runs with Python in that folder;
+- a command or Python block that cannot run here (a real team's ROS 2 install, a remote Ray
+  cluster, GitHub itself) is a ```` ```{code-block} bash ```` (or python) with `:class: shown`
+  and `:caption: Not run by the tests: REASON`, so the page says why. Any other shell or Python
+  block fails `test_every_command_block_runs_or_says_why_not`.
 
-Building the site takes about 20 s here (one build, shared by the reference checks); running
-the pages' examples takes about 4 minutes and the broken-reference builds 40 s, so those are
-`long` (`KARTCI_LONG=1`, which .ci/run's second pytest sets).
+Building the site takes about 20 s here (one build, shared by the reference checks); the pages
+in QUICK_PAGES run their examples in the default tier, the others (more than ~10 s each) and
+the broken-reference builds are `long` (`KARTCI_LONG=1`, which .ci/run's second pytest sets).
 """
 
 from __future__ import annotations
@@ -74,7 +78,9 @@ def blocks(page: Path) -> list[Block]:
             lang = info.removeprefix("{code-block}").strip()
             lines = body.splitlines(keepends=True)
             while lines and (opt := OPTION.match(lines[0].rstrip("\n"))):
-                options[opt.group(1)] = opt.group(2).strip()
+                value = opt.group(2).strip()
+                quoted = len(value) > 1 and value[0] == value[-1] and value[0] in "'\""
+                options[opt.group(1)] = value[1:-1] if quoted else value  # as MyST reads it
                 lines.pop(0)
             body = "".join(lines).lstrip("\n")
         else:
@@ -93,6 +99,13 @@ def runnable(page: Path) -> list[Block]:
 
 
 RUN_PAGES = [p for p in pages() if runnable(p)]
+# pages whose examples take under ~10 s on a loaded 2-core machine: run in the default tier
+QUICK_PAGES = {"howto/project.md", "howto/real-logs.md", "howto/ros2-dds.md"}
+# pages whose blocks another test runs or checks
+OWN_TESTS = {"tutorial.md": "tests/plugins/test_tutorial.py runs or checks every block"}
+# fenced blocks that hold commands or Python: each runs or says why it cannot
+CODE_LANGS = {"", "bash", "sh", "shell", "console", "python", "pycon"}
+SHOWN = "Not run by the tests: "
 
 
 # --- quick checks of the blocks ------------------------------------------------------------
@@ -130,6 +143,7 @@ def commands(block: Block) -> list[Command]:
 def test_the_site_has_runnable_pages() -> None:
     names = {p.relative_to(DOCS).as_posix() for p in RUN_PAGES}
     assert {"getting-started.md", "howto/scenario.md", "howto/python.md"} <= names
+    assert QUICK_PAGES - names == set()
 
 
 @pytest.mark.parametrize("page", RUN_PAGES, ids=lambda p: p.relative_to(DOCS).as_posix())
@@ -144,13 +158,47 @@ def test_runnable_blocks_are_well_formed(page: Path) -> None:
             compile(b.text, b.where, "exec")
 
 
+def _name(page: Path) -> str:
+    return page.relative_to(DOCS).as_posix()
+
+
+def test_every_command_block_runs_or_says_why_not() -> None:
+    """A command or Python example either runs in the tests or is marked shown-not-run with the
+    reason on the page: nothing is left unchecked by accident."""
+    unmarked = []
+    for page in pages():
+        if _name(page) in OWN_TESTS:
+            continue
+        run = runnable(page)
+        for b in blocks(page):
+            if b in run:
+                assert "shown" not in b.classes, f"{b.where}: runs and is marked shown"
+            elif b.lang in CODE_LANGS:
+                reason = b.options.get("caption", "").removeprefix(SHOWN)
+                if ("shown" not in b.classes or reason == b.options.get("caption")
+                        or len(reason) < 20):
+                    unmarked.append(b.where)
+    assert unmarked == []
+
+
+def test_the_blocks_are_parsed_as_the_site_renders_them() -> None:
+    """The parser above sees a shown block's caption and class, and a console block's
+    commands, exit codes and expected lines."""
+    page = DOCS / "howto" / "ray.md"
+    shown = [b for b in blocks(page) if "shown" in b.classes]
+    assert shown and all(b.options["caption"].startswith(SHOWN) for b in shown)
+    block = Block(page, 1, "console", {}, "$ kartci run a \\\n   --set x=1  # exit 1\nsaid  it\n")
+    assert commands(block) == [Command("kartci run a  --set x=1  # exit 1", 1, ("said it",))]
+
+
 # --- the pages' examples run ---------------------------------------------------------------
 
 def _environment(tmp_path: Path) -> dict[str, str]:
     """The shell's environment with `python` this interpreter (its environment has kartci's
-    pytest plugin) and tables as wide as the expected lines."""
+    pytest plugin), tables as wide as the expected lines and `$KARTCI_SOURCE` this checkout."""
     env = kartci_shell_env(tmp_path, str(Path(sys.executable).parent))
     env["COLUMNS"] = "200"  # not a terminal's 80
+    env["KARTCI_SOURCE"] = str(ROOT)  # the checkout a page copies examples/ from
     return env
 
 
@@ -179,9 +227,16 @@ def run_page(page: Path, tmp_path: Path) -> None:
                 assert line in said, f"{where}\nexpected in the output: {line!r}"
 
 
-@long_only
-@pytest.mark.long
-@pytest.mark.parametrize("page", RUN_PAGES, ids=lambda p: p.relative_to(DOCS).as_posix())
+def _tiered(page: Path) -> object:
+    """A page in QUICK_PAGES runs in the default tier, any other only with KARTCI_LONG=1."""
+    if _name(page) in QUICK_PAGES:
+        return pytest.param(page, id=_name(page))
+    return pytest.param(page, id=_name(page), marks=[
+        pytest.mark.long, pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
+                                             reason="runs a page's examples: set KARTCI_LONG=1")])
+
+
+@pytest.mark.parametrize("page", [_tiered(p) for p in RUN_PAGES])
 def test_page_examples_run(page: Path, tmp_path: Path) -> None:
     run_page(page, tmp_path)
 

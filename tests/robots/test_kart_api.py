@@ -1,4 +1,4 @@
-"""The kart's public API for a team's own controller (docs/howto/extending.md, the kart's API):
+"""The kart's public API for a team's own controller (docs/howto/plugins.md, the kart's API):
 `kartci.robots.gokart` exports the command, the steering map and the parameter set, its
 `outline` module the outline from the URDF, and the map and its inverse agree."""
 
