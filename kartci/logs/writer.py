@@ -13,6 +13,7 @@ from mcap.records import MessageIndex
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys.store import Typestore
 
+from kartci.logs.cdr import Serialise, compile_fixed
 from kartci.logs.qos import offered_qos_profiles
 from kartci.logs.types import typestore
 
@@ -22,7 +23,8 @@ _MESSAGE = struct.Struct("<BQHIQQ")
 _MESSAGE_OPCODE = 0x05
 _MESSAGE_HEAD = 22  # bytes of a Message record before its data
 BATCH = 512  # messages held before they go into the chunk together
-Pending = tuple[int, int, int, memoryview]  # channel id, sequence, t ns, CDR data
+LAYOUTS = 4  # fixed CDR layouts kept per topic (/tf alternates between two)
+Pending = tuple[int, int, int, bytes | memoryview]  # channel id, sequence, t ns, CDR data
 
 
 class _Chunks:
@@ -97,6 +99,7 @@ class McapLogWriter:
         self._seq: dict[int, int] = {}
         self._chunks = _Chunks(self._writer)
         self._pending: list[Pending] = []
+        self._layouts: dict[int, list[Serialise]] = {}  # per channel (see kartci.logs.cdr)
 
     def _channel(self, topic: str, typename: str, latched: bool) -> int:
         cid = self._channels.get(topic)
@@ -118,12 +121,29 @@ class McapLogWriter:
         afterwards is logged as it was) and goes into the file with the next batch."""
         typename = message.__msgtype__
         cid = self._channel(topic, typename, latched)
-        data = self.store.serialize_cdr(message, typename)
+        data = self._cdr(cid, message, typename)
         seq = self._seq.get(cid, 0)
         self._seq[cid] = seq + 1
         self._pending.append((cid, seq, t_ns, data))
         if len(self._pending) >= BATCH:
             self._flush()
+
+    def _cdr(self, cid: int, message: Any, typename: str) -> bytes | memoryview:
+        """The message's CDR: by one of its topic's fixed layouts when one fits (a new one
+        is made from it while the topic has fewer than LAYOUTS), else by rosbags."""
+        layouts = self._layouts.setdefault(cid, [])
+        for layout in layouts:
+            data = layout(message)
+            if data is not None:
+                return data
+        if len(layouts) < LAYOUTS:
+            made = compile_fixed(self.store, message)  # checked on this very message
+            if made is not None:
+                layouts.append(made)
+                data = made(message)
+                if data is not None:
+                    return data
+        return self.store.serialize_cdr(message, typename)
 
     def _flush(self) -> None:
         """The messages held so far into the writer's chunk."""
