@@ -25,6 +25,7 @@ def test_every_logged_message_serialises_to_rosbags_bytes(tmp_path: Path,
     store, layouts, fitted, total = typestore(), dict[str, list[Any]](), 0, 0
     with (tmp_path / "run.mcap").open("rb") as f:
         for schema, channel, record in make_reader(f).iter_messages():
+            assert schema is not None
             m = store.deserialize_cdr(record.data, schema.name)
             own = layouts.setdefault(channel.topic, [])
             out = next((b for lay in own if (b := lay(m)) is not None), None)
