@@ -37,10 +37,16 @@ RUNS: tuple[tuple[str, str, list[str]], ...] = (
 
 
 def rtf(name: str, sets: list[str], out: Path) -> float:
+    return rtfs(name, sets, out)[0]
+
+
+def rtfs(name: str, sets: list[str], out: Path) -> tuple[float, float]:
+    """Wall-clock and CPU real-time factors of one run (CPU: steadier on a shared machine)."""
     spec = load_scenario(name, sets)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     info = simulate(spec, out / "run.mcap")
-    return info.sim_time_s / (time.perf_counter() - t0)
+    return (info.sim_time_s / (time.perf_counter() - t0),
+            info.sim_time_s / (time.process_time() - c0))
 
 
 def scan_ms(name: str, repeats: int) -> tuple[list[float], list[float], int]:
@@ -86,10 +92,12 @@ def step_parts(record: Record, repeats: int, out: Path) -> None:
     f1tenth_gym anchor alternated with it."""
     spec = load_scenario("kart_manual", ["duration_s=10"])
     parts.measure(load_scenario("kart_manual", ["duration_s=0.5"]), out / "warm-up.mcap")
-    runs, kart, anchor = [], [], []
+    runs, kart, cpu, anchor = [], [], [], []
     for _ in range(repeats):
         runs.append(parts.measure(spec, out / "parts.mcap"))
-        kart.append(rtf("kart_manual", ["duration_s=10"], out))
+        wall, on_cpu = rtfs("kart_manual", ["duration_s=10"], out)
+        kart.append(wall)
+        cpu.append(on_cpu)
         a = anchor_rtf()
         if isinstance(a, str):
             print(f"f1tenth_gym anchor: skipped: {a}")
@@ -100,6 +108,10 @@ def step_parts(record: Record, repeats: int, out: Path) -> None:
     for label, us in parts.median_parts(runs).items():
         record.add(f"kart step: {label}", "us", [r.us_per_step[label] for r in runs])
         print(f"  {label:36s} {us:6.1f}")
+    record.add("kart_manual 10 s RTF", "x", kart, Better.HIGHER)
+    record.add("kart_manual 10 s CPU RTF", "x", cpu, Better.HIGHER)
+    print(f"kart_manual, no lidar, 10 s: median RTF {statistics.median(kart):.1f}x, CPU RTF "
+          f"{statistics.median(cpu):.1f}x  (" + ", ".join(f"{c:.1f}" for c in cpu) + ")")
     if anchor:
         record.add("f1tenth_gym one car RTF", "x", anchor, Better.HIGHER)
         ratio = [k / a for k, a in zip(kart, anchor, strict=True)]

@@ -91,7 +91,9 @@ def measure(scenario: Scenario, log_path: Path) -> Parts:
         log = s._log  # the run's writer: its serialisation and its MCAP records
         if log is not None:
             clock.wrap(log, "write", "log: CDR serialisation")
-            clock.wrap(log, "_flush", "log: MCAP records")
+            for obj, attr in ((log, "_flush"), (log._writer, "add_message")):
+                if hasattr(obj, attr):  # records in batches, or (writers before) one at a time
+                    clock.wrap(obj, attr, "log: MCAP records")
         t0 = CLOCK()
         while not r.done:
             r = s.step()
