@@ -129,7 +129,8 @@ class Gokart(Base):
 
     def reading(self) -> Reading:
         """The base's pose and velocity, read from PyBullet once between physics steps:
-        the sensors' `state()` and the next `pre_step` share it."""
+        the sensors' `state()` and the next `pre_step` share it. `pre_step` drops it before the
+        physics step; code that steps PyBullet without `pre_step` calls `forget()` first."""
         if self._rd is None:
             self._rd = self.read()
         return self._rd

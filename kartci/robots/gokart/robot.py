@@ -202,7 +202,7 @@ class KartRobot(RobotBase):
         a = (0.0, 0.0, 0.0) if prev is None else tuple((v[i] - prev[i]) / period
                                                         for i in range(3))
         a = (a[0] + 0.0, a[1] + 0.0, a[2] + 9.81)  # plus gravity
-        # imu_link's rotation in the world, m[i][j], and both vectors in imu_link
+        # imu_link's rotation in the world (rot), then both vectors in imu_link
         rot = [[r[3 * i] * m[0][j] + r[3 * i + 1] * m[1][j] + r[3 * i + 2] * m[2][j]
                 for j in range(3)] for i in range(3)]
         f = np.array([rot[0][i] * a[0] + rot[1][i] * a[1] + rot[2][i] * a[2] for i in range(3)])
