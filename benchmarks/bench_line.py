@@ -3,7 +3,10 @@ line sensor, measured in one process, median of repeats; with the same factor ov
 CPU time (steadier on a shared machine) and the physics alone (PyBullet's step for as many steps:
 the ceiling for the whole loop). Prints figures; asserts nothing.
 
-    .venv/bin/python benchmarks/bench_line.py [--repeats 3] [--json OUT.json]
+`--parts`: where a step of each line scenario (geometric sensor) goes, µs of CPU time per
+physics step by part (kartci.sim.parts), medians of repeats.
+
+    .venv/bin/python benchmarks/bench_line.py [--repeats 3] [--parts] [--json OUT.json]
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from pathlib import Path
 from kartci._bullet import pb
 from kartci.bench import Better, Record
 from kartci.scenario import load_scenario
-from kartci.sim import simulate
+from kartci.sim import parts, simulate
 from kartci.sim.session import Session
 
 SCENARIOS = ("line_straight", "line_circle")
@@ -50,13 +53,33 @@ def physics_rtf(name: str, steps: int = 5000) -> float:
         return steps * spec.physics.dt_s / (time.perf_counter() - t0)
 
 
+def step_parts(record: Record, repeats: int, out: Path) -> None:
+    """Each line scenario's step by part, CPU µs per physics step, median of repeats."""
+    parts.measure(load_scenario("line_circle", ["duration_s=0.5"]), out / "warm-up.mcap")
+    for name in SCENARIOS:
+        runs = [parts.measure(load_scenario(name), out / f"{name}.mcap") for _ in range(repeats)]
+        print(f"{name}, geometric sensor: {runs[0].steps} steps; CPU µs per 2 ms step, median "
+              f"of {repeats}")
+        for label, us in parts.median_parts(runs).items():
+            record.add(f"{name} step: {label}", "us", [r.us_per_step[label] for r in runs])
+            print(f"  {label:36s} {us:6.1f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", type=Path, help="also write the figures to this file "
                         "(compare two with `kartci bench compare`)")
+    parser.add_argument("--parts", action="store_true",
+                        help="only each line scenario's step by part")
     args = parser.parse_args()
     record = Record("bench_line")
+    if args.parts:
+        with tempfile.TemporaryDirectory() as tmp:
+            step_parts(record, args.repeats, Path(tmp))
+        if args.json:
+            record.save(args.json)
+        return
     print(f"{'scenario':15s} {'sensor':10s} {'median RTF':>10s} {'CPU RTF':>8s}  wall samples")
     with tempfile.TemporaryDirectory() as tmp:
         # warm-up, not timed: imports and message-type registration happen on the first run

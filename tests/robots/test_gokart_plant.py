@@ -5,6 +5,7 @@ longitudinal slip (kartci/robots/gokart/{inertia,tyres}.py)."""
 from __future__ import annotations
 
 import math
+import random
 
 import pytest
 
@@ -12,7 +13,16 @@ from kartci._bullet import pb
 from kartci.errors import SpecError
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GRAVITY_MPS2, GokartModel, axle_distance_m, cog_x_m
-from kartci.robots.gokart.tyres import Demand, motor_force_n, normal_loads, wheel_force, wheels
+from kartci.robots.gokart.tyres import (
+    Demand,
+    FourTyres,
+    air_drag_n,
+    drive_demand,
+    motor_force_n,
+    normal_loads,
+    wheel_force,
+    wheels,
+)
 from kartci.scenario import project_root
 
 MODELS = project_root() / "models" / "gokart"
@@ -124,3 +134,37 @@ def test_friction_ellipse_and_longitudinal_slip() -> None:
     spinning = wheel_force(model, rear, 30.0, Demand(5.0, 0.0), 0.0, (1.0, 0.0), 1.0)
     assert (spinning.fx_n, spinning.slip, spinning.spin_mps) == pytest.approx(
         (30.0 * 10.0 * 1.2, 1.0, 2.0))
+
+
+def test_the_loops_four_tyres_equal_the_per_wheel_model_to_the_last_bit() -> None:
+    """FourTyres (the physics loop's flat form) against normal_loads, wheel_force and
+    air_drag_n, over random states that reach every branch: load off a wheel, the slip-angle
+    floor, the motors' power limit, the friction ellipse's edge, a lock, a spin, reverse, an
+    emergency stop and a floor with no grip."""
+    rng = random.Random(7)
+    for model in (NOMINAL, NOMINAL.model_copy(update={"long_grip_ratio": 0.6,
+                                                      "cog_height_m": 0.5})):
+        off = (0.0123, -0.0021, 0.0456)
+        four, tyres = FourTyres(model, off), wheels(model)
+        for _ in range(3000):
+            ax, ay = rng.uniform(-15.0, 15.0), rng.uniform(-40.0, 40.0)
+            vx, vy, yaw_rate = (rng.uniform(-4.0, 20.0), rng.uniform(-3.0, 3.0),
+                                rng.uniform(-3.0, 3.0))
+            demand = drive_demand(model, rng.choice([0.0, rng.uniform(0.0, 8.0)]),
+                                  rng.choice([0.0, rng.uniform(0.0, 30.0)]),
+                                  rng.random() < 0.2, rng.random() < 0.05, vx)
+            steer = (rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6))
+            mu = [rng.choice([1.0, 0.0, rng.uniform(0.2, 1.3)]) for _ in range(4)]
+            want, spins, fx_sum, fy_sum = [], [], 0.0, 0.0
+            loads = normal_loads(model, tyres, ax, ay)
+            for w, load, delta, m in zip(tyres, loads, (0.0, 0.0, *steer), mu, strict=True):
+                dx, dy = w.x_m - off[0], w.y_m - off[1]
+                f = wheel_force(model, w, load, demand, delta,
+                                (vx - yaw_rate * dy, vy + yaw_rate * dx), m)
+                want.append((f.fx_n, f.fy_n, load * w.tyre.d_mps2 * m))
+                spins.append(f.spin_mps / w.radius_m)
+                fx_sum, fy_sum = fx_sum + f.fx_n, fy_sum + f.fy_n
+            drag = air_drag_n(model, vx)
+            got = four.forces(demand, steer, vx, vy, yaw_rate, (ax, ay), mu)
+            assert got == (want, spins, drag, ((fx_sum + drag) / model.mass_kg,
+                                               fy_sum / model.mass_kg))

@@ -14,14 +14,8 @@ from kartci._bullet import pb, quiet_c_output
 from kartci.robots.gokart.inertia import weigh_chassis
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput, wheel_angles
-from kartci.robots.gokart.tyres import (
-    air_drag_n,
-    drive_demand,
-    normal_loads,
-    wheel_force,
-    wheels,
-)
-from kartci.sim.body import Base, BodyState
+from kartci.robots.gokart.tyres import FourTyres, drive_demand, wheels
+from kartci.sim.body import Base, BodyState, Reading
 from kartci.sim.urdf import fixed_frames, physics_urdf
 
 WHEEL_SPIN_TORQUE_NM = 20.0  # spins the (frictionless) wheels at their rolling speed
@@ -63,6 +57,12 @@ class Gokart(Base):
         # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`);
         # none before the first step
         self.tyre_forces: list[tuple[float, float, float]] = []
+        off = self._com_off  # the chassis' centre of mass in base_link
+        self._four = FourTyres(model, off)
+        self._arms = [(w.x_m - off[0], w.y_m - off[1]) for w in self.tyres]  # from the CoM, m
+        self._floor_dz = -model.rear_wheel_radius_m - off[2]  # the floor, from the CoM, m
+        self._rd: Reading | None = None  # this step's reading of the base (see reading())
+        self._st: BodyState | None = None
 
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;
@@ -90,41 +90,72 @@ class Gokart(Base):
             pb.setJointMotorControlArray(self.body, self.steer, pb.POSITION_CONTROL,
                                          targetPositions=angles, forces=[800.0, 800.0],
                                          positionGains=[1.0, 1.0], physicsClientId=c)
-        com, quat = pb.getBasePositionAndOrientation(self.body, physicsClientId=c)
-        lin, ang = pb.getBaseVelocity(self.body, physicsClientId=c)
-        r = pb.getMatrixFromQuaternion(quat)  # row-major body-to-world
+        rd = self.reading()
+        r, lin, ang = rd.rotation, rd.lin, rd.ang  # r: row-major body-to-world
         vx = r[0] * lin[0] + r[3] * lin[1] + r[6] * lin[2]
         vy = r[1] * lin[0] + r[4] * lin[1] + r[7] * lin[2]
         yaw_rate = r[2] * ang[0] + r[5] * ang[1] + r[8] * ang[2]
         demand = drive_demand(m, inp.accel_mps2, inp.brake_mps2, inp.reverse, inp.estop, vx)
-        steer = [0.0, 0.0, *(s[0] for s in pb.getJointStates(self.body, self.steer,
-                                                             physicsClientId=c))]
-        loads = normal_loads(m, self.tyres, *self.accel)
-        off = self._com_offset  # the chassis' centre of mass in base_link
-        dz = -m.rear_wheel_radius_m - off[2]  # the floor, from the chassis' centre of mass
-        spin, fx_sum, fy_sum = [], 0.0, 0.0
-        self.tyre_forces = []
-        for w, load, delta, mu in zip(self.tyres, loads, steer, self.mu_scale, strict=True):
-            dx, dy = w.x_m - off[0], w.y_m - off[1]
-            f = wheel_force(m, w, load, demand, delta, (vx - yaw_rate * dy, vy + yaw_rate * dx),
-                            mu)
-            # grip: the lateral radius of the friction ellipse at this load
-            self.tyre_forces.append((f.fx_n, f.fy_n, load * w.tyre.d_mps2 * mu))
-            at = (com[0] + r[0] * dx + r[1] * dy + r[2] * dz,
-                  com[1] + r[3] * dx + r[4] * dy + r[5] * dz,
-                  com[2] + r[6] * dx + r[7] * dy + r[8] * dz)
-            force = (r[0] * f.fx_n + r[1] * f.fy_n, r[3] * f.fx_n + r[4] * f.fy_n,
-                     r[6] * f.fx_n + r[7] * f.fy_n)
-            pb.applyExternalForce(self.body, -1, force, at, pb.WORLD_FRAME, physicsClientId=c)
-            fx_sum, fy_sum = fx_sum + f.fx_n, fy_sum + f.fy_n
-            spin.append(f.spin_mps / w.radius_m)
-        drag = air_drag_n(m, vx)
-        pb.applyExternalForce(self.body, -1, (r[0] * drag, r[3] * drag, r[6] * drag), com,
-                              pb.WORLD_FRAME, physicsClientId=c)
-        self.accel = ((fx_sum + drag) / m.mass_kg, fy_sum / m.mass_kg)
+        fl, fr = pb.getJointStates(self.body, self.steer, physicsClientId=c)
+        self.tyre_forces, spin, drag, self.accel = self._four.forces(
+            demand, (fl[0], fr[0]), vx, vy, yaw_rate, self.accel, self.mu_scale)
+        self._push(rd, drag)
         pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
                                      targetVelocities=spin, forces=[WHEEL_SPIN_TORQUE_NM] * 4,
                                      physicsClientId=c)
+        self.forget()  # the physics step follows
+
+    def _push(self, rd: Reading, drag_n: float) -> None:
+        """The four tyre forces at their contact points and the drag at the centre of mass, as
+        one force and one torque about the centre of mass: two calls into PyBullet, not five.
+        Summed as Bullet sums what it is given (the force in order, each torque as (point -
+        centre of mass) x force), so the body gets the same bits."""
+        com, r = rd.com, rd.rotation
+        dz = self._floor_dz
+        fx_w = fy_w = fz_w = tx = ty = tz = 0.0
+        for (fx, fy, _), (dx, dy) in zip(self.tyre_forces, self._arms, strict=True):
+            px = com[0] + r[0] * dx + r[1] * dy + r[2] * dz - com[0]
+            py = com[1] + r[3] * dx + r[4] * dy + r[5] * dz - com[1]
+            pz = com[2] + r[6] * dx + r[7] * dy + r[8] * dz - com[2]
+            f0, f1, f2 = r[0] * fx + r[1] * fy, r[3] * fx + r[4] * fy, r[6] * fx + r[7] * fy
+            fx_w, fy_w, fz_w = fx_w + f0, fy_w + f1, fz_w + f2
+            tx, ty, tz = (tx + (py * f2 - pz * f1), ty + (pz * f0 - px * f2),
+                          tz + (px * f1 - py * f0))
+        c = self.client
+        pb.applyExternalForce(self.body, -1, (fx_w + r[0] * drag_n, fy_w + r[3] * drag_n,
+                                              fz_w + r[6] * drag_n), com, pb.WORLD_FRAME,
+                              physicsClientId=c)
+        pb.applyExternalTorque(self.body, -1, (tx, ty, tz), pb.WORLD_FRAME, physicsClientId=c)
+
+    def reading(self) -> Reading:
+        """The base's pose and velocity, read from PyBullet once between physics steps:
+        the sensors' `state()` and the next `pre_step` share it. `pre_step` drops it before the
+        physics step; code that steps PyBullet without `pre_step` calls `forget()` first."""
+        if self._rd is None:
+            self._rd = self.read()
+        return self._rd
+
+    def state(self) -> BodyState:
+        """Ground truth now (base_link), from this step's one reading."""
+        if self._st is None:
+            self._st = self.state_of(self.reading())
+        return self._st
+
+    def forget(self) -> None:
+        """The body moves (a physics step, a placement): the next state is read anew."""
+        self._rd, self._st = None, None
+
+    def reset_pose(self, xyz: np.ndarray, quat: tuple[float, float, float, float]) -> None:
+        """Place base_link at `xyz`."""
+        super().reset_pose(xyz, quat)
+        self.forget()
+
+    def place(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
+              yaw_rate_radps: float) -> None:
+        """Put base_link at (x, y, yaw) moving at `v_mps` and turning at `yaw_rate_radps`
+        (see Base.place)."""
+        super().place(x_m, y_m, yaw_rad, v_mps, yaw_rate_radps)
+        self.forget()
 
     def wheel_states(self) -> tuple[list[float], list[float], list[float]]:
         """Steer-joint angles (rad), and the four wheels' angles (rad) and speeds (rad/s), in

@@ -76,7 +76,9 @@ class KartRobot(RobotBase):
         self.lidar = lidar_mod.MODELS[sensors.lidar.model]
         self.azimuths = self.lidar.azimuths(sensors.lidar.rate_hz)
         self.blocks = world.blocks
-        self._imu_prev: np.ndarray | None = None
+        self._imu_prev: tuple[float, ...] | None = None  # the IMU point's last velocity, m/s
+        rel, rel_rot = self.frames["imu_link"]
+        self._imu_mount = (_t3(rel), rel_rot.tolist())  # position (m) and rotation in base_link
         acc_std, gyro_std = _imu_noise(model, sensors)
         self._imu_std = acc_std, gyro_std
         self._imu_cov = (frozen(np.diag([acc_std**2] * 3).ravel()),
@@ -180,17 +182,31 @@ class KartRobot(RobotBase):
 
     def _imu(self, st: BodyState, t_ns: int, put: Put) -> None:
         """Specific force (gravity included) and angular rate in imu_link, from the finite
-        difference of the IMU point's velocity over one IMU period."""
-        rot = st.rotation
-        rel, rel_rot = self.frames["imu_link"]
-        w_world = rot @ np.asarray(st.w_body)
-        v_world = rot @ np.asarray(st.v_body) + np.cross(w_world, rot @ rel)
+        difference of the IMU point's velocity over one IMU period. Scalar arithmetic on the
+        odometry's state (numpy's 3x3 products summed in the same order: the same bits)."""
+        r = pb.getMatrixFromQuaternion(st.quat)  # row-major body-to-world
+        (x0, x1, x2), m = self._imu_mount
+        wb0, wb1, wb2 = st.w_body
+        vb0, vb1, vb2 = st.v_body
+        w0 = r[0] * wb0 + r[1] * wb1 + r[2] * wb2  # angular rate in the world
+        w1 = r[3] * wb0 + r[4] * wb1 + r[5] * wb2
+        w2 = r[6] * wb0 + r[7] * wb1 + r[8] * wb2
+        p0 = r[0] * x0 + r[1] * x1 + r[2] * x2  # the IMU's lever arm in the world
+        p1 = r[3] * x0 + r[4] * x1 + r[5] * x2
+        p2 = r[6] * x0 + r[7] * x1 + r[8] * x2
+        v = (r[0] * vb0 + r[1] * vb1 + r[2] * vb2 + (w1 * p2 - w2 * p1),
+             r[3] * vb0 + r[4] * vb1 + r[5] * vb2 + (w2 * p0 - w0 * p2),
+             r[6] * vb0 + r[7] * vb1 + r[8] * vb2 + (w0 * p1 - w1 * p0))
+        prev, self._imu_prev = self._imu_prev, v
         period = self.imu_every * self.dt
-        acc = np.zeros(3) if self._imu_prev is None else (v_world - self._imu_prev) / period
-        self._imu_prev = v_world
-        to_imu = (rot @ rel_rot).T
-        f = to_imu @ (acc + np.array([0.0, 0.0, 9.81]))
-        g = to_imu @ w_world
+        a = (0.0, 0.0, 0.0) if prev is None else tuple((v[i] - prev[i]) / period
+                                                        for i in range(3))
+        a = (a[0] + 0.0, a[1] + 0.0, a[2] + 9.81)  # plus gravity
+        # imu_link's rotation in the world (rot), then both vectors in imu_link
+        rot = [[r[3 * i] * m[0][j] + r[3 * i + 1] * m[1][j] + r[3 * i + 2] * m[2][j]
+                for j in range(3)] for i in range(3)]
+        f = np.array([rot[0][i] * a[0] + rot[1][i] * a[1] + rot[2][i] * a[2] for i in range(3)])
+        g = np.array([rot[0][i] * w0 + rot[1][i] * w1 + rot[2][i] * w2 for i in range(3)])
         acc_std, gyro_std = self._imu_std
         f = f + acc_std * self.rng.standard_normal(3)
         g = g + gyro_std * self.rng.standard_normal(3)
@@ -327,6 +343,10 @@ class KartRobot(RobotBase):
         body.accel = (0.0, 0.0)  # no load transfer carried over from before the jump
         self._target, self._imu_prev = None, None
         self.contacts.clear()
+
+
+def _t3(v: np.ndarray) -> tuple[float, float, float]:
+    return float(v[0]), float(v[1]), float(v[2])
 
 
 def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:

@@ -156,3 +156,92 @@ def drive_demand(model: GokartModel, accel_mps2: float, brake_mps2: float, rever
 def air_drag_n(model: GokartModel, vx_mps: float) -> float:
     """Aerodynamic drag along the body x axis, N: rho Cd A v |v| / 2."""
     return -0.5 * model.air_density_kgpm3 * model.drag_area_m2 * vx_mps * abs(vx_mps)
+
+
+class FourTyres:
+    """The four tyres' forces of one physics step in one flat loop, everything that stays the
+    same between steps worked out once: the physics loop's fast path (its Python was half of
+    a kart's step). The arithmetic is `normal_loads`, `wheel_force` and `air_drag_n` operation
+    for operation, min and max written out as the builtins compare (`max(a, b)` is `b if b > a
+    else a`), so the results are equal to the last bit (tests/robots/test_gokart_plant.py holds
+    them so).
+
+    Args:
+        model: The kart's parameters.
+        com_offset_m: The chassis' centre of mass in base_link (x, y, z), m: the forces'
+            lever arms are measured from it.
+    """
+
+    def __init__(self, model: GokartModel, com_offset_m: tuple[float, float, float]) -> None:
+        """Work out the per-wheel constants."""
+        self.model = model
+        self.mass = model.mass_kg
+        self.per_g = model.mass_kg * model.cog_height_m / GRAVITY_MPS2
+        self.axle_m = axle_distance_m(model)
+        self.rolling = rolling_decel_mps2(model)
+        self.drag_k = -0.5 * model.air_density_kgpm3 * model.drag_area_m2
+        ox, oy, _ = com_offset_m
+        self.wheels = tuple(
+            (2 * w.static_kg, w.driven, w.y_m, 2 * abs(w.y_m), w.x_m - ox, w.y_m - oy,
+             w.tyre.d_mps2, w.tyre.b, w.tyre.c, w.radius_m,
+             model.wheel_torque_limit_nm / w.radius_m)
+            for w in wheels(model))
+
+    def forces(self, demand: Demand, steer_rad: tuple[float, float], vx_mps: float,
+               vy_mps: float, yaw_rate_radps: float, accel_mps2: tuple[float, float],
+               mu_scale: list[float]) -> tuple[list[tuple[float, float, float]], list[float],
+                                               float, tuple[float, float]]:
+        """Each wheel's (rl, rr, fl, fr) body-frame force and grip (N), its spin (rad/s), the
+        air drag (N, along body x) and the body's acceleration from them all (m/s^2, x and y),
+        for the front wheels at `steer_rad` and the centre of mass moving at (vx, vy) in the
+        body frame and turning at `yaw_rate_radps`, after a step whose forces accelerated the
+        body by `accel_mps2`."""
+        m, mass, per_g = self.model, self.mass, self.per_g
+        ratio, k_slip, power = m.long_grip_ratio, m.long_slip_stiffness, m.motor_power_w
+        ax, ay = accel_mps2
+        to_rear = per_g * ax / self.axle_m
+        brake = demand.brake_mps2 + self.rolling
+        drive = mass * demand.drive_mps2 / 2
+        out: list[tuple[float, float, float]] = []
+        spins: list[float] = []
+        fx_sum = fy_sum = 0.0
+        for (two_static, driven, y, two_y, dx, dy, d, b, c, radius, torque_cap), delta, mu in zip(
+                self.wheels, (0.0, 0.0, *steer_rad), mu_scale, strict=True):
+            a = two_static + (to_rear if driven else -to_rear)
+            axle = a if a > 0.0 else 0.0
+            across = axle / mass * per_g * ay / two_y
+            half, reach = axle / 2, abs(across)
+            load = half - math.copysign(half if half < reach else reach, across * y)
+            cs, sn = math.cos(delta), math.sin(delta)
+            v0, v1 = vx_mps - yaw_rate_radps * dy, vy_mps + yaw_rate_radps * dx
+            v_long, v_lat = cs * v0 + sn * v1, -sn * v0 + cs * v1
+            speed = abs(v_long)
+            alpha = -math.atan2(v_lat, SLIP_SPEED_FLOOR_MPS if speed < SLIP_SPEED_FLOOR_MPS
+                                else speed)
+            f_lat = load * mu * (d * math.sin(c * math.atan(b * alpha)))
+            q = v_long / STOP_SPEED_MPS
+            q = q if q < 1.0 else 1.0
+            want = -load * brake * (q if q > -1.0 else -1.0)
+            if driven:
+                p = power / (1e-9 if speed < 1e-9 else speed)
+                cap = p if p < torque_cap else torque_cap
+                q = drive if drive < cap else cap
+                want += q if q > -cap else -cap
+            load_d = load * d
+            f_max = load_d * ratio * mu
+            q = want if want < f_max else f_max
+            f_long = q if q > -f_max else -f_max
+            if f_max > 0:
+                q = 1.0 - (f_long / f_max) ** 2
+                f_lat *= math.sqrt(q if q > 0.0 else 0.0)
+            else:
+                f_lat *= 0.0
+            stiffness = k_slip * load * GRAVITY_MPS2
+            slip = (f_long / stiffness if abs(want) <= f_max and stiffness > 0
+                    else math.copysign(1.0, want))
+            fx, fy = cs * f_long - sn * f_lat, sn * f_long + cs * f_lat
+            out.append((fx, fy, load_d * mu))
+            spins.append((v_long + slip * speed) / radius)
+            fx_sum, fy_sum = fx_sum + fx, fy_sum + fy
+        drag = self.drag_k * vx_mps * abs(vx_mps)
+        return out, spins, drag, ((fx_sum + drag) / mass, fy_sum / mass)
