@@ -7,11 +7,15 @@ from __future__ import annotations
 
 import ipaddress
 import os
+import subprocess
+import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import pytest
+from helpers import PAIR, QUICK
 
 from kartci.runner.ray_executor import start
 
@@ -122,3 +126,38 @@ def test_ray_is_left_as_found() -> None:
     """Single-machine mode is Ray's own again once the instance started."""
     constants = pytest.importorskip("ray._private.ray_constants")
     assert constants.ENABLE_RAY_CLUSTER is True
+
+
+def test_kartci_joins_a_two_node_cluster_on_loopback(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ray's own test cluster (two nodes, `ray.cluster_utils`) in Ray's single-machine mode, and
+    `kartci run --ray-address` with RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0 (else Ray rewrites
+    127.0.0.1 to the machine's address and finds no GCS there): the scenarios run as tasks on the
+    cluster and every socket, the kartci driver's included, stays on loopback."""
+    ray = pytest.importorskip("ray", reason='Ray is not installed (pip install "kartci[ray]")')
+    from ray.cluster_utils import Cluster  # optional dependency: ray
+    monkeypatch.setattr(ray._private.ray_constants, "ENABLE_RAY_CLUSTER", False)
+    cluster: Any = Cluster(initialize_head=True, head_node_args={"num_cpus": 1,
+                                                            "include_dashboard": False})
+    try:
+        cluster.add_node(num_cpus=1)
+        env = {**os.environ, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}
+        err = (tmp_path / "stderr").open("w")  # a file, not a pipe nobody reads while it runs
+        run = subprocess.Popen(
+            [sys.executable, "-m", "kartci.cli", "run", *PAIR, *QUICK, "--executor", "ray",
+             "--ray-address", cluster.address, "--out", str(tmp_path / "out"),
+             "--baselines", str(tmp_path)],  # none: judged NEW
+            env=env, stdout=subprocess.DEVNULL, stderr=err)
+        socks: set[Sock] = set()
+        while run.poll() is None:  # the driver's sockets exist only while it runs
+            socks |= set(_sockets(_inodes(_descendants(os.getpid()))))
+            time.sleep(0.2)
+        err.close()
+        assert run.returncode == 0, (tmp_path / "stderr").read_text()
+        assert sorted(p.parent.name for p in (tmp_path / "out").glob("*/metrics.json")) == sorted(
+            PAIR)
+        assert [n.node_ip_address for n in cluster.list_all_nodes()] == ["127.0.0.1"] * 2
+        assert {s.process for s in socks if s.state == LISTEN} >= {"gcs_server", "raylet"}
+        assert [s for s in socks if not (_is_loopback(s.local) and _is_loopback(s.remote))] == []
+    finally:
+        cluster.shutdown()
