@@ -193,51 +193,71 @@ class OcpQp:
         self.size = int(col[-1])
 
     def _buffers(self, st: Stages) -> None:
-        """numpy buffers for every stage block and the pointer arrays HPIPM reads them by."""
+        """numpy buffers for every stage block, those filled alike in one array each (one
+        numpy call fills them), and the pointer arrays HPIPM reads them by."""
         n, nx, nu, ng = st.n, st.nx, st.nu, st.ng
-        sizes = {
-            "A": [nx[k + 1] * nx[k] for k in range(n)], "B": [nx[k + 1] * nu[k] for k in range(n)],
-            "b": nx[1:], "Q": [v * v for v in nx], "S": [nu[k] * nx[k] for k in range(n + 1)],
-            "R": [v * v for v in nu], "q": nx, "r": nu, "lbx": nx, "ubx": nx, "lbu": nu,
-            "ubu": nu, "C": [ng[k] * nx[k] for k in range(n + 1)],
-            "D": [ng[k] * nu[k] for k in range(n + 1)], "lg": ng, "ug": ng,
-            "u": nu, "x": nx, "pi": nx[1:], "lam_b": [a + b for a, b in zip(nx, nu, strict=True)],
-            "lam_b2": [a + b for a, b in zip(nx, nu, strict=True)], "lam_g": ng, "lam_g2": ng}
-        self.buf = {key: np.zeros(max(sum(v), 1)) for key, v in sizes.items()}
-        self._p = {key: _ptrs(self.buf[key], v) for key, v in sizes.items()}
+        nb = [a + b for a, b in zip(nx, nu, strict=True)]
+        groups: dict[str, dict[str, list[int]]] = {
+            "jac": {"A": [nx[k + 1] * nx[k] for k in range(n)],
+                    "B": [nx[k + 1] * nu[k] for k in range(n)],
+                    "C": [ng[k] * nx[k] for k in range(n + 1)],
+                    "D": [ng[k] * nu[k] for k in range(n + 1)]},
+            "hess": {"Q": [v * v for v in nx], "S": [nu[k] * nx[k] for k in range(n + 1)],
+                     "R": [v * v for v in nu]},
+            "grad": {"q": nx, "r": nu}, "lower": {"lbx": nx, "lbu": nu},
+            "upper": {"ubx": nx, "ubu": nu}, "sol": {"x": nx, "u": nu},
+            "b": {"b": nx[1:]}, "lg": {"lg": ng}, "ug": {"ug": ng},
+            "duals": {"pi": nx[1:], "lam_lb": nb, "lam_ub": nb, "lam_lg": ng, "lam_ug": ng}}
+        self.buf: dict[str, np.ndarray] = {}
+        self._p = {}
+        for group, parts in groups.items():
+            whole = self.buf[group] = np.zeros(sum(sum(v) for v in parts.values()) + 1)
+            offset = 0
+            for key, sizes in parts.items():
+                self._p[key] = _ptrs(whole[offset:], sizes)
+                offset += sum(sizes)
+        a, h = self._a_index, self._h_index
+        self._jac_index = np.concatenate([a["A"], a["B"], a["C"], a["D"], [-1]])
+        self._hess_index = np.concatenate([h["Q"], h["S"], h["R"], [-1]])
+        self._var_index = np.concatenate([self._x_cols, self._u_cols])
+        self._sizes = {"A": sum(groups["jac"]["A"]), "B": sum(groups["jac"]["B"])}
         # every variable is boxed: bound j of a stage is its variable j
         self._index = np.concatenate([np.arange(v) for v in nx + nu] + [[0]]).astype(np.intc)
         self._idxbx = _ptrs(self._index, nx)
         self._idxbu = _ptrs(self._index[sum(nx):], nu)
         self._none = (ctypes.c_void_p * (n + 1))()  # slacks: none
 
+    def _fill(self, hess: np.ndarray, jac: np.ndarray, grad: np.ndarray, lba: np.ndarray,
+              uba: np.ndarray, lbx: np.ndarray, ubx: np.ndarray) -> None:
+        """The stage blocks from the QP, as CasADi's interface computes them."""
+        b, var = self.buf, self._var_index
+        np.take(jac, self._jac_index, out=b["jac"])
+        diag = jac[self._a_index["I"]]
+        np.multiply(lba[self._dyn_rows], -1.0, out=b["b"][:-1])
+        if not (diag == -1.0).all():  # else a scale of 1.0: the same bits
+            scale = -1.0 / diag  # -1 / the coefficient of x_{k+1}
+            na, nb = self._sizes["A"], self._sizes["B"]
+            b["jac"][:na] *= scale[self._row_of["A"]]
+            b["jac"][na:na + nb] *= scale[self._row_of["B"]]
+            b["b"][:-1] *= scale
+        np.take(hess, self._hess_index, out=b["hess"])
+        b["hess"] *= 0.5  # HPIPM's cost is 1/2 of CasADi's
+        np.multiply(grad[var], 0.5, out=b["grad"][:-1])
+        np.add(0.0, lbx[var], out=b["lower"][:-1])
+        np.add(0.0, ubx[var], out=b["upper"][:-1])
+        np.take(lba, self._path_rows, out=b["lg"][:-1])
+        np.take(uba, self._path_rows, out=b["ug"][:-1])
+        for key in ("lower", "lg"):
+            np.maximum(b[key], -INF, out=b[key])
+        for key in ("upper", "ug"):
+            np.minimum(b[key], INF, out=b[key])
+
     def solve(self, hess: np.ndarray, jac: np.ndarray, grad: np.ndarray, lba: np.ndarray,
               uba: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
               out: np.ndarray) -> tuple[bool, int]:
         """The step into `out`, whether HPIPM solved it (status 0) and its iteration count.
         `hess` and `jac` are the nonzeros of H and J, each with one zero appended."""
-        b = self.buf
-        for key, index in self._a_index.items():
-            if key != "I":
-                np.take(jac, index, out=b[key])
-        scale = -1.0 / jac[self._a_index["I"]]  # -1 / the coefficient of x_{k+1}: 1 here
-        b["A"] *= scale[self._row_of["A"]]
-        b["B"] *= scale[self._row_of["B"]]
-        np.multiply(lba[self._dyn_rows], -1.0, out=b["b"])
-        b["b"] *= scale
-        for key, index in self._h_index.items():  # HPIPM's cost is 1/2 of CasADi's
-            np.multiply(hess[index], 0.5, out=b[key])
-        np.multiply(grad[self._x_cols], 0.5, out=b["q"])
-        np.multiply(grad[self._u_cols], 0.5, out=b["r"])
-        for key, vec, cols in (("lbx", lbx, self._x_cols), ("ubx", ubx, self._x_cols),
-                               ("lbu", lbx, self._u_cols), ("ubu", ubx, self._u_cols)):
-            np.add(0.0, vec[cols], out=b[key])
-        np.take(lba, self._path_rows, out=b["lg"])
-        np.take(uba, self._path_rows, out=b["ug"])
-        for key in ("lbx", "lbu", "lg"):
-            np.maximum(b[key], -INF, out=b[key])
-        for key in ("ubx", "ubu", "ug"):
-            np.minimum(b[key], INF, out=b[key])
+        self._fill(hess, jac, grad, lba, uba, lbx, ubx)
         lib, p, none = _hpipm(), self._p, self._none
         lib.qp_set_all(p["A"], p["B"], p["b"], p["Q"], p["S"], p["R"], p["q"], p["r"],
                        self._idxbx, p["lbx"], p["ubx"], self._idxbu, p["lbu"], p["ubu"],
@@ -247,10 +267,9 @@ class OcpQp:
         status, iters = ctypes.c_int(), ctypes.c_int()
         lib.get_status(self.ws, ctypes.byref(status))
         lib.get_iter(self.ws, ctypes.byref(iters))
-        lib.sol_get_all(self.sol, p["u"], p["x"], none, none, p["pi"], p["lam_b"],
-                        p["lam_b2"], p["lam_g"], p["lam_g2"], none, none)
-        out[self._x_cols] = b["x"][:len(self._x_cols)]
-        out[self._u_cols] = b["u"][:len(self._u_cols)]
+        lib.sol_get_all(self.sol, p["u"], p["x"], none, none, p["pi"], p["lam_lb"],
+                        p["lam_ub"], p["lam_lg"], p["lam_ug"], none, none)
+        out[self._var_index] = self.buf["sol"][:-1]
         out += 0.0  # CasADi adds the solution to zeros: -0.0 becomes 0.0
         return status.value == 0, iters.value
 
