@@ -24,7 +24,6 @@ INF = 1e8  # CasADi's HPIPM interface replaces infinite bounds with this
 SPEED = 1  # enum hpipm_mode: SPEED_ABS, SPEED, BALANCE, ROBUST
 
 
-
 def _library(name: str) -> ctypes.CDLL:
     """One of the libraries in CasADi's wheel (the ones its HPIPM plugin loads)."""
     return ctypes.CDLL(str(Path(ca.__file__).parent / name), mode=ctypes.RTLD_GLOBAL)
