@@ -20,9 +20,10 @@ from kartci.metrics import Metric, compute
 from kartci.project import BUILTIN_SIMS
 from kartci.robots.gokart.mpcc import Mpcc
 from kartci.robots.gokart.mpcc.cache import solver_key
+from kartci.robots.gokart.mpcc.direct import OcpQp
 from kartci.robots.gokart.mpcc.model import SingleTrack
 from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, QpSolver
-from kartci.robots.gokart.mpcc.rti import RtiStatus
+from kartci.robots.gokart.mpcc.rti import RtiStatus, qp_options
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
@@ -67,41 +68,49 @@ def test_the_method_is_selectable_with_set_and_a_bad_one_is_one_clear_error() ->
         load_scenario("mpcc_lap", ["agents.kart0.controller.method=sqp"])
 
 
-def test_hpipm_solves_the_structured_qp_as_a_general_solver_does(
+def test_hpipm_solves_the_structured_qp_as_casadi_does_and_as_a_general_solver_does(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """HPIPM reads the QP through the OCP structure (stages, signs of the dynamics rows); the
-    same QP handed to OSQP as a plain sparse QP must give the same step."""
+    """HPIPM called directly reads the QP through the OCP structure (stages, signs of the
+    dynamics rows): CasADi's HPIPM interface on the same QP gives the same step to the last
+    bit, and OSQP on it as a plain sparse QP the same step within 1e-3."""
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
     spec = MpccController(method=MpccMethod.RTI, horizon_steps=8)
     track = load_track(BUILTIN_SIMS / "winti" / "track.csv")
     mpcc = Mpcc(spec, GokartModel(), track)
     assert mpcc.built.rti is not None and mpcc.built.compiled
-    seen: list[dict[str, ca.DM]] = []
     hpipm = mpcc.built.rti.qp
+    assert isinstance(hpipm, OcpQp)
+    seen: list[list[np.ndarray]] = []
+    solve = hpipm.solve
 
-    class Recorder:
-        def __call__(self, **qp: ca.DM) -> dict[str, ca.DM]:
-            seen.append(qp)
-            return hpipm(**qp)
+    def recording(*qp: np.ndarray) -> tuple[bool, int]:
+        seen.append([np.array(a) for a in qp[:-1]])
+        return solve(*qp)
 
-        def stats(self) -> dict[str, object]:
-            return hpipm.stats()
-
-    mpcc.built.rti.qp = Recorder()  # type: ignore[assignment]
+    monkeypatch.setattr(hpipm, "solve", recording)
     x, y, psi = track.pose_at(0.0, 0.0)
     plan = mpcc.solve(np.array([x, y, psi, 2.0, 0, 0, 0, 0, 0]), [])
     assert plan.success and plan.status == RtiStatus.SOLVED
     assert len(seen) == spec.sqp_cold_iterations
     lin = mpcc.built.rti.lin
-    osqp = ca.conic("ref", "osqp", {"h": lin.sparsity_out("hess_f"),
-                                    "a": lin.sparsity_out("jac_g")},
+    h, a = lin.sparsity_out("hess_f"), lin.sparsity_out("jac_g")
+    casadi_hpipm = ca.conic("casadi_hpipm", "hpipm", {"h": h, "a": a}, qp_options(spec))
+    osqp = ca.conic("ref", "osqp", {"h": h, "a": a},
                     # 1e-7: at 1e-9 ADMM hits its iteration cap on the last QP (within
                     # 1.4e-5 of HPIPM's step), 1e-7 it reaches, far below the 1e-3 compared
                     {"osqp": {"verbose": False, "eps_abs": 1e-7, "eps_rel": 1e-7,
                               "max_iter": 100000, "polish": True}})
-    for qp in (seen[0], seen[-1]):
-        ours = np.asarray(hpipm(**qp)["x"]).ravel()
-        ref = np.asarray(osqp(**qp)["x"]).ravel()
+    for hess, jac, grad, lba, uba, lbx, ubx in seen:
+        ours = np.empty(len(grad))
+        assert solve(hess, jac, grad, lba, uba, lbx, ubx, ours)[0]
+        theirs = casadi_hpipm(h=ca.DM(h, hess[:-1]), g=grad, a=ca.DM(a, jac[:-1]), lba=lba,
+                              uba=uba, lbx=lbx, ubx=ubx)["x"]
+        assert ours.tobytes() == np.asarray(theirs).ravel().tobytes()
+    for hess, jac, grad, lba, uba, lbx, ubx in (seen[0], seen[-1]):
+        ours = np.empty(len(grad))
+        solve(hess, jac, grad, lba, uba, lbx, ubx, ours)
+        ref = np.asarray(osqp(h=ca.DM(h, hess[:-1]), g=grad, a=ca.DM(a, jac[:-1]), lba=lba,
+                              uba=uba, lbx=lbx, ubx=ubx)["x"]).ravel()
         assert np.abs(ours - ref).max() < 1e-3 * max(1.0, np.abs(ref).max())
     assert plan.accel_mps2 > 0  # from 2 m/s on the straight: it speeds up
 

@@ -80,10 +80,11 @@ def get_solver(spec: MpccController, model: SingleTrack) -> Built:
     hit = False
     if spec.method is MpccMethod.RTI:
         lin = linearisation(nlp, spec.horizon_steps)
+        lib: Path | None = None
         if cc is not None:
             lib, hit = _cached(spec, model, [lin], cc)
             lin = _load(lambda: ca.external(lin.name(), str(lib)), str(lib))
-        return Built(None, None, Rti(lin, spec), layout, cc is not None,
+        return Built(None, None, Rti(lin, spec, lib), layout, cc is not None,
                      time.perf_counter() - t0, hit)
     source: Any = nlp
     label = "(interpreted)"

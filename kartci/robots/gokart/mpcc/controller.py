@@ -151,7 +151,6 @@ class Mpcc:
 
     def _initial_guess(self, x0: np.ndarray) -> np.ndarray:
         lay, sp = self.lay, self.spec
-        w = np.zeros(lay.size)
         if self._w is not None:  # shift the last solution by one step
             xs, us = lay.states(self._w), lay.inputs(self._w)
             xs = np.vstack([xs[1:], xs[-1:]])
@@ -173,11 +172,7 @@ class Mpcc:
             us[:, VS] = xs[1:, VX]
             self._lam_g = self._lam_x = None
         xs[0] = x0
-        for k in range(lay.n + 1):
-            w[lay.x(k)] = xs[k]
-            if k < lay.n:
-                w[lay.u(k)] = us[k]
-        return w
+        return lay.pack(xs, us)
 
     def _along_track(self, xs: np.ndarray, x0: np.ndarray) -> None:
         """A fresh guess's poses: on the track at the guessed progress, at the kart's lateral

@@ -60,13 +60,25 @@ class Layout:
         start = k * (NX + NU) + NX
         return slice(start, start + NU)
 
+    def _stages(self, w: np.ndarray) -> np.ndarray:
+        """Stages 0..N-1 of w as rows [x_k u_k] (a view)."""
+        return w[:self.n * (NX + NU)].reshape(self.n, NX + NU)
+
     def states(self, w: np.ndarray) -> np.ndarray:
         """The N + 1 states in w, one row per stage."""
-        return np.stack([w[self.x(k)] for k in range(self.n + 1)])
+        return np.vstack([self._stages(w)[:, :NX], w[None, self.x(self.n)]])
 
     def inputs(self, w: np.ndarray) -> np.ndarray:
         """The N inputs in w, one row per stage."""
-        return np.stack([w[self.u(k)] for k in range(self.n)])
+        return self._stages(w)[:, NX:].copy()
+
+    def pack(self, states: np.ndarray, inputs: np.ndarray) -> np.ndarray:
+        """The decision vector w of N + 1 states and N inputs (rows)."""
+        w = np.empty(self.size)
+        rows = self._stages(w)
+        rows[:, :NX], rows[:, NX:] = states[:self.n], inputs
+        w[self.x(self.n)] = states[self.n]
+        return w
 
 
 def weights_vector(w: MpccWeights) -> list[float]:
@@ -153,11 +165,8 @@ def variable_bounds(spec: MpccController, lay: Layout, x0: np.ndarray,
     u_lo = np.array([-spec.max_jerk_mps3, -spec.max_steer_rate_radps, 0.0, 0.0])
     u_hi = np.array([spec.max_jerk_mps3, spec.max_steer_rate_radps,
                      spec.max_speed_mps * 1.2, np.inf])
-    lbw, ubw = np.empty(lay.size), np.empty(lay.size)
-    for k in range(lay.n + 1):
-        lbw[lay.x(k)], ubw[lay.x(k)] = (x0, x0) if k == 0 else (x_lo, x_hi)
-        if k < lay.n:
-            lbw[lay.u(k)], ubw[lay.u(k)] = u_lo, u_hi
+    lbw = lay.pack(np.vstack([x0, np.tile(x_lo, (lay.n, 1))]), np.tile(u_lo, (lay.n, 1)))
+    ubw = lay.pack(np.vstack([x0, np.tile(x_hi, (lay.n, 1))]), np.tile(u_hi, (lay.n, 1)))
     ubw[lay.u(0).start + SLACK] = 0.0  # stage 0 has no path constraints to relax
     return lbw, ubw
 

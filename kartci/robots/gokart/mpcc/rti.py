@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
+from pathlib import Path
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from kartci.robots.gokart.mpcc.direct import CompiledFunction, OcpQp, Stages
 from kartci.robots.gokart.mpcc.model import NU, NX
 from kartci.robots.gokart.mpcc.ocp import CONSTRAINTS_PER_STAGE, equality
 from kartci.robots.gokart.mpcc.params import MpccController, QpSolver
@@ -58,7 +60,7 @@ def linearisation(nlp: dict[str, ca.MX], n: int) -> ca.Function:
                        ["w", "p"], ["g", "jac_g", "f", "grad_f", "hess_f"])
 
 
-def _qp_options(spec: MpccController) -> dict[str, Any]:
+def qp_options(spec: MpccController) -> dict[str, Any]:
     """The QP solver's options: the OCP structure for HPIPM, an iteration cap for all."""
     n, cap = spec.horizon_steps, spec.max_iterations
     common: dict[str, Any] = {"error_on_fail": False, "print_problem": False}
@@ -78,13 +80,57 @@ def _qp_options(spec: MpccController) -> dict[str, Any]:
     return {**common, "daqp": {"iter_limit": cap * 10}}
 
 
-class Rti:
-    """The compiled linearisation and a QP solver for its sparsity."""
+def stages(n: int) -> Stages:
+    """The OCP's stage sizes as `ocp.build` stacks them: no path constraints on x_0 (it is
+    fixed) nor on x_N, no input at stage N."""
+    return Stages(n, [NX] * (n + 1), [NU] * n + [0],
+                  [0] + [CONSTRAINTS_PER_STAGE - NX] * (n - 1) + [0])
 
-    def __init__(self, lin: ca.Function, spec: MpccController) -> None:
+
+class ConicQp:
+    """A QP solver through CasADi's conic interface (OSQP, qpOASES, DAQP; HPIPM for
+    comparison), on the same arguments as `OcpQp`."""
+
+    def __init__(self, qp: ca.Function, h: ca.Sparsity, a: ca.Sparsity) -> None:
+        self.qp, self.h, self.a = qp, h, a
+
+    def solve(self, hess: np.ndarray, jac: np.ndarray, grad: np.ndarray, lba: np.ndarray,
+              uba: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
+              out: np.ndarray) -> tuple[bool, int]:
+        """The step into `out`, whether it solved and its iteration count."""
+        sol = self.qp(h=ca.DM(self.h, hess[:-1]), g=grad, a=ca.DM(self.a, jac[:-1]), lba=lba,
+                      uba=uba, lbx=lbx, ubx=ubx)
+        stats = self.qp.stats()
+        out[:] = np.asarray(sol["x"]).ravel()
+        return bool(stats.get("success", False)), int(stats.get("iter_count", 0))
+
+
+class _Interpreted:
+    """The linearisation as a CasADi function (no C compiler): outputs as `CompiledFunction`
+    gives them."""
+
+    def __init__(self, fn: ca.Function) -> None:
+        self.fn = fn
+
+    def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
+        return [np.append(np.asarray(out.nonzeros(), dtype=float), 0.0)
+                for out in self.fn(*args)]
+
+
+class Rti:
+    """The compiled linearisation and a QP solver for its sparsity: HPIPM through its own
+    interface (`direct.py`), the other solvers through CasADi's."""
+
+    def __init__(self, lin: ca.Function, spec: MpccController,
+                 library: Path | None = None) -> None:
         self.lin = lin
-        sparsity = {"h": lin.sparsity_out("hess_f"), "a": lin.sparsity_out("jac_g")}
-        self.qp = ca.conic("mpcc_qp", spec.qp_solver.value, sparsity, _qp_options(spec))
+        self.evaluate = CompiledFunction(lin, library) if library else _Interpreted(lin)
+        h, a = lin.sparsity_out("hess_f"), lin.sparsity_out("jac_g")
+        self.qp: OcpQp | ConicQp = (
+            OcpQp(stages(spec.horizon_steps), h, a, spec.max_iterations, QP_TOL)
+            if spec.qp_solver is QpSolver.HPIPM else
+            ConicQp(ca.conic("mpcc_qp", spec.qp_solver.value, {"h": h, "a": a},
+                             qp_options(spec)), h, a))
 
     def solve(self, w: np.ndarray, p: np.ndarray, lbw: np.ndarray, ubw: np.ndarray,
               lbg: np.ndarray, ubg: np.ndarray, iterations: int) -> Iterate:
@@ -92,16 +138,15 @@ class Rti:
         iterate's cost at its linearisation point. A QP that fails after others solved ends
         the iterations with the iterate so far, itself an RTI plan."""
         qp_iters, cost = 0, float("nan")
+        step = np.empty(len(w))
         for done in range(iterations):
-            g, jac, f, grad, hess = self.lin(w, p)
-            cost = float(f)
-            g = np.asarray(g).ravel()
-            sol = self.qp(h=hess, g=grad, a=jac, lba=lbg - g, uba=ubg - g, lbx=lbw - w,
-                          ubx=ubw - w)
-            stats = self.qp.stats()
-            qp_iters += int(stats.get("iter_count", 0))
-            step = np.asarray(sol["x"]).ravel()
-            if not stats.get("success", False) or not np.isfinite(step).all():
+            g, jac, f, grad, hess = self.evaluate(w, p)
+            cost = float(f[0])
+            g = g[:-1]
+            ok, iters = self.qp.solve(hess, jac, grad[:-1], lbg - g, ubg - g, lbw - w, ubw - w,
+                                      step)
+            qp_iters += iters
+            if not ok or not np.isfinite(step).all():
                 status = RtiStatus.QP_FAILED if done == 0 else RtiStatus.SOLVED_EARLY
                 return Iterate(w, cost, status, qp_iters)
             w = w + step
