@@ -208,7 +208,7 @@ class LogReader:
             m = self.decode(raw)
             if m is not None:
                 yield raw[0], raw[3], m
-        self._report_undecodable()
+        self.report_undecodable()
 
     def raw(self, wanted: Sequence[str] | None = None) -> Iterator[Raw]:
         """Like messages(), but undecoded: (topic, msgtype, ROS 1 encoded, log time ns, bytes).
@@ -287,7 +287,9 @@ class LogReader:
         self._checked.clear()
         self.note(text)
 
-    def _report_undecodable(self) -> None:
+    def report_undecodable(self) -> None:
+        """Note the messages decode() could not decode since the last note (messages() does
+        this at its end; a caller of raw() and decode() calls it itself)."""
         if not self._undecodable:
             return
         parts = [f"{n} on {topic} ({self._why[topic]})" for topic, n in

@@ -57,8 +57,14 @@ class McapLogWriter:
         """Append one message; a topic's first message decides its QoS (`latched`: published
         once, transient-local, like /tf_static)."""
         typename = message.__msgtype__
+        self.write_cdr(topic, typename, self.store.serialize_cdr(message, typename), t_ns,
+                       latched)
+
+    def write_cdr(self, topic: str, typename: str, data: bytes | memoryview, t_ns: int,
+                  latched: bool = False) -> None:
+        """Append one message already serialised as CDR (kartci.logs.poses writes a long pose
+        stream in bulk)."""
         cid = self._channel(topic, typename, latched)
-        data = self.store.serialize_cdr(message, typename)
         seq = self._seq.get(cid, 0)
         self._seq[cid] = seq + 1
         self._writer.add_message(cid, log_time=t_ns, data=bytes(data), publish_time=t_ns,
