@@ -19,10 +19,11 @@ from kartci.verdict.result import ScenarioResult
 
 def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
               allow_outside_paths: bool = False, align: Alignment | None = None,
-              align_first: int | None = None) -> ScenarioResult:
+              align_first: int | None = None, with_plots: bool = True) -> ScenarioResult:
     """Import `log` into OUT/<profile name>/run.mcap, compute metrics.json from it and judge it
     against `baselines/<profile name>.json`. `align` / `align_first` replace the profile's
-    (the estimate's alignment onto the reference). Bad input (profile, missing topics, a
+    (the estimate's alignment onto the reference); `with_plots`: the report's time series and
+    paths too (only an HTML report draws them). Bad input (profile, missing topics, a
     profile's track outside the project without `allow_outside_paths`) raises before anything
     is written."""
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
@@ -33,7 +34,7 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
     folder = out / profile.name
     write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst).warnings,
                  {"imported_from": str(log.resolve()), "profile": profile.name})
-    return evaluate(folder, baselines)
+    return evaluate(folder, baselines, with_plots)
 
 
 def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
