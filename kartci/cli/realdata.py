@@ -85,7 +85,8 @@ def simreal_cmd(
     profile: ProfileOpt = None,
     scenario: Annotated[str | None, typer.Option(
         help="Scenario whose world and robot are simulated (default: the profile's, else the "
-             "one its robot kind names for sim vs real).")] = None,
+             "one its robot kind names for sim vs real, else the one the log's command type "
+             "picks, said on stderr).")] = None,
     window_s: Annotated[float, typer.Option(
         "--window-s", min=0.05, help="Re-start the sim from the log's state every this many "
              "seconds.")] = 2.0,
@@ -106,7 +107,8 @@ def simreal_cmd(
         clear_reports(out)
         base = baselines_dir(baselines)
         result = simreal_log(log, profile, scenario, set_ or [], window_s, out, base,
-                             allow_outside_paths)
+                             allow_outside_paths, say=lambda line: typer.echo(
+                                 f"kartci: {line}", err=True))
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "simreal", [result.name])

@@ -5,7 +5,7 @@ exactly as a simulated run is."""
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from kartci.metrics.alignment import Alignment
@@ -39,12 +39,16 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
 
 def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
                 overrides: Sequence[str], window_s: float, out: Path,
-                baselines: Path, allow_outside_paths: bool = False) -> ScenarioResult:
+                baselines: Path, allow_outside_paths: bool = False,
+                say: Callable[[str], None] = print) -> ScenarioResult:
     """The log's commands replayed into the sim (whole and windowed) into
-    OUT/<profile name>_simreal/, scored for divergence and judged like a run."""
+    OUT/<profile name>_simreal/, scored for divergence and judged like a run. A scenario
+    guessed from the log (none named) is told through `say`, with why, in one line."""
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
-    setup = simreal.sim_setup(profile, scenario, overrides)
+    setup = simreal.sim_setup(profile, scenario, overrides, types)
+    if setup.picked:
+        say(setup.picked)
     simreal.check_commands(setup, profile, types)
     name = f"{profile.name}_simreal"
     t0 = time.perf_counter()
