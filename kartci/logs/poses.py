@@ -1,5 +1,6 @@
 """Pose streams in bulk: Odometry, PoseStamped and PoseWithCovarianceStamped read straight from
-their CDR bytes into numpy arrays, and Odometry written back the same way.
+their CDR bytes into numpy arrays, and Odometry written back the same way; planar poses
+(turtlesim's Pose, Pose2D) mapped onto the same arrays.
 
 A long log holds tens of thousands of poses; decoding each into a message object, and building
 and serialising one per output message, was most of `kartci score`'s time. CDR lays these
@@ -23,8 +24,13 @@ from kartci.logs.reader import Raw
 from kartci.logs.types import stamp_ns, typestore, yaw_from
 
 ODOMETRY = "nav_msgs/msg/Odometry"
-POSE_TYPES = (ODOMETRY, "geometry_msgs/msg/PoseStamped",
-              "geometry_msgs/msg/PoseWithCovarianceStamped")
+LAID_OUT = (ODOMETRY, "geometry_msgs/msg/PoseStamped",
+            "geometry_msgs/msg/PoseWithCovarianceStamped")  # decoded in bulk
+# planar poses without a header (stamped by log time, no frame): their fields x, y, heading
+# (rad) and, where the type has them, forward speed (m/s) and yaw rate (rad/s)
+PLANAR = {"turtlesim/msg/Pose": ("x", "y", "theta", "linear_velocity", "angular_velocity"),
+          "geometry_msgs/msg/Pose2D": ("x", "y", "theta", None, None)}
+POSE_TYPES = (*LAID_OUT, *PLANAR)
 _CDR_LE = b"\x00\x01"  # encapsulation: plain CDR, little endian
 _COV = 36  # doubles in a covariance matrix
 
@@ -71,7 +77,7 @@ def _layout(msgtype: str, body: bytes) -> tuple[tuple[int, bytes, bytes], int] |
     if msgtype == ODOMETRY:
         end, child = _string_end(body, end)
     start = _align(end, 8)
-    doubles = 7 + {ODOMETRY: 2 * _COV + 6, POSE_TYPES[1]: 0, POSE_TYPES[2]: _COV}[msgtype]
+    doubles = 7 + {ODOMETRY: 2 * _COV + 6, LAID_OUT[1]: 0, LAID_OUT[2]: _COV}[msgtype]
     if start + 8 * doubles != len(body) or not frame.endswith(b"\x00"):
         return None
     return (len(body), frame, child), start
@@ -84,8 +90,11 @@ def _columns(rows: np.ndarray, start: int, count: int, dtype: str) -> np.ndarray
 
 
 def same_definitions(store: Typestore, msgtype: str) -> bool:
-    """Whether `store` defines `msgtype` as kartci's standard store does (else the bytes are
-    decoded by the log's own definition, one by one)."""
+    """Whether `msgtype` is decoded in bulk: one of LAID_OUT, which `store` defines as kartci's
+    standard store does (else the bytes are decoded by the log's own definition, one by
+    one)."""
+    if msgtype not in LAID_OUT:
+        return False
     try:
         return bool(store.generate_msgdef(msgtype, ros_version=2)
                     == typestore().generate_msgdef(msgtype, ros_version=2))
@@ -97,7 +106,7 @@ def decode_poses(raws: Sequence[Raw], standard: bool, decode: Callable[[Raw], An
     """The pose stream of `raws` (one topic, one type): bulk where the bytes are standard CDR
     (`standard`: the log defines the type as kartci does), else `decode(raw)` per message
     (None: skipped, as the reader's messages() skips it)."""
-    msgtype = raws[0][1] if raws else POSE_TYPES[1]
+    msgtype = raws[0][1] if raws else LAID_OUT[1]
     groups: dict[tuple[int, bytes, bytes], tuple[int, list[int]]] = {}
     single: list[tuple[int, Any]] = []
     for i, raw in enumerate(raws):
@@ -111,7 +120,8 @@ def decode_poses(raws: Sequence[Raw], standard: bool, decode: Callable[[Raw], An
     n = len(raws)
     keep = np.ones(n, bool)
     stamp, xyz, quat = np.zeros(n, np.int64), np.zeros((n, 3)), np.zeros((n, 4))
-    twist = np.zeros((n, 6)) if msgtype == ODOMETRY else None
+    has_twist = msgtype == ODOMETRY or PLANAR.get(msgtype, (None,) * 5)[3] is not None
+    twist = np.zeros((n, 6)) if has_twist else None
     frame_of: dict[int, str] = {}
     for (length, frame, _), (start, idx) in groups.items():
         rows = np.frombuffer(b"".join([raws[i][4][4:] for i in idx]), np.uint8).reshape(-1,
@@ -128,10 +138,13 @@ def decode_poses(raws: Sequence[Raw], standard: bool, decode: Callable[[Raw], An
         if m is None:
             keep[i] = False
             continue
+        if msgtype in PLANAR:
+            _fill_planar(m, PLANAR[msgtype], i, xyz, quat, twist)
+            continue
         _fill(m, i, stamp, xyz, quat, twist)
         frame_of[i] = str(getattr(m.header, "frame_id", "") or "")
     t_log = np.array([raw[3] for raw in raws], np.int64)
-    frames = tuple(dict.fromkeys(frame_of[i] for i in range(n) if keep[i]))
+    frames = tuple(dict.fromkeys(frame_of[i] for i in range(n) if keep[i] and i in frame_of))
     return Poses(t_log[keep], stamp[keep], xyz[keep], quat[keep],
                  None if twist is None else twist[keep], frames)
 
@@ -146,6 +159,16 @@ def _fill(m: Any, i: int, stamp: np.ndarray, xyz: np.ndarray, quat: np.ndarray,
     if twist is not None:
         lin, ang = m.twist.twist.linear, m.twist.twist.angular
         twist[i] = lin.x, lin.y, lin.z, ang.x, ang.y, ang.z
+
+
+def _fill_planar(m: Any, fields: tuple[str | None, ...], i: int, xyz: np.ndarray,
+                 quat: np.ndarray, twist: np.ndarray | None) -> None:
+    """Row `i` from a planar pose (PLANAR's fields): z 0, the heading as a rotation about z."""
+    x, y, yaw, v, w = (float(getattr(m, f)) if f else 0.0 for f in fields)
+    xyz[i] = x, y, 0.0
+    quat[i] = 0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)
+    if twist is not None:
+        twist[i] = v, 0.0, 0.0, 0.0, 0.0, w
 
 
 def body_twist(t_ns: np.ndarray, xyz: np.ndarray, quat: np.ndarray) -> np.ndarray:
@@ -197,5 +220,5 @@ def odometry_cdr(stamp: np.ndarray, frame: str, child: str, xyz: np.ndarray, qua
     return [row.tobytes() for row in rows]
 
 
-__all__ = ["ODOMETRY", "POSE_TYPES", "Poses", "body_twist", "decode_poses", "odometry_cdr",
-           "same_definitions"]
+__all__ = ["LAID_OUT", "ODOMETRY", "PLANAR", "POSE_TYPES", "Poses", "body_twist", "decode_poses",
+           "odometry_cdr", "same_definitions"]

@@ -205,7 +205,7 @@ def _decode_roles(log: Path, reader: LogReader, by_topic: dict[str, str],
         for frame in poses.frames:
             _check_frame(log, checks, topic, frame)
         got.poses[name] = poses
-        if len(poses):
+        if poses.frames:  # planar poses have no header, hence no frame
             got.frames[name] = poses.frames[0].lstrip("/")
     reader.report_undecodable()
 

@@ -14,7 +14,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from kartci.logs import SalvagedLog, open_log, tables
-from kartci.logs.poses import POSE_TYPES, decode_poses, odometry_cdr, same_definitions
+from kartci.logs.poses import LAID_OUT, decode_poses, odometry_cdr, same_definitions
 from kartci.logs.tables import _read
 from kartci.realdata.importer import import_log
 from kartci.realdata.profile import resolve_profile
@@ -51,7 +51,7 @@ def _write(path: Path) -> dict[str, list[Any]]:
     rng = np.random.default_rng(4)
     written: dict[str, list[Any]] = {}
     with Writer(path, version=8, storage_plugin=StoragePlugin.MCAP) as w:
-        for i, msgtype in enumerate(POSE_TYPES):
+        for i, msgtype in enumerate(LAID_OUT):
             conn = w.add_connection(f"/p{i}", msgtype, typestore=STORE)
             written[conn.topic] = []
             for k in range(60):
@@ -62,10 +62,10 @@ def _write(path: Path) -> dict[str, list[Any]]:
     return written
 
 
-@pytest.mark.parametrize("msgtype", POSE_TYPES)
+@pytest.mark.parametrize("msgtype", LAID_OUT)
 def test_bulk_decoding_gives_what_rosbags_decodes(tmp_path: Path, msgtype: str) -> None:
     written = _write(tmp_path / "log")
-    topic = f"/p{POSE_TYPES.index(msgtype)}"
+    topic = f"/p{LAID_OUT.index(msgtype)}"
     with open_log(tmp_path / "log") as log:
         raws = list(log.raw([topic]))
         assert same_definitions(log.typestore, msgtype)
@@ -75,7 +75,7 @@ def test_bulk_decoding_gives_what_rosbags_decodes(tmp_path: Path, msgtype: str) 
     for a, b in ((fast.t_log, slow.t_log), (fast.stamp, slow.stamp), (fast.xyz, slow.xyz),
                  (fast.quat, slow.quat)):
         assert a.tobytes() == b.tobytes()
-    assert (fast.twist is None) == (slow.twist is None) == (msgtype != POSE_TYPES[0])
+    assert (fast.twist is None) == (slow.twist is None) == (msgtype != LAID_OUT[0])
     if fast.twist is not None and slow.twist is not None:
         assert fast.twist.tobytes() == slow.twist.tobytes()
     assert fast.frames == slow.frames == ("map", "odom", "a/long_frame")
