@@ -306,7 +306,8 @@ def _salvaged(path: Path, why: str, err: Exception) -> tuple[_Streamed, str]:
     except (NotStreamableError, OSError):
         raise LogError(f"{path}: {why}") from err
     if not found.conns:
-        raise LogError(f"{path}: {why}; streaming through it found no topics either") from err
+        raise LogError(f"{path}: {why}; reading it {found.how} found no topics either"
+                       ) from err
     source = _Streamed(found)
     extra = [*found.problems, *source.problems]
     if found.skipped_chunks:
@@ -316,7 +317,7 @@ def _salvaged(path: Path, why: str, err: Exception) -> tuple[_Streamed, str]:
     counts = found.counts()
     n = sum(counts[key] for key in found.conns)
     read = f"{count_of(n, 'message')} on {count_of(len(found.conns), 'topic')}"
-    return source, (f"{path}: {why}; read by streaming without the index: {read}"
+    return source, (f"{path}: {why}; read {found.how}: {read}"
                     + "".join(f"; {x}" for x in extra))
 
 
