@@ -1,7 +1,10 @@
-"""`kartci score` against `evo_ape` on the same file, side by side: wall time of each command as a
-user runs it (a fresh process, start-up included), median of repeats, on a Nav2-like rosbag2
-(MCAP) log: AMCL's pose (`map`) at 20 Hz and wheel odometry (`odom`) at 50 Hz, SE(3)-aligned
-(`--align se3` / `-a`). Both APE RMSEs are printed too: they must agree. Asserts nothing.
+"""`kartci score` against `evo_ape` on the same file, side by side: wall and CPU time (user +
+system) of each command as a user runs it (a fresh process, start-up included), the commands
+interleaved round by round, median of repeats, on a Nav2-like rosbag2 (MCAP) log: AMCL's pose
+(`map`) at 20 Hz and wheel odometry (`odom`) at 50 Hz, SE(3)-aligned (`--align se3` / `-a`).
+`kartci score` runs as it comes (run log + HTML reports) and with `--no-html`. Both APE RMSEs
+are printed too: they must agree. Asserts nothing. CPU time is the steadier figure on a
+shared machine: wall time there includes waiting for a core.
 
 evo is GPL and never a kartci dependency: its CLI runs from its own venv (KARTCI_EVO=DIR/bin,
 else .venv-evo/bin, else /tmp/venv-evo/bin).
@@ -14,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -95,14 +99,16 @@ def write_log(path: Path, minutes: float) -> int:
     return count
 
 
-def timed(cmd: list[str], env: dict[str, str]) -> float:
-    """Wall seconds of one command, which must succeed."""
+def timed(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
+    """Wall and CPU (user + system) seconds of one command, which must succeed."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
     wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{proc.stdout}{proc.stderr}")
-    return wall
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def main() -> None:
@@ -127,22 +133,31 @@ def main() -> None:
                    "--no_warnings"]
         runs: dict[str, Callable[[int], list[str]]] = {
             "kartci score": lambda i: [*kartci, "--out", str(folder / f"out{i}")],
+            "kartci score --no-html": lambda i: [*kartci, "--no-html", "--out",
+                                                 str(folder / f"plain{i}")],
             "evo_ape": lambda i: [*evo_ape, "--save_results", str(folder / f"evo{i}.zip")]}
-        print(f"{args.minutes:g} min log, {n} messages; wall s per command (fresh process)")
+        print(f"{args.minutes:g} min log, {n} messages; s per command (fresh process)")
+        samples: dict[str, list[tuple[float, float]]] = {name: [] for name in runs}
+        for i in range(args.repeats):  # interleaved: a load change hits every command alike
+            for name, make in runs.items():
+                samples[name].append(timed(make(i), env))
         medians = {}
-        for name, make in runs.items():
-            samples = [timed(make(i), env) for i in range(args.repeats)]
-            medians[name] = statistics.median(samples)
-            record.add(f"{name} wall", "s", samples, Better.LOWER)
-            print(f"  {name:26s} median {medians[name]:6.2f}  "
-                  f"({', '.join(f'{s:.2f}' for s in samples)})")
+        for name, got in samples.items():
+            for k, what in enumerate(("wall", "cpu")):
+                values = [g[k] for g in got]
+                medians[name, what] = statistics.median(values)
+                record.add(f"{name} {what}", "s", values, Better.LOWER)
+                print(f"  {name:24s} {what:4s} median {medians[name, what]:6.2f}  "
+                      f"({', '.join(f'{v:.2f}' for v in values)})")
         with zipfile.ZipFile(folder / "evo0.zip") as z:
             evo_rmse = json.loads(z.read("stats.json"))["rmse"]
         doc = json.loads((folder / "out0" / "nav2" / "metrics.json").read_text())
         ours = doc["metrics"]["ape_rmse_m"]["value"]
         print(f"APE RMSE: kartci {ours:.9f} m, evo {evo_rmse:.9f} m "
               f"(difference {abs(ours - evo_rmse):.2e})")
-        print(f"kartci score / evo_ape: {medians['kartci score'] / medians['evo_ape']:.2f}x")
+        for name in ("kartci score", "kartci score --no-html"):
+            ratio = {w: medians[name, w] / medians["evo_ape", w] for w in ("wall", "cpu")}
+            print(f"{name} / evo_ape: wall {ratio['wall']:.2f}x, cpu {ratio['cpu']:.2f}x")
     if args.json:
         record.save(args.json)
 

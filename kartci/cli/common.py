@@ -157,13 +157,14 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
 
 
 def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-            ci: bool = True, history: Path | None = None) -> None:
-    """Write every report, print the verdicts and (unless `ci` is off, as for a shard, whose
+            ci: bool = True, history: Path | None = None, html: bool = True) -> None:
+    """Write every report (the HTML ones with `html`), print the verdicts and (unless `ci` is
+    off, as for a shard, whose
     merge reports for it) the CI outputs; exit with the gating code. A report that cannot be
     written is exit 2, and no earlier report stays in its place (write_all removes them
     first)."""
     try:
-        paths = write_all(results, out, words, history)
+        paths = write_all(results, out, words, history, html)
     except (KartciError, OSError):
         raise
     except Exception as err:  # a report that cannot be drawn: bad input, not a regression
@@ -176,5 +177,6 @@ def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
         for line in annotation_lines(results, files=scenario_files(results)):
             typer.echo(line)
     code = exit_code(results)
-    out_console.print(f"report: {paths['html']}  (exit {code})", highlight=False)
+    shown = paths["html" if html else "markdown"]
+    out_console.print(f"report: {shown}  (exit {code})", highlight=False)
     raise typer.Exit(code)

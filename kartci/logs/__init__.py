@@ -96,9 +96,15 @@ def extract(src: Path, wanted: list[str], dst: Path) -> int:
 def recover(src: Path, dst: Path) -> int:
     """Every readable message of every topic of `src` (damaged or not) into `dst`; returns the
     count. What was lost is in the SalvagedLog warning; nothing readable is a LogError."""
-    wanted = [i.topic for i in topics(src) if i.count > 0]
+    with warnings.catch_warnings():  # told once: by extract, or in the error
+        warnings.simplefilter("ignore", SalvagedLog)
+        with open_log(src) as log:
+            wanted = [i.topic for i in log.topics() if i.count > 0]
+            notes = list(log.notes)
     if not wanted:
-        raise LogError(f"{src}: no message could be read; nothing written to {dst}")
+        why = "; ".join(t.removeprefix(f"{src}: ") for t in notes)
+        raise LogError(f"{src}: no message could be read{f' ({why})' if why else ''}; nothing "
+                       f"written to {dst}")
     return extract(src, wanted, dst)
 
 

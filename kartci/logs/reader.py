@@ -208,7 +208,7 @@ class LogReader:
             m = self.decode(raw)
             if m is not None:
                 yield raw[0], raw[3], m
-        self._report_undecodable()
+        self.report_undecodable()
 
     def raw(self, wanted: Sequence[str] | None = None) -> Iterator[Raw]:
         """Like messages(), but undecoded: (topic, msgtype, ROS 1 encoded, log time ns, bytes).
@@ -287,7 +287,9 @@ class LogReader:
         self._checked.clear()
         self.note(text)
 
-    def _report_undecodable(self) -> None:
+    def report_undecodable(self) -> None:
+        """Note the messages decode() could not decode since the last note (messages() does
+        this at its end; a caller of raw() and decode() calls it itself)."""
         if not self._undecodable:
             return
         parts = [f"{n} on {topic} ({self._why[topic]})" for topic, n in
@@ -304,7 +306,8 @@ def _salvaged(path: Path, why: str, err: Exception) -> tuple[_Streamed, str]:
     except (NotStreamableError, OSError):
         raise LogError(f"{path}: {why}") from err
     if not found.conns:
-        raise LogError(f"{path}: {why}; streaming through it found no topics either") from err
+        raise LogError(f"{path}: {why}; reading it {found.how} found no topics either"
+                       ) from err
     source = _Streamed(found)
     extra = [*found.problems, *source.problems]
     if found.skipped_chunks:
@@ -314,7 +317,7 @@ def _salvaged(path: Path, why: str, err: Exception) -> tuple[_Streamed, str]:
     counts = found.counts()
     n = sum(counts[key] for key in found.conns)
     read = f"{count_of(n, 'message')} on {count_of(len(found.conns), 'topic')}"
-    return source, (f"{path}: {why}; read by streaming without the index: {read}"
+    return source, (f"{path}: {why}; read {found.how}: {read}"
                     + "".join(f"; {x}" for x in extra))
 
 

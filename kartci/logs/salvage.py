@@ -6,6 +6,8 @@ whole log unreadable, although most chunks are intact. Here the file is read fro
 instead (mcap's StreamReader for MCAP, a small record walker for ROS 1 bags, whose format is a
 plain sequence of length-prefixed records), each chunk on its own: a damaged chunk is skipped,
 and reading stops at the first record whose framing is broken, keeping everything before it.
+A rosbag2 sqlite3 file is read row by row in id order up to the first damaged page and back
+from its end down to it (rosbags reads it through the timestamp index, which damage breaks).
 
 Only damaged logs come here, so everything readable is held in memory (raw bytes of the
 messages, not decoded) and sorted by time once: simple, and in time order like rosbags.
@@ -14,17 +16,20 @@ messages, not decoded) and sorted by time once: simple, and in time order like r
 from __future__ import annotations
 
 import bz2
+import sqlite3
 import struct
 import sys
 import zlib
 from collections import Counter
 from collections.abc import Iterator
+from contextlib import closing, suppress
 from dataclasses import dataclass, field
 from io import BytesIO
 from pathlib import Path
 from typing import Any, BinaryIO
 
 import lz4.frame  # type: ignore[import-untyped]
+import yaml
 from mcap.data_stream import ReadDataStream
 from mcap.records import Channel, Chunk, DataEnd, Message, Schema
 from mcap.stream_reader import StreamReader
@@ -62,12 +67,14 @@ Key = tuple[int, int]  # (file number, connection or channel id)
 
 @dataclass
 class Salvage:
-    """What streaming found: connections, raw messages (time, key, bytes), and problems."""
+    """What streaming found: connections, raw messages (time, key, bytes), and problems;
+    `how` the log was read, in words."""
 
     conns: dict[Key, Conn] = field(default_factory=dict)
     found: list[tuple[int, Key, bytes]] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)
     skipped_chunks: int = 0
+    how: str = "by streaming without the index"
 
     def counts(self) -> Counter[Key]:
         return Counter(key for _, key, _ in self.found)
@@ -362,18 +369,125 @@ def read_ros1(path: Path, part: int, into: Salvage) -> None:
                 return
 
 
+def _db3_connect(path: Path) -> sqlite3.Connection:
+    """`path`'s whole pages, in memory (the file is not touched): a page cut short by a
+    truncation would read as zeros past the cut, inside messages that look whole. With
+    `writable_schema` sqlite opens an image shorter than its header says (nothing is
+    written: it only skips that check) and reads the pages there are."""
+    data = path.read_bytes()
+    size = int.from_bytes(data[16:18], "big")
+    size = 65536 if size == 1 else size
+    if size < 512 or size & (size - 1):
+        raise sqlite3.DatabaseError("its header names no valid page size")
+    con = sqlite3.connect(":memory:")
+    try:
+        con.deserialize(data[:len(data) // size * size])
+        con.execute("PRAGMA writable_schema=ON")
+    except BaseException:
+        con.close()
+        raise
+    return con
+
+
+def _db3_topics(con: sqlite3.Connection, part: int, into: Salvage) -> None:
+    """The topics table (and the message definitions, where the file has them) as Conns."""
+    defs: dict[str, tuple[str, str]] = {}
+    with suppress(sqlite3.Error):  # older rosbag2 files have no message_definitions table
+        for msgtype, encoding, text in con.execute(
+                "SELECT topic_type, encoding, encoded_message_definition "
+                "FROM message_definitions"):
+            if isinstance(msgtype, str) and isinstance(text, str):
+                defs[msgtype] = (_FORMATS.get(encoding, ""), text)
+    for tid, name, msgtype in con.execute("SELECT id, name, type FROM topics"):
+        if isinstance(name, str) and isinstance(msgtype, str):  # a damaged page reads as NULLs
+            fmt, text = defs.get(msgtype, ("", ""))
+            into.conns[part, tid] = Conn(name, msgtype, fmt, text, ros1=False)
+
+
+def _db3_rows(con: sqlite3.Connection, part: int, into: Salvage) -> str | None:
+    """Every message row sqlite can still reach, in id order up to the first damaged page,
+    then back from the last row down to the damage; None when nothing was damaged, else
+    where reading stopped."""
+    query = "SELECT id, topic_id, timestamp, data FROM messages WHERE id > ? ORDER BY id"
+    last = 0
+    try:
+        for rid, tid, t_ns, data in con.execute(query, (last,)):
+            if _db3_row(t_ns, (part, tid), data, into):
+                last = rid
+    except sqlite3.Error:
+        pass
+    else:
+        return None
+    with suppress(sqlite3.Error):  # the rows after the damage, read from the end
+        for _, tid, t_ns, data in con.execute(query + " DESC", (last,)):
+            _db3_row(t_ns, (part, tid), data, into)
+    return f"damaged after message row {last}"
+
+
+def _db3_row(t_ns: object, key: Key, data: object, into: Salvage) -> bool:
+    """Keep one message row; False for what damage makes sqlite return instead (a page cut
+    short reads as rows of NULLs)."""
+    if not isinstance(t_ns, int) or not isinstance(data, bytes):
+        return False
+    into.found.append((t_ns, key, data))
+    return True
+
+
+def _listed(path: Path) -> int | None:
+    """How many messages rosbag2's metadata.yaml says the file holds (None: not said)."""
+    with suppress(OSError, ValueError, LookupError, yaml.YAMLError, AttributeError, TypeError):
+        with (path.parent / "metadata.yaml").open(encoding="utf-8") as f:
+            doc = yaml.safe_load(f.read(1_000_000))
+        for entry in doc["rosbag2_bagfile_information"].get("files") or []:
+            if entry.get("path") == path.name:
+                return int(entry["message_count"])
+    return None
+
+
+def read_db3(path: Path, part: int, into: Salvage) -> None:
+    """What sqlite can still read of a rosbag2 sqlite3 file: its topics and every message row
+    before and after the damage; the count lost (from metadata.yaml) among the problems."""
+    into.how = "row by row from its sqlite tables"
+    try:
+        con = _db3_connect(path)
+    except (sqlite3.Error, OSError) as err:
+        into.problems.append(f"{path.name} does not open ({describe(err)})")
+        return
+    with closing(con):
+        before = len(into.found)
+        try:
+            _db3_topics(con, part, into)
+        except sqlite3.Error as err:
+            into.problems.append(f"{path.name}: its topics table is unreadable ({describe(err)})")
+            return
+        stopped = _db3_rows(con, part, into)
+    got, listed = len(into.found) - before, _listed(path)
+    if stopped is None and (listed is None or got >= listed):
+        return
+    lost = ("an unknown number lost (no count in metadata.yaml)" if listed is None
+            else f"{count_of(max(listed - got, 0), 'message')} of {listed} lost")
+    where = stopped or "damaged (its message table ends early)"
+    into.problems.append(f"{path.name} {where}: {count_of(got, 'message')} read, {lost}")
+
+
 def salvage(path: Path) -> Salvage:
-    """Stream `path` (a .bag, an .mcap or a folder of .mcap files); NotStreamableError if it is
-    none of these."""
+    """Stream `path` (a .bag, an .mcap, a .db3 or a folder of .mcap or .db3 files);
+    NotStreamableError if it is none of these."""
     into = Salvage()
     if path.is_dir():
         parts = sorted(path.glob("*.mcap"))
+        readers = [read_mcap] * len(parts)
         if not parts:
-            raise NotStreamableError("holds no .mcap files to read by streaming")
-        for number, part in enumerate(parts):
-            read_mcap(part, number, into)
+            parts = sorted(path.glob("*.db3"))
+            readers = [read_db3] * len(parts)
+        if not parts:
+            raise NotStreamableError("holds no .mcap or .db3 files to read without the index")
+        for number, (part, read) in enumerate(zip(parts, readers, strict=True)):
+            read(part, number, into)
     elif path.suffix == ".bag":
         read_ros1(path, 0, into)
+    elif path.suffix == ".db3":
+        read_db3(path, 0, into)
     else:
         read_mcap(path, 0, into)
     return into

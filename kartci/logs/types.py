@@ -94,7 +94,12 @@ def header(t_ns: int, frame_id: str) -> Any:
 
 def yaw_of(q: Any) -> float:
     """Heading (rad) of a geometry_msgs/Quaternion, rotation about z."""
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    return yaw_from(q.x, q.y, q.z, q.w)
+
+
+def yaw_from(x: float, y: float, z: float, w: float) -> float:
+    """Heading (rad) of the quaternion (x, y, z, w), rotation about z."""
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def stamp_ns(hdr: Any) -> int:

@@ -121,7 +121,15 @@ class McapLogWriter:
         afterwards is logged as it was) and goes into the file with the next batch."""
         typename = message.__msgtype__
         cid = self._channel(topic, typename, latched)
-        data = self._cdr(cid, message, typename)
+        self._append(cid, self._cdr(cid, message, typename), t_ns)
+
+    def write_cdr(self, topic: str, typename: str, data: bytes | memoryview, t_ns: int,
+                  latched: bool = False) -> None:
+        """Append one message already serialised as CDR (kartci.logs.poses writes a long pose
+        stream in bulk)."""
+        self._append(self._channel(topic, typename, latched), data, t_ns)
+
+    def _append(self, cid: int, data: bytes | memoryview, t_ns: int) -> None:
         seq = self._seq.get(cid, 0)
         self._seq[cid] = seq + 1
         self._pending.append((cid, seq, t_ns, data))

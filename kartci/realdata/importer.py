@@ -5,8 +5,6 @@ simulated run, and `kartci report OUT` re-scores it from that log alone."""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -16,16 +14,18 @@ import numpy as np
 
 from kartci import core
 from kartci.errors import LogError
-from kartci.logs import (
-    SCENARIO_TOPIC,
-    LogReader,
-    McapLogWriter,
-    header,
-    msg,
-    open_log,
-    stamp_ns,
+from kartci.logs import SCENARIO_TOPIC, LogReader, McapLogWriter, msg, open_log, stamp_ns
+from kartci.logs.poses import (
+    ODOMETRY,
+    Poses,
+    body_twist,
+    decode_poses,
+    odometry_cdr,
+    same_definitions,
 )
-from kartci.logs.types import for_writing, typestore, yaw_of
+from kartci.logs.reader import Raw
+from kartci.logs.tables import odometry_table, remember, tables_of
+from kartci.logs.types import for_writing, typestore
 from kartci.metrics.alignment import Alignment
 from kartci.realdata.profile import PoseRole, Profile
 from kartci.realdata.tfchain import TF_TYPES, TfTree
@@ -65,40 +65,32 @@ def imported_scenario(profile: Profile, duration_s: float, start: str = "") -> S
         context=context(core.DEFAULT_REGISTRIES))
 
 
-def _xyzq(m: Any) -> tuple[float, float, float, Any]:
-    """Position and orientation of an Odometry, PoseStamped or PoseWithCovarianceStamped."""
-    p = m.pose.pose if hasattr(m.pose, "pose") else m.pose
-    return p.position.x, p.position.y, p.position.z, p.orientation
+@dataclass(frozen=True)
+class ImportedOdometry:
+    """A pose stream as the imported log's nav_msgs/Odometry: stamps (ns since the log's
+    start), position, quaternion and body twist (the message's own for Odometry, else from
+    finite differences of the poses)."""
+
+    t_log: np.ndarray  # ns
+    stamp: np.ndarray  # ns
+    xyz: np.ndarray
+    quat: np.ndarray
+    twist: np.ndarray
+
+    def messages(self, frame: str) -> list[bytes]:
+        """The messages, CDR-encoded (header frame `frame`, child base_link)."""
+        return odometry_cdr(self.stamp, frame, "base_link", self.xyz, self.quat, self.twist)
+
+    def table(self) -> Any:
+        """The messages' table, as kartci.logs.tables makes it."""
+        return odometry_table(self.stamp, self.xyz, self.quat, self.twist)
 
 
-def _stamp(m: Any, t_ns: int) -> int:
-    hdr = getattr(m, "header", None)
-    t = stamp_ns(hdr) if hdr is not None else 0
-    return t if t > 0 else t_ns
-
-
-def odometry_of(poses: list[tuple[int, Any]], frame: str,
-                start_ns: int = 0) -> Iterator[tuple[int, Any]]:
-    """nav_msgs/Odometry (ROS 2) for each pose message, stamps and log times `start_ns`
-    earlier; the twist (in the body frame) is the message's own for Odometry, else from finite
-    differences of the poses."""
-    ts = np.array([_stamp(m, t) - start_ns for t, m in poses], dtype=np.int64)
-    xyz = np.array([_xyzq(m)[:3] for _, m in poses], dtype=float)
-    yaw = np.unwrap([yaw_of(_xyzq(m)[3]) for _, m in poses])
-    t_s = (ts - ts[0]) * 1e-9
-    diff = len(poses) > 1 and float(t_s[-1]) > 0
-    vel = np.gradient(xyz, t_s, axis=0) if diff else np.zeros_like(xyz)
-    wz = np.gradient(yaw, t_s) if diff else np.zeros(len(poses))
-    for i, (t_log, m) in enumerate(poses):
-        x, y, z, q = _xyzq(m)
-        if m.__msgtype__ == "nav_msgs/msg/Odometry":
-            lin, ang = m.twist.twist.linear, m.twist.twist.angular
-            v = (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
-        else:
-            c, s = math.cos(yaw[i]), math.sin(yaw[i])
-            v = (c * vel[i, 0] + s * vel[i, 1], -s * vel[i, 0] + c * vel[i, 1], vel[i, 2],
-                 0.0, 0.0, float(wz[i]))
-        yield t_log - start_ns, _odom(int(ts[i]), frame, (x, y, z), (q.x, q.y, q.z, q.w), v)
+def odometry_of(poses: Poses, start_ns: int = 0) -> ImportedOdometry:
+    """`poses` as the imported log's odometry, stamps and log times `start_ns` earlier."""
+    ts = poses.times() - start_ns
+    twist = poses.twist if poses.twist is not None else body_twist(ts, poses.xyz, poses.quat)
+    return ImportedOdometry(poses.t_log - start_ns, ts, poses.xyz, poses.quat, twist)
 
 
 _ZEROS36 = np.zeros(36)  # every imported covariance (read-only: shared by the messages)
@@ -151,10 +143,10 @@ class Imported:
 
 @dataclass
 class _Collected:
-    """What the import read from the log: each pose role's (log time, message) pairs, the
-    copied messages (destination topic, log time, message), each pose role's frame."""
+    """What the import read from the log: each pose role's stream, the copied messages
+    (destination topic, log time, message), each pose role's frame."""
 
-    poses: dict[str, list[tuple[int, Any]]]
+    poses: dict[str, Poses]
     other: list[tuple[str, int, Any]]
     frames: dict[str, str]
 
@@ -162,6 +154,9 @@ class _Collected:
 def _pose_roles(profile: Profile) -> dict[str, PoseRole]:
     return {"pose": profile.pose,
             **({"estimate": profile.estimate} if profile.estimate is not None else {})}
+
+
+_NO_POSES = decode_poses([], standard=True, decode=lambda raw: None)
 
 
 def _collect(log: Path, reader: LogReader, profile: Profile, types: dict[str, str]
@@ -175,50 +170,64 @@ def _collect(log: Path, reader: LogReader, profile: Profile, types: dict[str, st
                       if i.topic.endswith("tf_static") and i.msgtype in TF_TYPES}
     checks = {role.topic: role.frame_id for role, _ in profile.roles().values()
               if role.frame_id is not None}
-    got = _Collected({name: [] for name in roles}, [], {})
+    got = _Collected({name: _NO_POSES for name in roles}, [], {})
+    raws: dict[str, list[Raw]] = {name: [] for name in by_topic.values()}
     tree = TfTree()
-    for topic, t_ns, m in reader.messages([*by_topic, *tf_topics, *copy]):
-        _check_frame(log, checks, topic, m)
+    for raw in reader.raw([*by_topic, *tf_topics, *copy]):
+        topic = raw[0]
+        if topic in by_topic:  # decoded in bulk below
+            raws[by_topic[topic]].append(raw)
+            continue
+        m = reader.decode(raw)
+        if m is None:
+            continue
+        _check_frame(log, checks, topic, getattr(getattr(m, "header", None), "frame_id", None))
         if topic in tf_topics:
             tree.add(m, static=topic.endswith("tf_static"))
-        elif topic in by_topic:
-            got.poses[by_topic[topic]].append((t_ns, m))
-            got.frames.setdefault(by_topic[topic], _frame(m))
         else:
-            got.other.append((copy[topic], t_ns, m))
+            got.other.append((copy[topic], raw[3], m))
+    _decode_roles(log, reader, by_topic, raws, types, checks, got)
     for name, role in roles.items():
         if role.is_tf:
-            others = [p for other, p in got.poses.items() if other != name and p]
+            others = [p for other, p in got.poses.items() if other != name and len(p)]
             got.poses[name] = _tf_poses(log, tree, role, others[0] if others else None)
             got.frames[name] = _frame_name(role.parent)
     return got
+
+
+def _decode_roles(log: Path, reader: LogReader, by_topic: dict[str, str],
+                  raws: dict[str, list[Raw]], types: dict[str, str], checks: dict[str, str],
+                  got: _Collected) -> None:
+    """Each pose role's messages decoded in bulk (kartci.logs.poses) into `got`."""
+    for topic, name in by_topic.items():
+        poses = decode_poses(raws[name], same_definitions(reader.typestore, types[name]),
+                             reader.decode)
+        for frame in poses.frames:
+            _check_frame(log, checks, topic, frame)
+        got.poses[name] = poses
+        if poses.frames:  # planar poses have no header, hence no frame
+            got.frames[name] = poses.frames[0].lstrip("/")
+    reader.report_undecodable()
 
 
 def _frame_name(name: str | None) -> str:
     return (name or "").lstrip("/")
 
 
-def _tf_poses(log: Path, tree: TfTree, role: PoseRole, at: list[tuple[int, Any]] | None
-              ) -> list[tuple[int, Any]]:
-    """The TF chain's poses as PoseStamped, at the other trajectory's stamps (`at`), else at
-    the chain's own."""
+def _tf_poses(log: Path, tree: TfTree, role: PoseRole, at: Poses | None) -> Poses:
+    """The TF chain's poses, at the other trajectory's stamps (`at`), else at the chain's
+    own."""
     parent, child = role.parent or "", role.child or ""
     try:
-        stamps = (np.array([_stamp(m, t) for t, m in at], np.int64) if at
-                  else tree.stamps(parent, child))
+        stamps = at.times() if at is not None else tree.stamps(parent, child)
         t_ns, xyz, quat = tree.lookup(parent, child, stamps)
     except LogError as err:
         raise LogError(f"{log}: {err}") from err
     if len(t_ns) == 0:
         raise LogError(f"{log}: the TF chain from '{parent}' to '{child}' covers none of the "
                        "other pose's stamps")
-    return [(int(t), msg("geometry_msgs/msg/PoseStamped", header=header(int(t), parent),
-                         pose=msg("geometry_msgs/msg/Pose",
-                                  position=msg("geometry_msgs/msg/Point", x=p[0], y=p[1],
-                                               z=p[2]),
-                                  orientation=msg("geometry_msgs/msg/Quaternion", x=q[0],
-                                                  y=q[1], z=q[2], w=q[3]))))
-            for t, p, q in zip(t_ns, xyz.tolist(), quat.tolist(), strict=True)]
+    t_ns = np.asarray(t_ns, np.int64)
+    return Poses(t_ns, t_ns, np.asarray(xyz, float), np.asarray(quat, float), None, (parent,))
 
 
 def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Imported:
@@ -229,25 +238,33 @@ def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) ->
         store = for_writing(reader.typestore)
         got = _collect(log, reader, profile, types)
     poses = got.poses
-    if not poses["pose"]:
+    if not len(poses["pose"]):
         raise LogError(f"{log}: {profile.pose.topic} holds no readable pose")
     start = _start_ns(got)  # one time base: seconds since the log's start
-    t0 = min(t for t, _ in poses["pose"]) - start
-    t1 = max(t for t, _ in poses["pose"]) - start
+    t0 = int(poses["pose"].t_log.min()) - start
+    t1 = int(poses["pose"].t_log.max()) - start
     scenario = imported_scenario(profile, (t1 - t0) * 1e-9, _said(start))
     out: list[tuple[str, int, Any]] = [
         (SCENARIO_TOPIC, t0, msg("std_msgs/msg/String", data=scenario.model_dump_json()))]
     if profile.track is not None:
         out.append((TRACK_TOPIC, t0, msg("std_msgs/msg/String", data=_read(profile.track))))
+    odometry: dict[str, ImportedOdometry] = {}
     for role, name in (("pose", "odom"), ("estimate", "estimate")):
-        if poses.get(role):
-            out += [(f"/{ns}/{name}", t, m)
-                    for t, m in odometry_of(poses[role], "map", start)]
+        if role in poses and len(poses[role]):
+            topic = f"/{ns}/{name}"
+            odometry[topic] = odom = odometry_of(poses[role], start)
+            out += zip([topic] * len(odom.t_log), odom.t_log.tolist(), odom.messages("map"),
+                       strict=True)
     out += [(topic, t - start, _shifted(m, start)) for topic, t, m in got.other]
     out.sort(key=lambda item: item[1])
     with McapLogWriter(dst, store) as writer:
         for topic, t_ns, m in out:
-            writer.write(topic, m, t_ns)
+            if isinstance(m, bytes):
+                writer.write_cdr(topic, ODOMETRY, m, t_ns)
+            else:
+                writer.write(topic, m, t_ns)
+    read = tables_of(dst, ((topic, t, m) for topic, t, m in out if not isinstance(m, bytes)))
+    remember(dst, {**read, **{topic: odom.table() for topic, odom in odometry.items()}})
     return Imported(scenario, frame_warnings(profile, got.frames))
 
 
@@ -259,8 +276,7 @@ def _header_ns(m: Any) -> int:
 def _start_ns(got: _Collected) -> int:
     """The imported log's start: its earliest log time or header stamp (unset stamps, 0,
     aside)."""
-    times = [t for p in got.poses.values() for t, _ in p]
-    times += [_stamp(m, t) for p in got.poses.values() for t, m in p]
+    times = [int(t.min()) for p in got.poses.values() if len(p) for t in (p.t_log, p.times())]
     times += [t for _, t, _ in got.other]
     times += [s for s in (_header_ns(m) for _, _, m in got.other) if s > 0]
     return min(times)
@@ -284,10 +300,6 @@ def _shifted(m: Any, start_ns: int) -> Any:
     return m
 
 
-def _frame(m: Any) -> str:
-    return str(getattr(getattr(m, "header", None), "frame_id", "") or "").lstrip("/")
-
-
 def frame_warnings(profile: Profile, frames: dict[str, str]) -> tuple[str, ...]:
     """A reference and an estimate in different frames compared without alignment: the APE
     then measures the offset between the frames (odometry against AMCL's map: metres), not
@@ -303,10 +315,10 @@ def frame_warnings(profile: Profile, frames: dict[str, str]) -> tuple[str, ...]:
             "without scale, origin for the start pose) or `align:` in the profile",)
 
 
-def _check_frame(log: Path, frames: dict[str, str], topic: str, m: Any) -> None:
-    """A message's header frame must be the one its role names (when it names one)."""
+def _check_frame(log: Path, frames: dict[str, str], topic: str, got: str | None) -> None:
+    """A message's header frame (`got`; None without a header) must be the one its role
+    names (when it names one)."""
     want = frames.get(topic)
-    got = getattr(getattr(m, "header", None), "frame_id", None)
     if want is not None and got is not None and got.lstrip("/") != want.lstrip("/"):
         raise LogError(f"{log}: {topic} is in frame '{got}', the profile expects '{want}'")
 

@@ -16,13 +16,12 @@ from kartci import project
 from kartci.core import Frozen
 from kartci.errors import SpecError
 from kartci.logs import TopicInfo, topics
+from kartci.logs.poses import POSE_TYPES
 from kartci.metrics.alignment import Alignment
 from kartci.realdata.tfchain import TF_TYPES
 from kartci.scenario.models import Criterion
 from kartci.scenario.yamlio import read_yaml
 
-POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",
-              "geometry_msgs/msg/PoseWithCovarianceStamped")
 COMMAND_TYPES = ("ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/TwistStamped",
                  "geometry_msgs/msg/Twist", "sensor_msgs/msg/Joy",
                  "kartci_msgs/msg/KartCommand")
@@ -89,7 +88,8 @@ class Profile(Frozen):
     agent: str = Field("robot", pattern=r"^[a-z0-9_]+$", description="the robot's namespace "
                        "in the imported run log")
     pose: PoseRole = Field(description="the reference pose: nav_msgs/Odometry, PoseStamped, "
-                           "PoseWithCovarianceStamped, or a TF chain (topic /tf, parent, "
+                           "PoseWithCovarianceStamped, a planar turtlesim/Pose or Pose2D (x, "
+                           "y, theta; log time, no frame), or a TF chain (topic /tf, parent, "
                            "child)")
     estimate: PoseRole | None = Field(None, description="a pose estimate judged against the "
                                       "reference (localization error); a topic or a TF chain")

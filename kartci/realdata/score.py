@@ -5,7 +5,7 @@ exactly as a simulated run is."""
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from kartci.metrics.alignment import Alignment
@@ -19,10 +19,11 @@ from kartci.verdict.result import ScenarioResult
 
 def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
               allow_outside_paths: bool = False, align: Alignment | None = None,
-              align_first: int | None = None) -> ScenarioResult:
+              align_first: int | None = None, with_plots: bool = True) -> ScenarioResult:
     """Import `log` into OUT/<profile name>/run.mcap, compute metrics.json from it and judge it
     against `baselines/<profile name>.json`. `align` / `align_first` replace the profile's
-    (the estimate's alignment onto the reference). Bad input (profile, missing topics, a
+    (the estimate's alignment onto the reference); `with_plots`: the report's time series and
+    paths too (only an HTML report draws them). Bad input (profile, missing topics, a
     profile's track outside the project without `allow_outside_paths`) raises before anything
     is written."""
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
@@ -33,17 +34,21 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
     folder = out / profile.name
     write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst).warnings,
                  {"imported_from": str(log.resolve()), "profile": profile.name})
-    return evaluate(folder, baselines)
+    return evaluate(folder, baselines, with_plots)
 
 
 def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
                 overrides: Sequence[str], window_s: float, out: Path,
-                baselines: Path, allow_outside_paths: bool = False) -> ScenarioResult:
+                baselines: Path, allow_outside_paths: bool = False,
+                say: Callable[[str], None] = print) -> ScenarioResult:
     """The log's commands replayed into the sim (whole and windowed) into
-    OUT/<profile name>_simreal/, scored for divergence and judged like a run."""
+    OUT/<profile name>_simreal/, scored for divergence and judged like a run. A scenario
+    guessed from the log (none named) is told through `say`, with why, in one line."""
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
-    setup = simreal.sim_setup(profile, scenario, overrides)
+    setup = simreal.sim_setup(profile, scenario, overrides, types)
+    if setup.picked:
+        say(setup.picked)
     simreal.check_commands(setup, profile, types)
     name = f"{profile.name}_simreal"
     t0 = time.perf_counter()

@@ -42,22 +42,58 @@ def kind_simreal(kind: object) -> SimReal | None:
 
 @dataclass(frozen=True)
 class SimSetup:
-    """The scenario simulated against a log, its overrides and the command conversion."""
+    """The scenario simulated against a log, its overrides and the command conversion;
+    `picked`: why that scenario, when it was guessed from the log (one line), else empty."""
 
     scenario: Scenario
     overrides: tuple[str, ...]
     convert: Converter
+    picked: str = ""
 
 
-def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str]) -> SimSetup:
-    """The scenario to simulate (given, else the profile's, else by the profile's robot kind),
-    with the profile's robot parameters and then `overrides` (`--set`, calibrated values)."""
+_NAME_IT = "give --scenario, or `robot: {kind: ...}` or `scenario:` in a profile"
+
+
+def guess_scenario(profile: Profile, types: dict[str, str]) -> tuple[str, str]:
+    """The scenario for a log nobody named one for, and why, in one line: the robot kind
+    replayed from the log's command type (RobotKind.simreal); of several, the one that turns a
+    velocity command into wheel speeds (a Twist is what a differential-drive base takes). A
+    SpecError when the log does not tell."""
+    got = types.get("commands")
+    if profile.commands is None or got is None:
+        raise SpecError(f"profile {profile.name}: cannot tell which robot to simulate: the log "
+                        f"has no single command topic to replay; {_NAME_IT}")
+    fits = {n: r for n in core.ROBOTS.names()
+            if (r := core.ROBOTS.get(n).simreal) is not None and got in r.commands}
+    if len(fits) > 1 and got in TWIST:
+        fits = {n: r for n, r in fits.items() if r.wheel_speeds} or fits
+    topic = profile.commands.topic
+    if len(fits) != 1:
+        which = (f"{', '.join(sorted(fits))} are all replayed from it" if fits
+                 else "no robot kind is replayed from it")
+        raise SpecError(f"profile {profile.name}: cannot tell which robot to simulate: the "
+                        f"commands {topic} are {got}, and {which}; {_NAME_IT}")
+    (kind, replay), = fits.items()
+    why = ("velocity commands a differential-drive base turns into wheel speeds"
+           if replay.wheel_speeds and got in TWIST else f"commands only {kind} is replayed from")
+    return replay.scenario, (f"simulating {replay.scenario} (robot kind {kind}): the commands "
+                             f"{topic} are {got}, {why} (--scenario to choose another)")
+
+
+def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str],
+              types: dict[str, str] | None = None) -> SimSetup:
+    """The scenario to simulate (given, else the profile's, else by the profile's robot kind,
+    else guessed from the log's command type `types["commands"]` when `types` is given), with
+    the profile's robot parameters and then `overrides` (`--set`, calibrated values)."""
     kind = (profile.robot or {}).get("kind")
     default = kind_simreal(kind)
     name = scenario or profile.scenario or (default.scenario if default else None)
+    picked = ""
+    if name is None and types is not None:
+        name, picked = guess_scenario(profile, types)
     if name is None:
-        raise SpecError(f"profile {profile.name}: no scenario to simulate the log in; give "
-                        "--scenario or the profile's `robot: {kind: ...}` or `scenario:`")
+        raise SpecError(f"profile {profile.name}: no scenario to simulate the log in; "
+                        f"{_NAME_IT}")
     base = load_scenario(name)
     if len(base.agents) != 1:
         raise SpecError(f"scenario {base.name}: simreal needs exactly one agent")
@@ -75,7 +111,7 @@ def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str]) 
     replay = kind_simreal(model_kind)
     wheels = replay is not None and replay.wheel_speeds
     convert = diff_drive(profile.commands) if wheels else as_recorded
-    return SimSetup(spec, tuple(sets), convert)
+    return SimSetup(spec, tuple(sets), convert, picked)
 
 
 def check_commands(setup: SimSetup, profile: Profile, types: dict[str, str]) -> None:

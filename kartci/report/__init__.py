@@ -66,25 +66,29 @@ def _history(results: list[ScenarioResult], folder: Path | None) -> tuple[list[s
 
 
 def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-              history: Path | None = None) -> dict[str, Path]:
+              history: Path | None = None, html: bool = True) -> dict[str, Path]:
     """report.html (interactive), report-static.html (SVG, no script), summary.md, summary.json
-    and junit.xml in `out`. The old ones are removed
+    and junit.xml in `out` (without `html`: no HTML, whose figures are most of the time a
+    scored log's reports take). The old ones are removed
     first: a report that fails half-way leaves some missing, never an earlier one standing."""
     out.mkdir(parents=True, exist_ok=True)
     paths = {key: out / name for key, name in FILES.items()}
     for path in paths.values():
         path.unlink(missing_ok=True)
     # start-up: the writers (matplotlib, the figures) load when reports are written
-    from kartci.report.html import report_html
     from kartci.report.junit import junit_xml
     from kartci.report.markdown import summary_md
 
-    write_text_atomic(paths["html"], report_html(results, words,
-                                                 history=_history(results, history)))
-    write_text_atomic(paths["static"], report_html(results, words, static=True))
+    if html:
+        from kartci.report.html import report_html  # start-up: matplotlib (+1 s), HTML only
+
+        write_text_atomic(paths["html"], report_html(results, words,
+                                                     history=_history(results, history)))
+        write_text_atomic(paths["static"], report_html(results, words, static=True))
     write_text_atomic(paths["markdown"], summary_md(results, words))
     write_json_atomic(paths["json"], summary_json(results))
-    write_text_atomic(paths["junit"], junit_xml(results, str(paths["html"]), words))
+    main = paths["html" if html else "markdown"]
+    write_text_atomic(paths["junit"], junit_xml(results, str(main), words))
     return paths
 
 

@@ -53,6 +53,24 @@ def test_jackal_scored_with_its_profile_and_judged_against_its_baseline(
     assert rescored.status is Status.REGRESSED and _metrics(out, "jackal") == m
 
 
+def test_no_html_writes_the_same_metrics_and_no_html_report(bags: Path, tmp_path: Path,
+                                                             baselines: Path) -> None:
+    args = ("score", bags / "jackal_imu_odom.bag", "--profile", PROFILES / "jackal.yaml",
+            "--baselines", baselines)
+    full, plain = tmp_path / "full", tmp_path / "plain"
+    assert kartci(*args, "--out", full).returncode == 0
+    (full / "report.html").rename(tmp_path / "kept.html")  # --no-html leaves none behind
+    r = kartci(*args, "--out", plain, "--no-html")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.rstrip().endswith(f"report: {plain / 'summary.md'}  (exit 0)")
+    assert sorted(p.name for p in plain.iterdir() if p.name != ".kartci.lock") == [
+        "jackal", "junit.xml", "manifest.json", "summary.json", "summary.md"]
+    assert (plain / "jackal" / "metrics.json").read_bytes() == (
+        full / "jackal" / "metrics.json").read_bytes()
+    assert (plain / "jackal" / "run.mcap").read_bytes() == (full / "jackal" / "run.mcap"
+                                                            ).read_bytes()
+
+
 @pytest.mark.parametrize("profile", sorted(PROFILES.glob("*.yaml")), ids=lambda p: p.stem)
 def test_every_shipped_profile_matches_its_fixture(bags: Path, profile: Path) -> None:
     logs = {"jackal": "jackal_imu_odom.bag", "turtlebot3": "turtlebot3_gazebo_cmd_odom_scan.bag",
