@@ -4,9 +4,10 @@ kartci as a user installs it: its wheel (once per session) in a fresh venv."""
 
 from __future__ import annotations
 
+import fcntl
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -15,6 +16,8 @@ from helpers import KartLap, kartci
 from kartci import portable
 from kartci.report import write_all
 from kartci.runner.run import evaluate
+from kartci.scenario import load_scenario
+from kartci.sim import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = ROOT.parent / "shared" / "fixtures" / "bags"
@@ -28,6 +31,22 @@ def pytest_configure(config: pytest.Config) -> None:
         if capture is not None:
             capture.stop_global_capturing()  # the restarted pytest writes to the terminal
         portable.reexec(["-P", "-m", "pytest", *sys.argv[1:]])
+
+
+LONG = os.environ.get("KARTCI_LONG") == "1"
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Two tiers: the default one a developer runs while working (`pytest -q -n 2`), and the
+    full one, tests marked `long` (fuzzing, full-length scenario runs, fresh venvs, every SIMD
+    level), which `KARTCI_LONG=1 pytest -m long` adds and `.ci/run` always runs."""
+    if LONG:
+        return
+    for item in items:
+        if (mark := item.get_closest_marker("long")) is not None:
+            why = mark.kwargs.get("reason", "a slow run")
+            item.add_marker(pytest.mark.skip(
+                reason=f"full tier ({why}): KARTCI_LONG=1 pytest -m long runs it, as .ci/run does"))
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -123,3 +142,24 @@ def kart_lap(tmp_path_factory: pytest.TempPathFactory) -> KartLap:
     write_all([result], root / "out")
     return KartLap(root / "out", root / "baselines", update, result)
 
+
+
+@pytest.fixture(scope="session")
+def shipped_run(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Path]:
+    """The log of a shipped scenario run at full length with its committed settings, simulated
+    once per test run and shared by every test and every xdist worker that asks for it: the
+    first one simulates while the others wait on the scenario's lock, then all read one log."""
+    base = tmp_path_factory.getbasetemp()
+    folder = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "shipped-runs"
+    folder.mkdir(exist_ok=True)
+
+    def get(name: str) -> Path:
+        log, done = folder / f"{name}.mcap", folder / f"{name}.done"
+        with (folder / f"{name}.lock").open("w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not done.exists():
+                simulate(load_scenario(name), log)
+                done.touch()
+        return log
+
+    return get

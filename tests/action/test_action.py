@@ -159,6 +159,7 @@ def _installed(name: str) -> bool:
     return name == "Install kartci"
 
 
+@pytest.mark.long(reason="the action's steps with a fresh install")
 def test_one_job_runs_the_selected_scenarios_reports_and_uploads(project: Path,
                                                                  tmp_path: Path) -> None:
     ran = run_action(ACTION, {"scenarios": "line_straight"}, GITHUB, tmp_path,
@@ -174,6 +175,7 @@ def test_one_job_runs_the_selected_scenarios_reports_and_uploads(project: Path,
     assert (tmp_path / "step_summary.md").read_text().count("## kartci: all scenarios pass") == 1
 
 
+@pytest.mark.long(reason="the action's steps with a fresh install")
 def test_kartcis_own_ci_runs_its_shards_and_merge_through_the_action(project: Path,
                                                                      tmp_path: Path) -> None:
     """ci.yml's shard legs and merge job, each `uses: ./` expanded into the action's steps,

@@ -192,6 +192,7 @@ def _cmdline(proc: Path) -> bytes:
         return b""
 
 
+@pytest.mark.long(reason="the example stack, two full runs")
 def test_the_example_stack_gives_byte_identical_metrics(tmp_path: Path,
                                                        baselines: Path) -> None:
     """Two lockstep runs of the shipped scenario (shortened to one lap) with the example

@@ -16,8 +16,8 @@ from kartci.project import BUILTIN_SCENARIOS
 
 SCENARIOS = BUILTIN_SCENARIOS
 
-SHORT = ["--set", "duration_s=6", "--set", "criteria={}",
-         "--set", "metrics.line_tracking.transient_s=2"]
+SHORT = ["--set", "duration_s=4", "--set", "criteria={}",
+         "--set", "metrics.line_tracking.transient_s=1"]
 
 
 

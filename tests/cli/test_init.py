@@ -26,6 +26,7 @@ def _tree(folder: Path) -> dict[str, str]:
             if p.is_file()}
 
 
+@pytest.mark.long(reason="a fresh venv from the wheel")
 def test_init_then_run_then_baseline_update_from_the_installed_wheel(
         fresh_venv: Path, tmp_path: Path) -> None:
     """In a new empty folder, with kartci installed from its wheel: `kartci init && kartci run`

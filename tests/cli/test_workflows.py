@@ -217,6 +217,7 @@ def _short_pair(scenarios: Path) -> None:
         (scenarios / f"{name}.yaml").write_text(yaml.safe_dump(spec))
 
 
+@pytest.mark.long(reason="a fresh venv from the wheel")
 def test_the_gate_runs_in_a_project_that_is_not_kartci(fresh_venv: Path, kartci_wheel: Path,
                                                        tmp_path: Path) -> None:
     """`kartci init` writes the gate; its steps run in order in that project with kartci

@@ -48,6 +48,7 @@ def fastdds_files() -> set[str]:
     return {p.name for p in SHM.glob("*fastdds_*")} if SHM.is_dir() else set()
 
 
+@pytest.mark.long(reason="a ROS 2 node over DDS for a full run")
 def test_rclpy_node_drives_the_kart_in_lockstep_and_scores_its_baseline(
         example: Path, record_property: Any) -> None:
     before = fastdds_files()

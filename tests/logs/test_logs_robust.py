@@ -482,13 +482,13 @@ def _fuzz_one(source: Path, damage: Damage, pick: int) -> list[str]:
         return results
 
 
-@settings(FUZZ, max_examples=120)
+@settings(FUZZ, max_examples=40)  # the long tier runs 10,000+
 @given(st.sampled_from(SHIPPED), damages, st.integers(0, 7))
 def test_fuzz_shipped_logs(source: Path, damage: Damage, pick: int) -> None:
     _fuzz_one(source, damage, pick)
 
 
-@settings(FUZZ, max_examples=100)
+@settings(FUZZ, max_examples=40)  # the long tier runs 10,000+
 @given(st.integers(0, 63), damages, st.integers(0, 7))
 def test_fuzz_real_recorded_logs(bags: Path, which: int, damage: Damage, pick: int) -> None:
     logs = sorted(bags.iterdir())

@@ -3,6 +3,7 @@ and the racing metrics computed from its logs."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +30,9 @@ def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]
     return log, compute(log)[1]
 
 
-@pytest.mark.parametrize("method", list(MpccMethod))
+@pytest.mark.parametrize("method", [
+    MpccMethod.RTI, pytest.param(MpccMethod.IPOPT, marks=pytest.mark.long(
+        reason="compiles the Ipopt solver: about 30 s of C"))])
 def test_solver_is_compiled_once_then_loaded_from_the_cache(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, method: MpccMethod) -> None:
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
@@ -96,12 +99,14 @@ def test_failed_solves_brake_and_are_counted(tmp_path: Path) -> None:
     assert m["progress_m"].value < 0.5
 
 
-def test_two_karts_in_their_own_namespaces_and_the_mpcc_passes(tmp_path: Path) -> None:
+@pytest.mark.long(reason="the full multi_agent race, shared with its exact-baseline check")
+def test_two_karts_in_their_own_namespaces_and_the_mpcc_passes(
+        shipped_run: Callable[[str], Path]) -> None:
     """kart0 passes kart1; their clearance is outline to outline: PyBullet's
     distance between the two karts' collision shapes at the logged poses, never more than the
     chassis box alone (the old footprint) gives."""
-    log, m = _run(tmp_path, "multi_agent")
-    t = tables(log)
+    log = shipped_run("multi_agent")
+    m, t = compute(log)[1], tables(log)
     assert {"/kart0/odom", "/kart1/odom", "/kart0/mpcc/stats", "/kart1/joy",
             "/kart0/tyres"} <= set(t)
     assert "/kart1/mpcc/stats" not in t

@@ -19,6 +19,7 @@ def _metrics(out: Path) -> bytes:
     return (out / "pure_pursuit_lap" / "metrics.json").read_bytes()
 
 
+@pytest.mark.long(reason="a fresh venv from the wheel")
 def test_the_pure_pursuit_package_runs_everywhere(tmp_path: Path, fresh_venv: Path) -> None:
     work = tmp_path / "pure_pursuit"
     shutil.copytree(EXAMPLE, work, ignore=shutil.ignore_patterns("reports", "build",

@@ -81,6 +81,7 @@ def test_excerpts_match_the_repository() -> None:
             assert not line.strip() or line in text, f"{b.where}: {line!r} not in the file"
 
 
+@pytest.mark.long(reason="the whole tutorial, in a shell")
 def test_the_tutorial_runs(tmp_path: Path) -> None:
     env = kartci_shell_env(tmp_path)
     home = tmp_path / "work"

@@ -64,6 +64,7 @@ def _shot(browser: Browser, session: str, name: str) -> None:
     (ARTIFACTS / name).write_bytes(base64.b64decode(data))
 
 
+@pytest.mark.long(reason="two runs and headless Chromium")
 @pytest.mark.parametrize("which", [0, 1], ids=["run report", "comparison report"])
 def test_report_is_interactive_in_headless_chromium(reports: tuple[Path, Path], which: int,
                                                     tmp_path: Path) -> None:

@@ -55,6 +55,7 @@ def test_j2_and_two_merged_shards_equal_one_serial_run(serial: Path, tmp_path: P
     assert Path(log).parent == tmp_path / "merged" / "line_circle"
 
 
+@pytest.mark.long(reason="starts Ray")
 def test_a_sweep_on_local_ray_gives_the_same_metrics(serial: Path, tmp_path: Path) -> None:
     """Each sweep point a Ray task; the points equal to the scenarios' own gains reproduce the
     serial run byte for byte, and sweep points are judged as NEW (no baseline of their own)."""

@@ -352,7 +352,7 @@ def _loads_or_one_line_error(load: Callable[[], object]) -> None:
         assert "\n" not in message and len(message) < MESSAGE_MAX_CHARS, message[:300]
 
 
-FAST = settings(max_examples=500, derandomize=True, database=None, deadline=None,
+FAST = settings(max_examples=150, derandomize=True, database=None, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 LONG = settings(max_examples=12_000, database=None, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
