@@ -94,6 +94,9 @@ def _sockets(held: dict[str, str]) -> Iterator[Sock]:
                 yield Sock(held[f[9]], proto, _endpoint(f[1]), _endpoint(f[2]), f[3])
 
 
+pytestmark = pytest.mark.long(reason="starts Ray instances, one of two nodes")
+
+
 @pytest.fixture(scope="module")
 def ray_sockets() -> Iterator[tuple[Any, list[Sock]]]:
     """kartci's local Ray, after tasks (one with a runtime environment, through the agent) ran."""
