@@ -61,6 +61,7 @@ def two_at_once(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, A
     return out, seen, p
 
 
+@pytest.mark.long(reason="a Zenoh stack driving full runs")
 def test_independent_subscriber_sees_clock_odometry_and_tokens(two_at_once: Any) -> None:
     out, seen, p = two_at_once
     assert p.returncode == 0, p.stdout + p.stderr
@@ -110,6 +111,7 @@ def test_two_runs_at_once_do_not_hear_each_other(two_at_once: Any) -> None:
         {t.split("/")[2] for t in b["tokens"]})
 
 
+@pytest.mark.long(reason="a Zenoh stack driving full runs")
 def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) -> None:
     copy = tmp_path / "kart_driver.py"  # a path of this test's own, to look for leftovers by
     shutil.copy(DRIVER, copy)
@@ -172,15 +174,16 @@ def messages(log: Path, topic: str) -> list[Any]:
 
 
 def test_paced_mode_runs_at_its_real_time_factor(tmp_path: Path, baselines: Path) -> None:
-    """Paced: sim time is held to 2x wall clock (1 s of sim takes at least 0.5 s), the stack's
-    latest commands drive the kart."""
+    """Paced: sim time is held to 2x wall clock (3 s of sim take at least 1.5 s), the stack's
+    latest commands drive the kart (3 s, not 1: a stack slow to start on a loaded machine
+    still answers within the run)."""
     proj = project(tmp_path, {"paced": external(
-        1.0, ["{python}", str(DRIVER), "--connect", "{endpoint}"], mode="paced",
+        3.0, ["{python}", str(DRIVER), "--connect", "{endpoint}"], mode="paced",
         real_time_factor=2.0)})
     out = tmp_path / "out"
     p = kartci("run", "--out", out, "--baselines", baselines, "--no-strict", cwd=proj)
     assert p.returncode == 0, p.stdout + p.stderr
-    assert json.loads((out / "paced" / "run.json").read_text())["wall_s"] >= 0.5
+    assert json.loads((out / "paced" / "run.json").read_text())["wall_s"] >= 1.5
     cmds = messages(out / "paced" / "run.mcap", "/kart0/ackermann_cmd")
     assert len(cmds) > 10 and max(c.drive.speed for c in cmds) > 3.0
 
@@ -236,6 +239,7 @@ def test_a_stack_started_by_hand_connects_to_a_fixed_port(tmp_path: Path,
     assert stamps == [k * 20_000_000 for k in range(26)]
 
 
+@pytest.mark.long(reason="a Zenoh stack driving full runs")
 def test_a_stack_of_two_processes_meets_through_kartci(tmp_path: Path, baselines: Path) -> None:
     """Planner and driver both connect to kartci only; kartci's gossip tells each where the
     other listens, so the plan reaches the driver and every tick is answered on time."""

@@ -212,6 +212,7 @@ def test_characterise_writes_csv_and_plot(tmp_path: Path) -> None:
     assert "<svg" in (tmp_path / "characterisation.html").read_text()
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_bad_inputs_found_in_review_are_one_line_each(tmp_path: Path) -> None:
     binary = tmp_path / "bin.yaml"
     binary.write_bytes(b"\xff\xfe\x00")
@@ -228,6 +229,7 @@ def test_bad_inputs_found_in_review_are_one_line_each(tmp_path: Path) -> None:
         "run", crit, "--set", "criteria={cross_track_maxx_m: {max: 1}}", "--out", tmp_path / "o"))
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_a_failed_run_is_marked_and_never_becomes_a_baseline(tmp_path: Path) -> None:
     out, base = tmp_path / "out", tmp_path / "baselines"
     base.mkdir()

@@ -57,6 +57,7 @@ def _scenario(out: Path) -> dict[str, Any]:
     return doc
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_a_changed_scenario_makes_its_baseline_stale(accepted: Path, tmp_path: Path) -> None:
     proj = _copy(accepted, tmp_path)
     stale = ("baseline is stale: scenario changed since it was accepted (fields: {}); run it as "
@@ -104,6 +105,7 @@ def test_a_changed_scenario_makes_its_baseline_stale(accepted: Path, tmp_path: P
         "`kartci baseline update` records it"]
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_a_tolerance_loosened_by_hand_fails_in_ci(accepted: Path, tmp_path: Path) -> None:
     proj = _copy(accepted, tmp_path)
     path = proj / "baselines" / "q.json"

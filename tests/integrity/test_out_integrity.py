@@ -74,6 +74,7 @@ def _interrupt_while(busy: Path, args: list[str], cwd: Path) -> subprocess.Compl
     return subprocess.CompletedProcess(p.args, p.returncode, stdout, stderr)
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_an_interrupted_run_leaves_no_older_result_to_promote(tmp_path: Path,
                                                               baselines: Path) -> None:
     """Issue 24 defect 5: OUT holds an earlier run of q and q2; `kartci run slow q q2` is
@@ -177,6 +178,7 @@ def test_no_command_follows_a_symlink_out_of_out(command: str, one_run: Path, tm
     assert _tree(outside) == before
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_score_does_not_write_through_a_symlinked_folder(one_run: Path, tmp_path: Path,
                                                           baselines: Path) -> None:
     """`kartci score LOG --out OUT` writes OUT/<profile>: a symlink there is refused, as for

@@ -216,6 +216,7 @@ def test_files_read_at_run_time_are_contained_at_load_time(proj: Path, make: Any
     assert _leaks(proj / "out", p) == []
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_a_source_log_inside_the_project_or_allowed_keeps_working(proj: Path) -> None:
     """A scenario naming a log inside the project (relative to the scenario file) resolves to
     it, as the shipped kart_manual's does; one outside runs with --allow-outside-paths."""

@@ -248,6 +248,7 @@ def _simd_levels() -> tuple[list[str], list[str]]:
     return baseline.split(","), [n for n in active.split(",") if n]
 
 
+@pytest.mark.long(reason="runs at two SIMD levels")
 def test_runs_at_two_numpy_simd_levels_are_told_apart(
         capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     """The laptop-against-CI case: one run restricted to numpy's baseline kernels, one with

@@ -97,6 +97,7 @@ def test_metrics_equal_evo_on_the_runs_trajectories(lap: tuple[Path, dict[str, M
         assert lap[1][name].value == pytest.approx(stats[key], abs=1e-6), name
 
 
+@pytest.mark.long(reason="closed-loop localization runs")
 def test_kidnap_without_registration_is_a_regression(tmp_path: Path) -> None:
     """The kidnap scenario, shortened; the same with registration turned off: the estimate
     never comes back, and the comparison (what `kartci compare` judges with) says regressed."""

@@ -30,9 +30,8 @@ def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]
     return log, compute(log)[1]
 
 
-@pytest.mark.parametrize("method", [
-    MpccMethod.RTI, pytest.param(MpccMethod.IPOPT, marks=pytest.mark.long(
-        reason="compiles the Ipopt solver: about 30 s of C"))])
+@pytest.mark.long(reason="compiles each solver: about 10 s (RTI) and 30 s (Ipopt) of C")
+@pytest.mark.parametrize("method", list(MpccMethod))
 def test_solver_is_compiled_once_then_loaded_from_the_cache(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, method: MpccMethod) -> None:
     monkeypatch.setenv("KARTCI_CACHE_DIR", str(tmp_path))
@@ -53,6 +52,7 @@ def test_solver_is_compiled_once_then_loaded_from_the_cache(
     assert solver_key(spec, SingleTrack.of(GokartModel(yaw_inertia_kgm2=30.0))) != key
 
 
+@pytest.mark.long(reason="closed-loop MPCC laps")
 def test_a_lower_speed_limit_lowers_the_top_speed(tmp_path: Path) -> None:
     _, fast = _run(tmp_path, "mpcc_lap", "duration_s=6")
     _, slow = _run(tmp_path, "mpcc_lap", "duration_s=6",
@@ -77,6 +77,7 @@ def test_an_obstacle_moved_by_set_moves_the_path(tmp_path: Path, lateral: float,
     assert m["min_clearance_m"].value > 0.1
 
 
+@pytest.mark.long(reason="closed-loop MPCC laps")
 @pytest.mark.parametrize("name", ["hairpins", "sweepers", "chicane"])
 def test_the_same_mpcc_laps_other_tracks(tmp_path: Path, name: str) -> None:
     _, m = _run(tmp_path, "mpcc_lap", f"world.track=tracks/{name}.csv", "duration_s=17")

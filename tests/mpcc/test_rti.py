@@ -68,6 +68,7 @@ def test_the_method_is_selectable_with_set_and_a_bad_one_is_one_clear_error() ->
         load_scenario("mpcc_lap", ["agents.kart0.controller.method=sqp"])
 
 
+@pytest.mark.long(reason="closed-loop MPCC laps")
 def test_hpipm_solves_the_structured_qp_as_casadi_does_and_as_a_general_solver_does(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """HPIPM called directly reads the QP through the OCP structure (stages, signs of the
@@ -125,6 +126,7 @@ def test_a_failed_qp_brakes_and_is_counted(tmp_path: Path) -> None:
     assert m["progress_m"].value < 0.5
 
 
+@pytest.mark.long(reason="closed-loop MPCC laps")
 def test_rti_overtakes_in_multi_agent(tmp_path: Path) -> None:
     _, m = _run(tmp_path, "multi_agent", RTI)
     # the pass; the power-limited kart within ETH's limits no longer laps kart1 in 25 s

@@ -138,13 +138,13 @@ SHIPPED = sorted(p.stem for p in BUILTIN_SCENARIOS.glob("*.yaml")
                  if (ROOT / "baselines" / f"{p.stem}.json").exists())
 
 
-# the kart runs of more than ~8 s of CPU: the full tier checks them (with the others)
-HEAVY = {"localization_kidnap", "localization_lap", "mpcc_circuit", "multi_agent",
-         "obstacle_avoidance", "perception_obstacles"}
+# the runs of more than ~8 s of CPU: the full tier checks them (with the others)
+HEAVY = {"external_pure_pursuit", "localization_kidnap", "localization_lap", "mpcc_circuit",
+         "multi_agent", "obstacle_avoidance", "perception_obstacles"}
 
 
 @pytest.mark.parametrize("name", [
-    pytest.param(n, marks=pytest.mark.long(reason="a full kart scenario")) if n in HEAVY else n
+    pytest.param(n, marks=pytest.mark.long(reason="a full scenario run")) if n in HEAVY else n
     for n in SHIPPED])
 def test_every_shipped_scenario_scores_exactly_its_baseline(
         name: str, shipped_run: Callable[[str], Path]) -> None:

@@ -181,6 +181,7 @@ def test_the_kartci_run_fixture_returns_results_for_my_asserts(
     result.assert_outcomes(passed=2)
 
 
+@pytest.mark.long(reason="pytest under xdist in a subprocess")
 def test_scenario_items_and_the_fixture_run_under_xdist(project: pytest.Pytester) -> None:
     pytest.importorskip("xdist")
     (project.path / "scenarios" / "line_circle.yaml").write_text(

@@ -132,6 +132,7 @@ def test_the_command_gives_the_same_metrics_under_every_level(tmp_path: Path) ->
     assert len(set(got.values())) == 1, got
 
 
+@pytest.mark.long(reason="runs under several pins, workers and an unpinned Python")
 def test_workers_and_an_unpinned_python_compute_as_the_command(tmp_path: Path) -> None:
     """-j workers, and the API in a Python that imported numpy before kartci (its run goes to
     a pinned child), give the command's bytes."""

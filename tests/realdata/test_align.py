@@ -162,6 +162,7 @@ def _write_log(path: Path, ref: Trajectory, est: Trajectory) -> None:
                 w.write(conn, ns, store.serialize_cdr(m, m.__msgtype__))
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_score_aligns_a_log_and_warns_when_frames_differ(tmp_path: Path) -> None:
     evo_exe("evo_ape")  # skips, saying how to install it, where evo is absent
     ref, est = _noisy_pair()

@@ -16,6 +16,7 @@ from kartci.realdata.simreal import sim_setup
 IDENTIFIABLE = ("speed_gain_per_s", "steering_rate_radps")
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_calibrate_recovers_the_kart_parameters_its_trajectory_shows(
         kart_logs: dict[float, Path], kart_profile: Path, tmp_path: Path) -> None:
     """The log's kart differs from nominal in all of TRUTH, but only the speed loop's gain and

@@ -16,6 +16,7 @@ MODEL = "agents.lt0.model"
 TRUTH = {"wheel_radius_m": 0.037, "wheel_separation_m": 0.16, "wheel_time_constant_s": 0.15}
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_calibrate_recovers_wheel_radius_separation_and_lag(tmp_path: Path) -> None:
     """The base controller believes in the URDF's 0.035 m wheels 0.15 m apart; the robot's
     are 0.037 m and 0.16 m and lag 0.15 s (nominal 0.1 s)."""

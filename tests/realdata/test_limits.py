@@ -88,6 +88,7 @@ def test_profile_parameters_are_set_for_calibration(tmp_path: Path) -> None:
     assert p.commands is not None and p.commands.max_speed_mps == 0.25
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_a_speed_limit_caps_the_simulated_turtlebot(bags: Path, tmp_path: Path) -> None:
     """The TurtleBot3 bag commands up to 0.5 m/s; with a 0.2 m/s limit in its base controller
     the simulated robot, driven by the same commands over the whole log, stays below it."""

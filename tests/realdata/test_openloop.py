@@ -61,6 +61,7 @@ def test_a_recorded_run_through_its_controller_is_reproduced_exactly(line_run: P
     assert wheel.compared > 40 and wheel.differing == 0 and not wheel.note
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_a_project_agent_is_gated_on_its_outputs(line_run: Path, tmp_path: Path) -> None:
     project = tmp_path / "team"
     project.mkdir()

@@ -27,6 +27,7 @@ def _metrics(out: Path, name: str) -> dict[str, float]:
     return {k: v["value"] for k, v in doc["metrics"].items()}
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_jackal_scored_with_its_profile_and_judged_against_its_baseline(
         bags: Path, tmp_path: Path, baselines: Path) -> None:
     out = tmp_path / "out"

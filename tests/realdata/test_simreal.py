@@ -44,6 +44,7 @@ def test_divergence_is_near_zero_for_the_nominal_model_and_grows_with_the_change
     assert truth["simreal_ape_window_rmse_m"] < 0.02
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_simreal_command_writes_a_judged_report(kart_logs: dict[float, Path], kart_profile: Path,
                                                 tmp_path: Path) -> None:
     out, baselines = tmp_path / "out", tmp_path / "baselines"

@@ -86,6 +86,7 @@ def _log(path: Path) -> None:
             w.write(conn, t_ns, STORE.serialize_cdr(m, m.__msgtype__))
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_a_tf_chain_is_scored_as_an_estimate_at_the_reference_stamps(tmp_path: Path) -> None:
     log = tmp_path / "tf_log"
     _log(log)
@@ -109,6 +110,7 @@ def test_a_tf_chain_is_scored_as_an_estimate_at_the_reference_stamps(tmp_path: P
     assert doc["metrics"]["ape_max_m"]["value"] == pytest.approx(0.0, abs=1e-9)
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
 def test_a_tf_chain_as_the_reference_at_its_own_stamps_and_errors(tmp_path: Path) -> None:
     log = tmp_path / "tf_log"
     _log(log)

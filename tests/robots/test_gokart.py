@@ -183,6 +183,7 @@ def test_steering_into_a_wall_is_a_collision(tmp_path: Path) -> None:
     assert first["impulse_ns"] > 10.0
 
 
+@pytest.mark.long(reason="several robot runs")
 def test_the_slippery_zone_changes_the_drive(tmp_path: Path) -> None:
     """The same joystick inputs on concrete everywhere vs. with the coated (mu 0.6) east end,
     then with the east end at mu 0.3: the kart slides wide on the slipperiest floor."""

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from helpers import kartci
 
 from kartci.robots.line_tracker import figures, study
 
 
+@pytest.mark.long(reason="several robot runs")
 def test_study_draws_the_step_time_panel_from_a_two_point_grid(tmp_path: Path) -> None:
     out = tmp_path / "out"
     r = kartci("run", "line_straight_grid", "--out", out, "--set", "duration_s=2",

@@ -61,6 +61,7 @@ def test_fig_7_1_2_a_longer_step_time_overshoots_more(tmp_path: Path) -> None:
     assert slow["overshoot_ratio"] > fast["overshoot_ratio"] > 0.1
 
 
+@pytest.mark.long(reason="several robot runs")
 def test_pi_with_ki_0_001_oscillates_like_p_with_a_lower_amplitude(tmp_path: Path) -> None:
     """Sec. 7.3 on the same circle: "the same oscillations ... but the amplitude is lower". With
     the annex's integration step (0.01 Ki e per tick) Ki 0.001 moves the amplitude by well under

@@ -91,6 +91,7 @@ def test_a_crashed_controller_leaves_its_traceback_beside_a_one_line_error(
     assert trace.startswith("Traceback") and "in step" in trace
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_a_damaged_or_deleted_log_is_an_error_of_report_and_is_marked(
         tmp_path: Path, baselines: Path) -> None:
     out = tmp_path / "out"
@@ -108,6 +109,7 @@ def test_a_damaged_or_deleted_log_is_an_error_of_report_and_is_marked(
         assert "last run of this scenario failed" in _one_line(p)
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_baseline_update_takes_only_the_last_run_of_a_reused_out(tmp_path: Path,
                                                                   baselines: Path) -> None:
     out = tmp_path / "out"
@@ -131,6 +133,7 @@ def test_a_dangling_baseline_symlink_is_an_error_not_a_pass(tmp_path: Path,
         "scenarios"]["line_straight"]["error"]
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_baseline_update_prints_values_that_show_the_change(tmp_path: Path,
                                                             baselines: Path) -> None:
     out = tmp_path / "out"
@@ -180,6 +183,7 @@ def _doomed_project(root: Path) -> Path:
     return root
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_a_dead_worker_marks_its_folder(tmp_path: Path) -> None:
     root = _doomed_project(tmp_path / "proj")
     out = root / "out"
@@ -245,6 +249,7 @@ def one_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_compare_with_an_empty_or_unscored_base_is_bad_input(one_run: Path,
                                                              tmp_path: Path) -> None:
     (tmp_path / "empty").mkdir()
@@ -260,6 +265,7 @@ def test_compare_with_an_empty_or_unscored_base_is_bad_input(one_run: Path,
     assert "kartci report" in line
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_strict_fails_a_missing_baseline_and_says_how_to_accept_it(one_run: Path,
                                                                    tmp_path: Path) -> None:
     out = one_run / "out"

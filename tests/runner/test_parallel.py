@@ -33,6 +33,7 @@ def serial(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_j2_and_two_merged_shards_equal_one_serial_run(serial: Path, tmp_path: Path) -> None:
     baselines = serial / "baselines"
     _run(tmp_path / "pool", baselines, "-j", "2")

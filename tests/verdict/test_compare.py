@@ -29,6 +29,7 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_repeats_are_stored_beside_the_judged_run(runs: Path) -> None:
     seeds = [json.loads((runs / "base" / "line_circle" / sub / "metrics.json").read_text())
              ["seed"] for sub in (".", "repeat_1")]

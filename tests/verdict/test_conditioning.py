@@ -71,6 +71,7 @@ def test_a_start_replica_moves_every_robot_k_nanometres_and_nothing_else() -> No
     assert r.seed == spec.seed and replica(spec, Vary.SEED, 2).seed == spec.seed + 2
 
 
+@pytest.mark.long(reason="several kartci runs end to end")
 def test_conditioning_run_and_baseline_update_record_spreads(tmp_path: Path) -> None:
     """`run --conditioning 3` leaves 2 nudged replicas; `baseline update` runs the fourth,
     records every spread, the platform and how replicas were made. A later run against that
