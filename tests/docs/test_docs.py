@@ -44,8 +44,6 @@ EXIT = re.compile(r"#\s*exit\s+(\d+)\s*$")
 # the tables' box drawing and the verdicts' emoji: a table cell reads as its words
 BOX = re.compile("[\u2500-\u257f\u2600-\u27bf\ufe0f\U0001f000-\U0001ffff]")
 
-long_only = pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
-                               reason="builds the site or runs every page: set KARTCI_LONG=1")
 
 
 @dataclass(frozen=True)
@@ -231,9 +229,8 @@ def _tiered(page: Path) -> object:
     """A page in QUICK_PAGES runs in the default tier, any other only with KARTCI_LONG=1."""
     if _name(page) in QUICK_PAGES:
         return pytest.param(page, id=_name(page))
-    return pytest.param(page, id=_name(page), marks=[
-        pytest.mark.long, pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
-                                             reason="runs a page's examples: set KARTCI_LONG=1")])
+    return pytest.param(page, id=_name(page), marks=pytest.mark.long(
+        reason="a page whose examples take more than 10 s"))
 
 
 @pytest.mark.parametrize("page", [_tiered(p) for p in RUN_PAGES])
@@ -268,8 +265,7 @@ def _copy_docs(tmp_path: Path) -> Path:
     return tmp_path / "docs"
 
 
-@long_only
-@pytest.mark.long
+@pytest.mark.long(reason="builds the site or runs every page")
 @pytest.mark.parametrize(("broken", "warning"), [
     ("[the next step](howto/no-such-page.md)", "howto/no-such-page.md"),
     ("{py:func}`kartci.no_such_function`", "kartci.no_such_function"),

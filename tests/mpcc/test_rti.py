@@ -7,7 +7,6 @@ The full-length laps run behind KARTCI_LONG=1 (about a minute of CPU)."""
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import casadi as ca
@@ -31,8 +30,6 @@ from kartci.track import load_track
 
 ROOT = Path(__file__).resolve().parents[2]
 RTI = "agents.kart0.controller.method=rti"
-long_only = pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
-                               reason="full-length RTI laps: set KARTCI_LONG=1")
 
 
 def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]]:
@@ -140,8 +137,7 @@ def test_rti_overtakes_in_multi_agent(tmp_path: Path) -> None:
         _reference("multi_agent", "kart0.lap_times_s"), rel=0.02)
 
 
-@long_only
-@pytest.mark.long
+@pytest.mark.long(reason="full-length RTI laps")
 @pytest.mark.parametrize("name", ["mpcc_lap", "mpcc_circuit"])
 def test_rti_laps_the_shipped_tracks_within_2_percent_of_ipopt(tmp_path: Path,
                                                                 name: str) -> None:
@@ -154,8 +150,7 @@ def test_rti_laps_the_shipped_tracks_within_2_percent_of_ipopt(tmp_path: Path,
         assert m[lap].value == pytest.approx(_reference(name, lap), rel=0.02)
 
 
-@long_only
-@pytest.mark.long
+@pytest.mark.long(reason="full-length RTI laps")
 def test_rti_passes_the_obstacles(tmp_path: Path) -> None:
     """Clear of all five boxes, on the track, laps no more than 2 % slower than Ipopt's. One-sided
     here: among the boxes the two methods take different lines (RTI's best lap is 2.3 % faster

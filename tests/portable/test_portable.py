@@ -156,9 +156,7 @@ KART_SCENARIOS = ["obstacle_avoidance", "perception_obstacles", "mpcc_lap", "mul
                   "localization_lap"]
 
 
-@pytest.mark.long
-@pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
-                    reason="every kart scenario under every level: set KARTCI_LONG=1")
+@pytest.mark.long(reason="every kart scenario under every SIMD level")
 @pytest.mark.parametrize("name", KART_SCENARIOS)
 def test_kart_scenarios_are_byte_identical_under_every_level(name: str, tmp_path: Path) -> None:
     got = _across_levels(tmp_path, name, 12.0, every=True)

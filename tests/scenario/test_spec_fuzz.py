@@ -356,8 +356,6 @@ FAST = settings(max_examples=150, derandomize=True, database=None, deadline=None
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 LONG = settings(max_examples=12_000, database=None, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-long_only = pytest.mark.skipif(os.environ.get("KARTCI_LONG") != "1",
-                               reason="long fuzz: set KARTCI_LONG=1")
 
 
 def _check_document(data: bytes, folder: Path) -> None:
@@ -382,16 +380,14 @@ def test_fuzz_set_overrides(overrides: list[str]) -> None:
     _check_overrides(overrides)
 
 
-@pytest.mark.long
-@long_only
+@pytest.mark.long(reason="fuzzing with 12,000 scenario files and overrides")
 @LONG
 @given(data=_document())
 def test_fuzz_scenario_files_long(data: bytes, tmp_path_factory: pytest.TempPathFactory) -> None:
     _check_document(data, tmp_path_factory.getbasetemp())
 
 
-@pytest.mark.long
-@long_only
+@pytest.mark.long(reason="fuzzing with 12,000 scenario files and overrides")
 @LONG
 @given(overrides=st.lists(assignments, min_size=1, max_size=3))
 def test_fuzz_set_overrides_long(overrides: list[str]) -> None:
