@@ -14,10 +14,10 @@ from kartci.core import Direction, Metric, MetricDef
 from kartci.metrics.outline import Placed, box, fixed, outline_gap_m
 from kartci.scenario.models import Box
 
-SLACK_DEF = MetricDef("m", Direction.LOWER, 0.05, 0.2, "largest slack of any MPCC plan (the "
-                      "solve's maximum over its horizon, from mpcc/stats): how far it planned "
-                      "past its track bounds; the same slack relaxes its speed and friction "
-                      "limits")
+SLACK_DEF = MetricDef("m", Direction.LOWER, 0.05, 0.2, "largest slack the MPCC applied (its "
+                      "first predicted stage's, the state its command leads to, from "
+                      "mpcc/stats): how far past its track bounds it drove by its own model; "
+                      "the same slack relaxes its speed and friction limits")
 
 
 def min_clearance_m(mine: Placed, obstacles: tuple[Box, ...], others: list[Placed]) -> float:

@@ -179,4 +179,4 @@ class MpccAgent:
                    success=plan.success, status=plan.status, solve_ms=plan.solve_ms,
                    iterations=plan.iterations, cost=plan.cost,
                    failures=self.mpcc.failures if self.mpcc else 0,
-                   max_slack_m=plan.max_slack_m)
+                   max_slack_m=plan.slack_m)

@@ -40,7 +40,7 @@ class Plan:
     iterations: int  # Ipopt iterations; in RTI the QP solver iterations of all its QPs
     solve_ms: float
     cost: float
-    max_slack_m: float
+    slack_m: float  # stage 1's: how far past its bounds the state the command leads to lies
     states: np.ndarray  # (N + 1, NX) predicted states; on failure the braking fallback
     accel_mps2: float  # the command: longitudinal acceleration (negative: brake)
     wheel_angle_rad: float  # mean front-wheel angle to steer to
@@ -98,7 +98,9 @@ class Mpcc:
             self._lam_g = np.asarray(sol["lam_g"]).ravel()
             self._lam_x = np.asarray(sol["lam_x"]).ravel()
         states = lay.states(w)
-        slack = float(lay.inputs(w)[1:, SLACK].max())
+        # the applied stage's slack, not the horizon's maximum: a later stage's is a plan the
+        # next solves revise, and its peaks moved with a 1 nm change of the start
+        slack = float(lay.inputs(w)[1, SLACK])
         return Plan(True, status, iters, solve_ms, float(sol["f"]), slack, states,
                     float(states[0, ACC] + states[1, ACC]) / 2, float(states[1, DELTA]))
 
