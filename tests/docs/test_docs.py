@@ -303,7 +303,6 @@ def _commands(command: typer.core.TyperGroup | object, path: str,
             yield from _commands(sub, f"{path} {name}", context)
 
 
-@pytest.mark.long(reason="builds the documentation site")
 def test_every_command_and_option_is_in_the_reference(site: Path) -> None:
     from kartci.cli import app
 
