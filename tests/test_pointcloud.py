@@ -52,6 +52,7 @@ def test_voxel_downsample_keeps_one_centroid_per_voxel() -> None:
     assert np.allclose(voxel_downsample(pts, 1.0), [[0.2, 0.2, 0.2], [1.5, 0.0, 0.0]])
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_kartci_map_writes_the_halls_surfaces(tmp_path: Path) -> None:
     """A coarse mapping run: the walls at x = 0 and 32 m, y = 0 and 20 m, the floor at 0 and
     the ceiling at 4 m all appear; nothing lies outside the hall."""

@@ -81,6 +81,7 @@ def test_an_unacceptable_run_is_refused_before_anything_is_written(tmp_path: Pat
     assert not base.exists()
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_a_baseline_of_an_agent_object_compares_only_with_that_object(tmp_path: Path) -> None:
     base = tmp_path / "baselines"
     mine = api.run("line_straight", overrides=QUICK, out=tmp_path / "mine",

@@ -173,6 +173,7 @@ def messages(log: Path, topic: str) -> list[Any]:
                 for s, _, m in make_reader(f).iter_messages(topics=[topic])]
 
 
+@pytest.mark.long(reason="a Zenoh stack driving a run")
 def test_paced_mode_runs_at_its_real_time_factor(tmp_path: Path, baselines: Path) -> None:
     """Paced: sim time is held to 2x wall clock (3 s of sim take at least 1.5 s), the stack's
     latest commands drive the kart (3 s, not 1: a stack slow to start on a loaded machine
@@ -215,6 +216,7 @@ def test_the_example_stack_gives_byte_identical_metrics(tmp_path: Path,
     assert values["mean_speed_mps"]["value"] > 3.5
 
 
+@pytest.mark.long(reason="a Zenoh stack driving a run")
 def test_a_stack_started_by_hand_connects_to_a_fixed_port(tmp_path: Path,
                                                           baselines: Path) -> None:
     """No `command`: the user starts the stack, told the port; kartci waits for it."""
@@ -255,6 +257,7 @@ def test_a_stack_of_two_processes_meets_through_kartci(tmp_path: Path, baselines
     assert timing["late_commands"]["value"] == 0
 
 
+@pytest.mark.long(reason="a Zenoh stack driving a run")
 @pytest.mark.parametrize("kartci_is_router", [False, True])
 def test_a_stack_behind_a_router_drives(tmp_path: Path, baselines: Path,
                                         kartci_is_router: bool) -> None:
@@ -306,6 +309,7 @@ def test_joining_a_remote_endpoint_is_refused_unless_allowed(tmp_path: Path) -> 
             "the external controller to allow it") in p.stdout + p.stderr
 
 
+@pytest.mark.long(reason="a Zenoh stack driving a run")
 def test_a_humble_stack_drives_with_humbles_keys(tmp_path: Path) -> None:
     """`ros_distro: humble`: keys and tokens carry `TypeHashNotSupported` (rmw_zenoh on Humble);
     the independent stack, speaking Humble's keys, answers every tick."""

@@ -173,6 +173,7 @@ def test_baseline_cycle_and_a_tightened_baseline_fails(tmp_path: Path) -> None:
     assert "cross_track_rms_m" in (suite.find("testcase/failure").get("message") or "")  # type: ignore[union-attr]
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_report_rebuilds_from_logs_alone(tmp_path: Path) -> None:
     out, base = tmp_path / "out", tmp_path / "baselines"
     base.mkdir()
@@ -270,6 +271,7 @@ def test_corrupt_files_for_baseline_update(tmp_path: Path) -> None:
         kartci("baseline", "update", out, "--baselines", base))
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_list_shows_origins_and_survives_a_bad_file_and_a_broken_link(tmp_path: Path) -> None:
     (tmp_path / "kartci.toml").write_text('scenarios = ["scenarios"]\n')
     scen = tmp_path / "scenarios"

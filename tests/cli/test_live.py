@@ -91,6 +91,7 @@ async def _client(port: int, deadline: float) -> Seen:
     return seen
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_live_run_serves_channels_and_messages(tmp_path: Path) -> None:
     port = _free_port()
     (tmp_path / "baselines").mkdir()

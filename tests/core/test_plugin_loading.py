@@ -53,6 +53,7 @@ def test_a_broken_entry_point_is_recorded_under_its_name_not_raised() -> None:
     assert "Traceback (most recent call last)" in err.value.trace
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_broken_plugins_fail_only_the_scenarios_that_name_them(tmp_path: Path,
                                                                baselines: Path) -> None:
     """An installed plugin that raises on import and a project plugin module that raises

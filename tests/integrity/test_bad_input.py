@@ -310,6 +310,7 @@ def test_urdf_and_map_are_read_as_bounded_regular_files(tmp_path: Path, scenario
     assert f"{scenario}: ERROR: {fifo}: {reason}" in proc.stdout
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_box_and_hall_sizes_must_be_positive(tmp_path: Path) -> None:
     """`size_m` of a box (and of a hall) took any length in ±1e4 m, negative too: an edge
     length is now more than 0."""

@@ -92,6 +92,7 @@ def test_a_symlink_out_of_worlds_is_refused(proj: Path) -> None:
                             f" (a link to {secret}) {OUTSIDE}")
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_allow_outside_paths_lets_an_outside_track_through(proj: Path) -> None:
     """With the flag, a valid track outside the project is run like any other."""
     track = proj.parent / "outside" / "hall_track.csv"

@@ -52,6 +52,7 @@ def _summary(out: Path) -> dict[str, float]:
     return {k: v["value"] for k, v in doc["metrics"].items()}
 
 
+@pytest.mark.long(reason="replays logs through full runs")
 def test_replay_a_ros1_joy_bag_written_by_rosbags(tmp_path: Path) -> None:
     bag = tmp_path / "drive.bag"
     _ros1_joy_bag(bag)
@@ -69,6 +70,7 @@ def test_replay_a_ros1_joy_bag_written_by_rosbags(tmp_path: Path) -> None:
     assert abs(t["/kart0/odom"]["vx"].iloc[-1]) < 0.05  # braked to a stop
 
 
+@pytest.mark.long(reason="replays logs through full runs")
 def test_replay_twist_stamped_from_a_rosbag2(tmp_path: Path) -> None:
     """2 m/s and 0.4 rad/s (a 5 m circle) as TwistStamped in a rosbag2 (sqlite3) folder."""
     ts = get_typestore(Stores.ROS2_HUMBLE)
@@ -95,6 +97,7 @@ def test_replay_twist_stamped_from_a_rosbag2(tmp_path: Path) -> None:
     assert late["wz"].mean() == pytest.approx(0.4, rel=0.25)
 
 
+@pytest.mark.long(reason="replays logs through full runs")
 def test_replay_the_real_twist_stamped_fixture(bags: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
     p = kartci("replay", bags / "cmd_vel_twiststamped.mcap", "--set", "duration_s=2",
@@ -142,6 +145,7 @@ def _xbox_bag(path: Path, seconds: float = 6.0) -> None:
                                                "std_msgs/msg/String"))
 
 
+@pytest.mark.long(reason="replays logs through full runs")
 def test_an_xbox_pad_with_its_mapping_and_a_log_longer_than_the_scenario(tmp_path: Path) -> None:
     bag = tmp_path / "xbox.bag"
     _xbox_bag(bag)
@@ -156,6 +160,7 @@ def test_an_xbox_pad_with_its_mapping_and_a_log_longer_than_the_scenario(tmp_pat
     assert "runs to 6.0 s but the scenario stops at 3 s" in warnings[0]
 
 
+@pytest.mark.long(reason="replays logs through full runs")
 def test_a_pad_that_does_not_fit_its_mapping_is_one_clear_line(tmp_path: Path) -> None:
     bag = tmp_path / "xbox.bag"
     _xbox_bag(bag, seconds=1.0)

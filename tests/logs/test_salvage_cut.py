@@ -78,6 +78,7 @@ def test_a_single_chunk_mcap_cut_at_30_percent_yields_the_messages_before_the_cu
     assert again == sorted(got, key=lambda m: m[1]) and notes == []
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_recover_writes_the_salvaged_log_from_the_command_line(bags: Path,
                                                                tmp_path: Path) -> None:
     whole = _one_chunk(bags, tmp_path, CompressionType.ZSTD)

@@ -130,6 +130,7 @@ def test_an_agent_object_drives_and_the_log_says_so(tmp_path: Path) -> None:
 
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_a_run_whose_agent_sends_unnamed_wheel_commands_reports(tmp_path: Path) -> None:
     """`Bang` sends wheel speeds without joint names (the robot reads them in order): the
     report and the baseline's reference trace draw what they can (the commanded speeds they

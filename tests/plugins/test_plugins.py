@@ -138,9 +138,9 @@ SHIPPED = sorted(p.stem for p in BUILTIN_SCENARIOS.glob("*.yaml")
                  if (ROOT / "baselines" / f"{p.stem}.json").exists())
 
 
-# the runs of more than ~8 s of CPU: the full tier checks them (with the others)
+# the runs of more than ~5 s of CPU: the full tier checks them (with the others)
 HEAVY = {"external_pure_pursuit", "localization_kidnap", "localization_lap", "mpcc_circuit",
-         "multi_agent", "obstacle_avoidance", "perception_obstacles"}
+         "mpcc_lap", "multi_agent", "obstacle_avoidance", "perception_obstacles"}
 
 
 @pytest.mark.parametrize("name", [

@@ -7,11 +7,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from helpers import kartci
 
 BAG = "turtlebot3_gazebo_cmd_odom_scan.bag"
 
 
+@pytest.mark.long(reason="end-to-end runs of real or synthetic logs")
 def test_the_turtlebot_bag_replays_through_localization(bags: Path, tmp_path: Path) -> None:
     profile = tmp_path / "tb3.yaml"
     profile.write_text("name: tb3\npose: {topic: /odom}\nimu: {topic: /imu}\n"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
+import pytest
 from helpers import kartci
 
 BAG = "turtlebot3_gazebo_cmd_odom_scan.bag"
@@ -25,6 +26,7 @@ def test_a_foreign_log_without_a_namespace_lists_its_topics(bags: Path, tmp_path
     assert "/scan (sensor_msgs/msg/LaserScan)" in line and "(--ns)" in line
 
 
+@pytest.mark.long(reason="end-to-end runs of real or synthetic logs")
 def test_a_robot_specific_agent_says_which_robots_it_runs_on(bags: Path, tmp_path: Path) -> None:
     for agent in ("localization", "line_pid"):
         line = _one_line(kartci("replay", bags / BAG, "--open-loop", "--agent", agent,

@@ -50,6 +50,7 @@ def _log(path: Path) -> None:
                 w.write(conn, ns, store.serialize_cdr(m, m.__msgtype__))
 
 
+@pytest.mark.long(reason="end-to-end runs of real or synthetic logs")
 def test_reports_count_seconds_from_the_log_start_and_say_it_once(tmp_path: Path) -> None:
     log = tmp_path / "wall"
     _log(log)

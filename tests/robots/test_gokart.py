@@ -162,6 +162,7 @@ def _run(tmp_path: Path, name: str, *sets: str) -> dict[str, float]:
     return {k: v.value for k, v in compute(log)[1].items()}
 
 
+@pytest.mark.long(reason="several robot runs")
 def test_kart_manual_completes_its_laps_without_collisions(tmp_path: Path) -> None:
     m = _run(tmp_path, "kart_manual")
     assert m["laps_completed"] == 2

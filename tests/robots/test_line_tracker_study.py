@@ -74,6 +74,7 @@ def test_pi_with_ki_0_001_oscillates_like_p_with_a_lower_amplitude(tmp_path: Pat
     assert pi_strong < pi
 
 
+@pytest.mark.long(reason="several robot runs")
 def test_away_from_the_sensor_edge_the_step_time_does_not_matter_on_the_circle(
         tmp_path: Path) -> None:
     """kartci's circle result, unlike the seed's: at r = 0.45 m (steady offset about 5.3 mm)
@@ -88,6 +89,7 @@ def test_away_from_the_sensor_edge_the_step_time_does_not_matter_on_the_circle(
             assert m["line_lost"] == 0 and m["cross_track_max_m"] < 0.0065, (extra, ts)
 
 
+@pytest.mark.long(reason="several robot runs")
 def test_at_the_sensor_edge_the_seeds_circle_result_appears(tmp_path: Path) -> None:
     """r = 0.36 m, the seed's Gazebo robot: the steady offset sits at 7.5 mm, on the edge of the
     8 mm range, and there ts 0.01 s stays within while ts 0.04 s loses the line."""

@@ -76,6 +76,7 @@ register(Controller("nan_wheels", Params, NanWheels, ("line_tracker",)))
 """
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_nan_state_in_a_pool_and_the_report_is_still_written(tmp_path: Path,
                                                              baselines: Path) -> None:
     """A controller that commands NaN (a team's plugin, imported in the workers too) drives
@@ -100,6 +101,7 @@ def test_nan_state_in_a_pool_and_the_report_is_still_written(tmp_path: Path,
     assert (out / "report.html").exists() and (out / "junit.xml").exists()
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_a_run_over_its_time_limit_is_an_error(tmp_path: Path, baselines: Path) -> None:
     p = kartci("run", "line_straight", *QUICK, "--timeout-s", "0.01", "--out", tmp_path,
                "--baselines", baselines)

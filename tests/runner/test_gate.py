@@ -121,6 +121,7 @@ def test_baseline_update_takes_only_the_last_run_of_a_reused_out(tmp_path: Path,
     assert sorted(x.name for x in (baselines / "traces").iterdir()) == ["line_circle.json"]
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_a_dangling_baseline_symlink_is_an_error_not_a_pass(tmp_path: Path,
                                                             baselines: Path) -> None:
     link = baselines / "line_straight.json"
@@ -368,6 +369,7 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_workers_die_with_their_parent(tmp_path: Path, baselines: Path) -> None:
     env = {k: v for k, v in os.environ.items() if k != "CI"}

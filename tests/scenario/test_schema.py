@@ -225,6 +225,7 @@ def _schema_cli(out: Path, cwd: Path) -> subprocess.CompletedProcess[str]:
                           capture_output=True, text=True, cwd=cwd, timeout=120)
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_cli_writes_the_schema_into_a_new_folder(tmp_path: Path) -> None:
     out = tmp_path / ".kartci" / "scenario.schema.json"
     p = _schema_cli(out, tmp_path)

@@ -37,6 +37,7 @@ def test_repeats_are_stored_beside_the_judged_run(runs: Path) -> None:
     assert not (runs / "base" / "line_circle" / "repeat_2").exists()
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_compare_identical_runs_exits_0(runs: Path) -> None:
     p = kartci("compare", runs / "base", runs / "base", "--out", runs / "same",
                "--baselines", runs / "baselines")
@@ -47,6 +48,7 @@ def test_compare_identical_runs_exits_0(runs: Path) -> None:
     assert statuses == {"pass"}
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_a_worse_head_exits_1_and_every_output_names_the_regression(runs: Path) -> None:
     step_summary = runs / "step_summary.md"
     step_summary.write_text("earlier step\n")

@@ -117,6 +117,7 @@ def test_conditioning_run_and_baseline_update_record_spreads(tmp_path: Path) -> 
     assert "baseline made elsewhere" in (out / "summary.md").read_text()
 
 
+@pytest.mark.long(reason="kartci runs end to end")
 def test_baseline_update_refuses_a_run_with_native_kernels(tmp_path: Path) -> None:
     out = tmp_path / "out"
     assert kartci("run", "line_straight", *QUICK, "--out", out, "--baselines", tmp_path,
