@@ -46,7 +46,8 @@ IPOPT = {"mpcc_lap": {"laps_completed": 4, "lap_times_s": 9.892494923,
                       "best_lap_s": 9.652529918},
          "mpcc_circuit": {"laps_completed": 2, "lap_times_s": 23.26901524,
                           "best_lap_s": 22.61735636},
-         "obstacle_avoidance": {"lap_times_s": 14.8444447, "best_lap_s": 14.42192717},
+         # with boxes 1 and 5 at 0.6 m off centre (issue 26's conditioning fix)
+         "obstacle_avoidance": {"lap_times_s": 13.97068346, "best_lap_s": 13.4988422},
          "multi_agent": {"kart0.lap_times_s": 11.31344734}}
 
 
@@ -153,8 +154,9 @@ def test_rti_laps_the_shipped_tracks_within_2_percent_of_ipopt(tmp_path: Path,
 @pytest.mark.long(reason="full-length RTI laps")
 def test_rti_passes_the_obstacles(tmp_path: Path) -> None:
     """Clear of all five boxes, on the track, laps no more than 2 % slower than Ipopt's. One-sided
-    here: among the boxes the two methods take different lines (RTI's best lap is 2.3 % faster
-    than Ipopt's, at the same clearance), and the point is that the cheap method costs no time."""
+    here: among the boxes the two methods take different lines (RTI's best lap is 1.6 % and its
+    mean lap 3.8 % faster than Ipopt's, at the same clearance: 0.209 vs 0.212 m), and the point
+    is that the cheap method costs no time."""
     _, m = _run(tmp_path, "obstacle_avoidance", RTI)
     assert m["laps_completed"].value >= 2
     assert m["collisions"].value == 0
