@@ -379,6 +379,8 @@ def _db3_connect(path: Path) -> sqlite3.Connection:
     size = 65536 if size == 1 else size
     if size < 512 or size & (size - 1):
         raise sqlite3.DatabaseError("its header names no valid page size")
+    if len(data) < size:  # sqlite's deserialize takes an empty image for a MemoryError
+        raise sqlite3.DatabaseError("it is shorter than one page")
     con = sqlite3.connect(":memory:")
     try:
         con.deserialize(data[:len(data) // size * size])
