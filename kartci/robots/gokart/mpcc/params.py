@@ -148,7 +148,7 @@ class MpccController(ControllerParams):
                                "time); `ipopt`: the NLP to convergence every step, the "
                                "reference")
     qp_solver: QpSolver = Field(QpSolver.HPIPM, description="the RTI mode's QP solver")
-    sqp_iterations: int = Field(3, ge=1, le=20, description="RTI: SQP iterations (QPs) per "
+    sqp_iterations: int = Field(1, ge=1, le=20, description="RTI: SQP iterations (QPs) per "
                                 "control step, a fixed count so runs stay deterministic")
     sqp_cold_iterations: int = Field(10, ge=1, le=100, description="RTI: SQP iterations of a "
                                      "solve without a previous plan (the first, and after a "
