@@ -143,16 +143,13 @@ class MpccController(ControllerParams):
     recovery: MpccRecovery = Field(MpccRecovery(), description="loss-of-control detection "
                                    "and the recovery behaviour")
     method: MpccMethod = Field(MpccMethod.RTI, description="`rti`: real-time iterations, "
-                               "`sqp_iterations` QPs per step with `qp_solver` (laps the "
-                               "shipped scenarios as Ipopt does, best laps within 2 %, at a "
-                               "fraction of its solve time); `ipopt`: the NLP to convergence every step, the "
+                               "`sqp_iterations` QPs per step with `qp_solver` (laps every "
+                               "shipped scenario within 1 % of Ipopt at a third of its solve "
+                               "time); `ipopt`: the NLP to convergence every step, the "
                                "reference")
     qp_solver: QpSolver = Field(QpSolver.HPIPM, description="the RTI mode's QP solver")
     sqp_iterations: int = Field(1, ge=1, le=20, description="RTI: SQP iterations (QPs) per "
-                                "control step, a fixed count so runs stay deterministic. One "
-                                "(real-time iteration proper): every shipped scenario's "
-                                "criteria pass with best laps within 0.8 % of three QPs' "
-                                "at 0.43x the solve time (docs/explain/speed.md)")
+                                "control step, a fixed count so runs stay deterministic")
     sqp_cold_iterations: int = Field(10, ge=1, le=100, description="RTI: SQP iterations of a "
                                      "solve without a previous plan (the first, and after a "
                                      "failure)")
