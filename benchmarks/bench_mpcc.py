@@ -2,14 +2,14 @@
 
 - first build (generate C + compile) and cached start of each method's compiled code;
 - closed-loop solve time (median, p95) on mpcc_lap and the real-time factor of mpcc_lap and
-  multi_agent, each variant (Ipopt, RTI, RTI with three QPs per step), `--repeat`
-  times interleaved (ipopt, rti, rti-3qp, ipopt, ...);
+  multi_agent, each variant (Ipopt, RTI, RTI with one QP per step), `--repeat`
+  times interleaved (ipopt, rti, rti-1qp, ipopt, ...);
 - the RTI QPs of a mpcc_lap run solved again by HPIPM through its own interface and by every
   QP solver through CasADi's (HPIPM, OSQP, qpOASES, DAQP): time per QP and failures on
   identical problems, and the linearisation's own time (CasADi call, C entry point);
 - with `--suite`, the default suite's wall time from a warm cache.
 
-    .venv/bin/python benchmarks/bench_mpcc.py [--repeat 3] [--variants rti,"rti-3qp"]
+    .venv/bin/python benchmarks/bench_mpcc.py [--repeat 3] [--variants rti,rti-1qp]
         [--suite] [--json OUT.json]
 """
 
@@ -63,10 +63,9 @@ def setup_times(record: Record) -> None:
               f"{np.median(cached) * 1e3:.0f} ms")
 
 
-# the closed-loop variants: Ipopt, RTI as shipped (one QP per step), RTI with the three QPs
-# per step it had before issue 30
+# the closed-loop variants: Ipopt, RTI as shipped (three QPs per step), RTI with one QP
 VARIANTS = {"ipopt": ["method=ipopt"], "rti": ["method=rti"],
-            "rti-3qp": ["method=rti", "sqp_iterations=3"]}
+            "rti-1qp": ["method=rti", "sqp_iterations=1"]}
 
 
 def closed_loop(record: Record, repeat: int, variants: list[str]) -> None:
