@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from kartci import portable
 from kartci.bench import Better, Record
 from kartci.scenario import load_scenario
 from kartci.scenario.models import HallWorld
@@ -91,9 +92,13 @@ class AnchorRun:
 
 def anchor_rtf(python: Path, steps: int = 2000) -> AnchorRun | str:
     """f1tenth_gym's one car stepped by `python` (its side venv: f110_gym's gym and numba
-    never enter this process), or why it did not run. `-I`: this tree's PYTHONPATH stays out."""
+    never enter this process), or why it did not run. `-I`: this tree's PYTHONPATH stays out;
+    without the variables `import kartci` set, its libm and numpy run native, as they do here
+    (numpy came first) and for f1tenth_gym's users."""
+    pin = portable.pin_vars()
+    env = {k: v for k, v in os.environ.items() if k not in pin}
     done = subprocess.run([str(python), "-I", str(ANCHOR), "--steps", str(steps)],
-                          capture_output=True, text=True, check=False)
+                          capture_output=True, text=True, check=False, env=env)
     if done.returncode:
         last = (done.stderr.strip().splitlines() or ["no output"])[-1]
         return f"{python} {ANCHOR.name} exited {done.returncode}: {last}"
