@@ -8,7 +8,9 @@ with SE(3) / Sim(3) alignment it equals `evo_ape -a` / `-as` (0.0231 m / 0.0176 
 evo reads a /tf chain only with ROS's tf2_py, which its pip environment lacks, so evo gets the
 log as TUM files: the reference as recorded (header stamps) and the odometry looked up at those
 stamps as tf2 does (translation linear, rotation slerp between the two neighbouring transforms,
-none outside their span); association, alignment and the statistics are evo's own."""
+none outside their span); association, alignment and the statistics are evo's own. (evo 1.38's
+bag reader would look the chain up on its own 10 Hz grid, `tf_cache_lookup_frequency`, and pair
+only stamps within 10 ms of the reference's: 0.0235 m with -a, from other samples.)"""
 
 from __future__ import annotations
 
