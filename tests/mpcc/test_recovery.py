@@ -13,7 +13,7 @@ import pytest
 from kartci.robots.gokart.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, continuous
 from kartci.robots.gokart.mpcc.params import MpccRecovery, MpccVehicle
 from kartci.robots.gokart.mpcc.recovery import Measured, MpccStatus, Watchdog
-from kartci.robots.gokart.mpcc.reference import FrictionMap, Obstacle, stage_params
+from kartci.robots.gokart.mpcc.reference import FrictionMap, Obstacle, TrackWidths, stage_params
 from kartci.robots.gokart.params import GokartModel, axle_distance_m
 from kartci.scenario.models import FloorZone, HallWorld
 from kartci.track import Track, track_from_rows
@@ -115,6 +115,7 @@ def test_a_kart_is_passed_inside_the_edge_margin_and_a_box_is_not(follow_gap_m: 
     left bound gives 0.4 m of the edge margin (margin 0.5 -> 0.1 m), beside a box it does not."""
     track = _circle_track()
     ob = Obstacle(10.0, -0.8, 0.69, 0.0, follow_gap_m)
-    rows = stage_params(track, np.array([10.0]), 0.075, 1.19, [ob], 0.9, 2.0, squeeze_m=0.4)
+    rows = stage_params(TrackWidths.of(track), np.array([10.0]), 0.075, 1.19, [ob], 0.9, 2.0,
+                        squeeze_m=0.4)
     lo, hi, s_max = rows[0, 5:8]
     assert (lo, hi, s_max) == pytest.approx((-0.8 + 0.69 + 0.9, hi_m, 1e6))

@@ -13,12 +13,30 @@ import numpy as np
 
 from kartci.robots.gokart import STEERING_RATIO, wheel_angles
 from kartci.robots.gokart.mpcc.cache import Built, get_solver
-from kartci.robots.gokart.mpcc.model import ACC, DELTA, PSI, SLACK, VS, VX, S, SingleTrack, X, Y
-from kartci.robots.gokart.mpcc.ocp import constraint_bounds, variable_bounds, weights_vector
+from kartci.robots.gokart.mpcc.model import (
+    ACC,
+    DELTA,
+    NX,
+    PSI,
+    SLACK,
+    VS,
+    VX,
+    S,
+    SingleTrack,
+    X,
+    Y,
+)
+from kartci.robots.gokart.mpcc.ocp import (
+    STAGE_PARAMS,
+    constraint_bounds,
+    variable_bounds,
+    weights_vector,
+)
 from kartci.robots.gokart.mpcc.params import MpccController
 from kartci.robots.gokart.mpcc.reference import (
     FrictionMap,
     Obstacle,
+    TrackWidths,
     progress_guess,
     stage_params,
 )
@@ -66,6 +84,12 @@ class Mpcc:
         self.max_delta = min(abs(sum(wheel_angles(model, max(lo, -col))) / 2),
                              abs(sum(wheel_angles(model, min(hi, col))) / 2),
                              STEERING_RATIO * 1.7)
+        self.widths = TrackWidths.of(track)
+        # what does not change between solves, worked out once: the parameters before the
+        # stages' (weights and limits), and the box bounds but for x_0's (the measurement)
+        self._p_head = np.array([*weights_vector(spec.weights), spec.max_lateral_accel_mps2,
+                                 spec.max_brake_mps2, spec.front_check_m, spec.max_speed_mps])
+        self._bounds = variable_bounds(spec, self.lay, np.zeros(NX), self.max_delta)
         self._w: np.ndarray | None = None
         self._lam_g: np.ndarray | None = None
         self._lam_x: np.ndarray | None = None
@@ -112,15 +136,15 @@ class Mpcc:
         cold = self._w is None
         w0 = self._initial_guess(x0)
         guess = lay.states(w0)[1:]
-        params = stage_params(self.track, guess[:, S], sp.step_s, self.padding_m, obstacles,
-                              sp.obstacle_margin_m, self.kart_length_m,
-                              sp.track_margin_m - sp.passing_margin_m)
-        params = np.column_stack([params, self._grip(guess)])
-        p = np.concatenate([weights_vector(sp.weights), [sp.max_lateral_accel_mps2,
-                                                          sp.max_brake_mps2, sp.front_check_m,
-                                                          sp.max_speed_mps],
-                            params.ravel()])
-        lbw, ubw = variable_bounds(sp, lay, x0, self.max_delta)
+        p = np.empty(len(self._p_head) + STAGE_PARAMS * sp.horizon_steps)
+        p[:len(self._p_head)] = self._p_head
+        stage = p[len(self._p_head):].reshape(sp.horizon_steps, STAGE_PARAMS)
+        stage[:, :-1] = stage_params(self.widths, guess[:, S], sp.step_s, self.padding_m,
+                                     obstacles, sp.obstacle_margin_m, self.kart_length_m,
+                                     sp.track_margin_m - sp.passing_margin_m)
+        stage[:, -1] = self._grip(guess)
+        lbw, ubw = (b.copy() for b in self._bounds)
+        lbw[lay.x(0)] = ubw[lay.x(0)] = x0
         if isinstance(solver, Rti):
             it = solver.solve(w0, p, lbw, ubw, self.lbg, self.ubg,
                               sp.sqp_cold_iterations if cold else sp.sqp_iterations)

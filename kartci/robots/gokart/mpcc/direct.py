@@ -228,9 +228,10 @@ class OcpQp:
 
     def _fill(self, hess: np.ndarray, jac: np.ndarray, grad: np.ndarray, lba: np.ndarray,
               uba: np.ndarray, lbx: np.ndarray, ubx: np.ndarray) -> None:
-        """The stage blocks from the QP, as CasADi's interface computes them."""
+        """The stage blocks from the QP, as CasADi's interface computes them. `take` wraps
+        (-1 is the appended zero): with `out`, its default mode copies through a buffer."""
         b, var = self.buf, self._var_index
-        np.take(jac, self._jac_index, out=b["jac"])
+        np.take(jac, self._jac_index, out=b["jac"], mode="wrap")
         diag = jac[self._a_index["I"]]
         np.multiply(lba[self._dyn_rows], -1.0, out=b["b"][:-1])
         if not (diag == -1.0).all():  # else a scale of 1.0: the same bits
@@ -239,13 +240,13 @@ class OcpQp:
             b["jac"][:na] *= scale[self._row_of["A"]]
             b["jac"][na:na + nb] *= scale[self._row_of["B"]]
             b["b"][:-1] *= scale
-        np.take(hess, self._hess_index, out=b["hess"])
+        np.take(hess, self._hess_index, out=b["hess"], mode="wrap")
         b["hess"] *= 0.5  # HPIPM's cost is 1/2 of CasADi's
         np.multiply(grad[var], 0.5, out=b["grad"][:-1])
         np.add(0.0, lbx[var], out=b["lower"][:-1])
         np.add(0.0, ubx[var], out=b["upper"][:-1])
-        np.take(lba, self._path_rows, out=b["lg"][:-1])
-        np.take(uba, self._path_rows, out=b["ug"][:-1])
+        np.take(lba, self._path_rows, out=b["lg"][:-1], mode="wrap")
+        np.take(uba, self._path_rows, out=b["ug"][:-1], mode="wrap")
         for key in ("lower", "lg"):
             np.maximum(b[key], -INF, out=b[key])
         for key in ("upper", "ug"):

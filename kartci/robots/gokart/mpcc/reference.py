@@ -58,19 +58,43 @@ class FrictionMap:
         return out
 
 
-def _width(track: Track, s_m: np.ndarray, side: np.ndarray) -> np.ndarray:
-    out: np.ndarray = np.interp(np.mod(s_m, track.length_m), track.s, side,
-                                period=track.length_m)
-    return out
+@dataclass(frozen=True)
+class TrackWidths:
+    """The track's free widths as periodic interpolation tables, sorted and padded once:
+    `np.interp(..., period=)` sorts its table on every call, the same arithmetic otherwise."""
+
+    track: Track
+    s_m: np.ndarray  # sample arc lengths, m, one sample of the previous and next lap added
+    left_m: np.ndarray  # free width left of the centreline at `s_m`, m
+    right_m: np.ndarray  # free width right of the centreline at `s_m`, m
+
+    @classmethod
+    def of(cls, track: Track) -> TrackWidths:
+        """The tables of `track`, as `np.interp` pads them for its `period`."""
+        period = track.length_m
+        xp = np.asarray(track.s, dtype=np.float64) % period
+        order = np.argsort(xp)
+        xp = xp[order]
+        left, right = (np.asarray(w, dtype=np.float64)[order]
+                       for w in (track.w_left, track.w_right))
+        return cls(track, np.concatenate((xp[-1:] - period, xp, xp[0:1] + period)),
+                   *(np.concatenate((f[-1:], f, f[0:1])) for f in (left, right)))
+
+    def at(self, s_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The free widths (left, right) at arc lengths `s_m` (m, unwrapped)."""
+        length = self.track.length_m
+        x = np.mod(s_m, length) % length
+        return np.interp(x, self.s_m, self.left_m), np.interp(x, self.s_m, self.right_m)
 
 
-def stage_params(track: Track, s_bar: np.ndarray, step_s: float, padding_m: float,
+def stage_params(widths: TrackWidths, s_bar: np.ndarray, step_s: float, padding_m: float,
                  obstacles: list[Obstacle], margin_m: float, kart_length_m: float,
                  squeeze_m: float = 0.0) -> np.ndarray:
     """Rows of [x_ref, y_ref, cos, sin, s_ref, lateral_lo, lateral_hi, s_max] for stages
     1..N at predicted progress `s_bar` (m, unwrapped). Beside a kart it passes the bound on the
     passing side may come `squeeze_m` closer to the track's edge than `padding_m`: clearing the
     kart matters more than the edge's margin."""
+    track = widths.track
     n = len(s_bar)
     m = len(track.s)
     wrapped = np.mod(s_bar, track.length_m)
@@ -78,8 +102,9 @@ def stage_params(track: Track, s_bar: np.ndarray, step_s: float, padding_m: floa
     diff = (track.s[idx] - wrapped + track.length_m / 2) % track.length_m - track.length_m / 2
     s_ref = s_bar + diff  # the progress of the sample the reference is taken at
     heading, xy = track.heading[idx], track.xy[idx]
-    hi = _width(track, s_bar, track.w_left) - padding_m
-    lo = padding_m - _width(track, s_bar, track.w_right)
+    left, right = widths.at(s_bar)
+    hi = left - padding_m
+    lo = padding_m - right
     s_max = np.full(n, NO_LIMIT_M)
     t = step_s * np.arange(1, n + 1)
     for ob in obstacles:
