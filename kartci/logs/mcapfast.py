@@ -76,16 +76,43 @@ def _match(x: Connection, conns: Sequence[Connection]) -> Connection | None:
 def _indexed(storage: McapReader, channels: dict[int, Connection], bio: BinaryIO
              ) -> Iterator[Message]:
     """The chunks' messages merged in time order, each chunk opened when its first message is
-    due (McapReader.messages). Chunks that follow each other in time (each starts after the
-    one before ends, as a recorder writes them) are simply read in turn: the same order."""
+    due (McapReader.messages)."""
     infos = [x for x in storage.chunks if any(x.channel_count.get(cid, 0) for cid in channels)]
-    if all(b.message_start_time > a.message_end_time for a, b in pairwise(infos)):
-        for info in infos:
-            yield from _chunk_messages(bio, info, channels)
+    if all(b.message_start_time >= a.message_end_time >= a.message_start_time
+           for a, b in pairwise(infos)):
+        yield from _in_turn(bio, infos, channels)
         return
     for t_ns, offset, conn, data in heapq.merge(*(_chunk(bio, x, channels) for x in infos)):
         if offset:
             yield conn, t_ns, data
+
+
+def _in_turn(bio: BinaryIO, infos: list[Any], channels: dict[int, Connection]
+             ) -> Iterator[Message]:
+    """Chunks that follow each other in time (each starts at or after the end of the one
+    before, as a recorder writes them), read in turn: the merge's order. Each is opened when
+    the merge would open it, before the first message at or after its start time, so damage
+    is met at the same message."""
+    opened: dict[int, list[Message]] = {}
+    due = 0  # the next chunk to open
+
+    def open_until(t_ns: int) -> None:
+        nonlocal due
+        while due < len(infos) and infos[due].message_start_time <= t_ns:
+            opened[due] = _chunk_messages(bio, infos[due], channels)
+            due += 1
+
+    for k, info in enumerate(infos):
+        open_until(info.message_start_time)
+        found = opened.pop(k)
+        later = infos[k + 1].message_start_time if k + 1 < len(infos) else None
+        if later is None or not found or found[-1][1] < later:
+            yield from found
+            continue
+        for m in found:  # its last messages share their time with the next chunk's start
+            if m[1] >= later:
+                open_until(m[1])
+            yield m
 
 
 Entry = tuple[int, int, Any, Any]  # log time, chunk offset (0: the chunk's marker), conn, data
