@@ -4,17 +4,21 @@ interleaved round by round, median of repeats, on a Nav2-like rosbag2 (MCAP) log
 (`map`) at 20 Hz and wheel odometry (`odom`) at 50 Hz, SE(3)-aligned (`--align se3` / `-a`).
 `kartci score` runs as it comes (run log + HTML reports) and with `--no-html`. Both APE RMSEs
 are printed too: they must agree. Asserts nothing. CPU time is the steadier figure on a
-shared machine: wall time there includes waiting for a core.
+shared machine: wall time there includes waiting for a core. kartci's modules are byte-compiled
+first, as an installed kartci's (and evo's) are: a checkout run with PYTHONDONTWRITEBYTECODE
+set would compile them on every run (about 0.3 s; `--source` measures that).
 
 evo is GPL and never a kartci dependency: its CLI runs from its own venv (KARTCI_EVO=DIR/bin,
 else .venv-evo/bin, else /tmp/venv-evo/bin).
 
     .venv/bin/python benchmarks/bench_score_evo.py [--minutes 10] [--repeats 3] [--json OUT]
+        [--source]
 """
 
 from __future__ import annotations
 
 import argparse
+import compileall
 import json
 import os
 import resource
@@ -116,8 +120,12 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=10.0, help="log length, min")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", type=Path, help="also write the figures to this file")
+    parser.add_argument("--source", action="store_true",
+                        help="do not byte-compile kartci first (as a checkout without .pyc)")
     args = parser.parse_args()
     evo = evo_bin()
+    if not args.source:
+        compileall.compile_dir(ROOT / "kartci", quiet=1)
     record = Record("bench_score_evo")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)

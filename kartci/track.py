@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from kartci.errors import SpecError
@@ -123,6 +122,8 @@ def track_from_text(text: str, name: str) -> Track:
 
 def track_from_rows(rows: Array, path: Path) -> Track:
     """The Track splined through CSV rows; refuses coincident points and splined widths <= 0."""
+    from scipy.interpolate import CubicSpline  # start-up: +0.25 s (scipy.optimize) on import
+
     pts = np.vstack([rows, rows[:1]])
     seg = np.hypot(*np.diff(pts[:, :2], axis=0).T)
     if (seg < 1e-6).any():

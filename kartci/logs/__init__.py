@@ -1,10 +1,10 @@
 """Logs: writing runs as MCAP (ROS 2 types, CDR) and reading ROS 1 / ROS 2 / MCAP logs."""
 
 import warnings
+from functools import cache
 from pathlib import Path
 from typing import Any
 
-from rosbags.convert.converter import STATIC_MSGTYPE_RENAMES, migrate_message
 from rosbags.typesys.store import Typestore
 
 from kartci.errors import LogError
@@ -45,17 +45,25 @@ def _check_output(src: Path, dst: Path) -> None:
         raise LogError(f"{dst}: is a folder; give the path of the .mcap file to write")
 
 
-# ROS 1 message types renamed in ROS 2 (rosbags.convert's table, and its migration of the
-# fields): written under the ROS 2 name, so ROS 2 tools read the copy
-ROS1_RENAMES = {**STATIC_MSGTYPE_RENAMES,
-                "rosgraph_msgs/msg/Log": "rcl_interfaces/msg/Log"}
+@cache
+def ros1_renames() -> dict[str, str]:
+    """ROS 1 message types renamed in ROS 2 (rosbags.convert's table, and its migration of the
+    fields): written under the ROS 2 name, so ROS 2 tools read the copy."""
+    # start-up: rosbags.convert costs 0.1 s on import; only extract needs it
+    from rosbags.convert.converter import STATIC_MSGTYPE_RENAMES
+
+    return {**STATIC_MSGTYPE_RENAMES, "rosgraph_msgs/msg/Log": "rcl_interfaces/msg/Log"}
+
+
 # ROS 1 Log levels (1, 2, 4, 8, 16) -> ROS 2's (10, 20, 30, 40, 50)
 _LOG_LEVELS = {1: 10, 2: 20, 4: 30, 8: 40, 16: 50}
 
 
 def ros2_message(m: Any, src: Typestore, dst: Typestore, cache: dict[str, object]) -> Any:
-    """`m` as its ROS 2 type when ROS 2 renamed it (ROS1_RENAMES), else `m` itself."""
-    name = ROS1_RENAMES.get(m.__msgtype__)
+    """`m` as its ROS 2 type when ROS 2 renamed it (ros1_renames), else `m` itself."""
+    from rosbags.convert.converter import migrate_message  # start-up: see ros1_renames
+
+    name = ros1_renames().get(m.__msgtype__)
     if name is None or name not in dst.fielddefs:
         return m
     out: Any = migrate_message(src, dst, m.__msgtype__, name, cache, m)
@@ -78,7 +86,7 @@ def _write(out: McapLogWriter, log: LogReader, topic: str, m: Any, t_ns: int) ->
 
 def extract(src: Path, wanted: list[str], dst: Path) -> int:
     """Copy some topics of any log into a new MCAP file (ROS 2 types, ROS 1 names renamed as
-    ROS1_RENAMES says); returns the count.
+    ros1_renames says); returns the count.
 
     Types that only the log defines (a ROS 1 bag's turtlesim/msg/Pose) are written with the
     log's own definitions. The file appears only when the copy is complete (see

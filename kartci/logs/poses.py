@@ -109,14 +109,23 @@ def decode_poses(raws: Sequence[Raw], standard: bool, decode: Callable[[Raw], An
     msgtype = raws[0][1] if raws else LAID_OUT[1]
     groups: dict[tuple[int, bytes, bytes], tuple[int, list[int]]] = {}
     single: list[tuple[int, Any]] = []
+    # the last layout met: message length, its frame names' bytes (all _layout reads but the
+    # length), its rows; a message with the same length and bytes there has that layout too
+    last: tuple[int, bytes, list[int]] = (-1, b"", [])
     for i, raw in enumerate(raws):
         data = raw[4]
+        if (len(data) == last[0] and data[12:12 + len(last[1])] == last[1] and not raw[2]
+                and data[:2] == _CDR_LE):
+            last[2].append(i)
+            continue
         found = (_layout(msgtype, data[4:]) if standard and not raw[2]
                  and data[:2] == _CDR_LE else None)
         if found is None:
             single.append((i, decode(raw)))
         else:
-            groups.setdefault(found[0], (found[1], []))[1].append(i)
+            members = groups.setdefault(found[0], (found[1], []))[1]
+            members.append(i)
+            last = (len(data), bytes(data[12:4 + found[1]]), members)
     n = len(raws)
     keep = np.ones(n, bool)
     stamp, xyz, quat = np.zeros(n, np.int64), np.zeros((n, 3)), np.zeros((n, 4))

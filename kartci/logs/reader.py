@@ -23,6 +23,7 @@ from rosbags.typesys.store import Typestore
 
 from kartci.boundedio import RefusedFileError, check_log
 from kartci.errors import LogError
+from kartci.logs import mcapfast
 from kartci.logs.damage import count_of, describe
 from kartci.logs.salvage import NotStreamableError, Salvage, salvage
 from kartci.logs.types import from_definitions, typestore
@@ -66,7 +67,9 @@ class _Indexed:
         if not conns:  # AnyReader reads every topic when given none
             return
         got = 0
-        for conn, t_ns, data in self._reader.messages(connections=conns):
+        fast = mcapfast.messages(self._reader, conns)  # a rosbag2 MCAP: the same, faster
+        for conn, t_ns, data in fast if fast is not None else self._reader.messages(
+                connections=conns):
             got += 1
             yield conn.topic, conn.msgtype, self._ros1, t_ns, data
         listed = sum(c.msgcount for c in conns)
@@ -236,19 +239,15 @@ class LogReader:
 
     def _raws(self, wanted: Sequence[str] | None, position: _Position,
               resume: bool) -> Iterator[Raw]:
-        raws = self._source.raw(wanted)
-        while True:
-            try:
-                raw = next(raws)
-            except StopIteration:
-                return
-            except Exception as err:  # damaged bytes make readers raise anything
-                raise _SourceFailedError(err) from err
-            topic, t_ns = raw[0], raw[3]
-            if resume and position.seen(topic, t_ns):
-                continue
-            position.passed(topic, t_ns)
-            yield raw
+        passed, seen = position.passed, position.seen
+        try:  # only the source raises in here (GeneratorExit at the yield is no Exception)
+            for raw in self._source.raw(wanted):
+                if resume and seen(raw[0], raw[3]):
+                    continue
+                passed(raw[0], raw[3])
+                yield raw
+        except Exception as err:  # damaged bytes make readers raise anything
+            raise _SourceFailedError(err) from err
 
     def _decode(self, topic: str, msgtype: str, ros1: bool, data: bytes) -> Any:
         store = self._source.store

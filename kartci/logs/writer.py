@@ -22,6 +22,7 @@ from kartci.logs.types import typestore
 _MESSAGE = struct.Struct("<BQHIQQ")
 _MESSAGE_OPCODE = 0x05
 _MESSAGE_HEAD = 22  # bytes of a Message record before its data
+_RECORD_HEAD = 9 + _MESSAGE_HEAD  # with the opcode and the record length
 BATCH = 512  # messages held before they go into the chunk together
 LAYOUTS = 4  # fixed CDR layouts kept per topic (/tf alternates between two)
 Pending = tuple[int, int, int, bytes | memoryview]  # channel id, sequence, t ns, CDR data
@@ -46,31 +47,60 @@ class _Chunks:
         self.chunk_size: int = writer._Writer__chunk_size if found else 0  # type: ignore[attr-defined]
 
     def add(self, batch: list[Pending]) -> None:
-        """Append the batch's messages, in order."""
+        """Append the batch's messages, in order: each run of them that fits the open chunk
+        in one write, the statistics brought up to date once per run."""
         cb, st = self.builder, self.stats
         if cb is None or st is None:
             for cid, seq, t, data in batch:
                 self.writer.add_message(cid, log_time=t, data=bytes(data), publish_time=t,
                                         sequence=seq)
             return
-        counts, indices, pack = st.channel_message_counts, cb.message_indices, _MESSAGE.pack
-        for cid, seq, t, data in batch:
-            st.message_start_time = t if st.message_count == 0 else min(t, st.message_start_time)
-            st.message_end_time = max(t, st.message_end_time)
-            counts[cid] += 1
-            st.message_count += 1
-            cb.message_start_time = t if cb.num_messages == 0 else min(cb.message_start_time, t)
-            cb.message_end_time = max(cb.message_end_time, t)
+        i = 0
+        while i < len(batch):
+            j, full = self._fill(cb, batch, i)
+            self._count(cb, st, batch[i:j])
+            i = j
+            if full:
+                self.writer._Writer__finalize_chunk()  # type: ignore[attr-defined]
+
+    def _fill(self, cb: Any, batch: list[Pending], i: int) -> tuple[int, bool]:
+        """Write batch[i:j] into the open chunk, j where the chunk outgrew the chunk size (or
+        the batch's end); whether it did."""
+        out = cb.record_writer._buffer  # a new one after each chunk
+        indices, pack, limit = cb.message_indices, _MESSAGE.pack, self.chunk_size
+        pos = out.tell()
+        parts: list[bytes | memoryview] = []
+        for j in range(i, len(batch)):
+            cid, seq, t, data = batch[j]
             index = indices.get(cid)
             if index is None:
                 index = indices[cid] = MessageIndex(channel_id=cid, records=[])
-            out = cb.record_writer._buffer  # a new one after each chunk
-            index.records.append((t, out.tell()))
-            cb.num_messages += 1
-            out.write(pack(_MESSAGE_OPCODE, _MESSAGE_HEAD + len(data), cid, seq, t, t))
-            out.write(data)
-            if out.tell() > self.chunk_size:
-                self.writer._Writer__finalize_chunk()  # type: ignore[attr-defined]
+            index.records.append((t, pos))
+            parts += (pack(_MESSAGE_OPCODE, _MESSAGE_HEAD + len(data), cid, seq, t, t), data)
+            pos += _RECORD_HEAD + len(data)
+            if pos > limit:
+                out.write(b"".join(parts))
+                return j + 1, True
+        out.write(b"".join(parts))
+        return len(batch), False
+
+    @staticmethod
+    def _count(cb: Any, st: Any, run: list[Pending]) -> None:
+        """The statistics and the chunk's time range after `run`, as add_message keeps them
+        one message at a time."""
+        times = [t for _, _, t, _ in run]
+        first, last = min(times), max(times)
+        st.message_start_time = first if st.message_count == 0 else min(first,
+                                                                         st.message_start_time)
+        st.message_end_time = max(last, st.message_end_time)
+        st.message_count += len(run)
+        counts = st.channel_message_counts
+        for cid, _, _, _ in run:
+            counts[cid] += 1
+        cb.message_start_time = first if cb.num_messages == 0 else min(cb.message_start_time,
+                                                                       first)
+        cb.message_end_time = max(cb.message_end_time, last)
+        cb.num_messages += len(run)
 
 
 class McapLogWriter:

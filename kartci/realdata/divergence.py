@@ -5,6 +5,7 @@ drift does not hide model error), compared signal by signal with the log."""
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pydantic import Field
@@ -13,8 +14,10 @@ from kartci.core import Direction, Metric, MetricDef, MetricParams
 from kartci.errors import LogError
 from kartci.metrics import ScoreContext
 from kartci.metrics.trajectory import DeltaUnit, Trajectory, TrajectoryError, ape, rpe
-from kartci.realdata.drive import Drive
-from kartci.realdata.plant import Plant
+
+if TYPE_CHECKING:  # scoring needs neither; the plant brings the simulator (start-up)
+    from kartci.realdata.drive import Drive
+    from kartci.realdata.plant import Plant
 
 SIGNALS = (("x", "m"), ("y", "m"), ("yaw", "rad"), ("speed", "mps"), ("yaw_rate", "radps"))
 SIM_WINDOWS, SIM_WHOLE = "sim/odom_windows", "sim/odom_whole"

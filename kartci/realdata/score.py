@@ -8,8 +8,8 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from kartci import project
 from kartci.metrics.alignment import Alignment
-from kartci.realdata import simreal
 from kartci.realdata.importer import import_log
 from kartci.realdata.profile import Profile, resolve_profile
 from kartci.realdata.runlog import write_result
@@ -25,16 +25,18 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
     (the estimate's alignment onto the reference); `with_plots`: the report's time series and
     paths too (only an HTML report draws them). Bad input (profile, missing topics, a
     profile's track outside the project without `allow_outside_paths`) raises before anything
-    is written."""
-    profile, info = resolve_profile(log, profile_path, allow_outside_paths)
-    update = {k: v for k, v in (("align", align), ("align_first", align_first))
-              if v is not None}
-    profile = Profile.model_validate({**profile.model_dump(), **update})
-    types = {role: i.msgtype for role, i in info.items()}
-    folder = out / profile.name
-    write_result(folder, profile.name, lambda dst: import_log(log, profile, types, dst).warnings,
-                 {"imported_from": str(log.resolve()), "profile": profile.name})
-    return evaluate(folder, baselines, with_plots)
+    is written. The project is looked up once (every registry lookup would read its file)."""
+    with project.held():
+        profile, info = resolve_profile(log, profile_path, allow_outside_paths)
+        update = {k: v for k, v in (("align", align), ("align_first", align_first))
+                  if v is not None}
+        profile = Profile.model_validate({**profile.model_dump(), **update})
+        types = {role: i.msgtype for role, i in info.items()}
+        folder = out / profile.name
+        write_result(folder, profile.name,
+                     lambda dst: import_log(log, profile, types, dst).warnings,
+                     {"imported_from": str(log.resolve()), "profile": profile.name})
+        return evaluate(folder, baselines, with_plots)
 
 
 def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
@@ -44,6 +46,8 @@ def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
     """The log's commands replayed into the sim (whole and windowed) into
     OUT/<profile name>_simreal/, scored for divergence and judged like a run. A scenario
     guessed from the log (none named) is told through `say`, with why, in one line."""
+    from kartci.realdata import simreal  # start-up: the simulator and its scipy, not for score
+
     profile, info = resolve_profile(log, profile_path, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
     setup = simreal.sim_setup(profile, scenario, overrides, types)

@@ -40,14 +40,15 @@ def _pose(rng: np.random.Generator, k: int, frame: str, stamp_ns: int, msgtype: 
     vec = T["geometry_msgs/msg/Vector3"]
     twist = T["geometry_msgs/msg/Twist"](linear=vec(x=rng.normal(), y=rng.normal(), z=0.5),
                                          angular=vec(x=0.0, y=0.1, z=rng.normal()))
-    return T[msgtype](header=header, child_frame_id="base_footprint" if k % 3 else "b", pose=cov,
+    child = "base_footprint" if k // 6 % 2 else "b"
+    return T[msgtype](header=header, child_frame_id=child, pose=cov,
                       twist=T["geometry_msgs/msg/TwistWithCovariance"](
                           twist=twist, covariance=np.zeros(36)))
 
 
 def _write(path: Path) -> dict[str, list[Any]]:
     """One topic of each pose type; frames of several lengths (the CDR padding moves), some
-    stamps unset."""
+    stamps unset; runs of messages with the same frames (read by the layout of the first)."""
     rng = np.random.default_rng(4)
     written: dict[str, list[Any]] = {}
     with Writer(path, version=8, storage_plugin=StoragePlugin.MCAP) as w:
@@ -56,7 +57,7 @@ def _write(path: Path) -> dict[str, list[Any]]:
             written[conn.topic] = []
             for k in range(60):
                 stamp = 0 if k % 11 == 0 else 7 * 10**9 + k * 12_345_678
-                m = _pose(rng, k, ("map", "odom", "a/long_frame")[k % 3], stamp, msgtype)
+                m = _pose(rng, k, ("map", "odom", "a/long_frame")[k // 4 % 3], stamp, msgtype)
                 w.write(conn, 10**9 + k * 10**7 + i, STORE.serialize_cdr(m, msgtype))
                 written[conn.topic].append(m)
     return written

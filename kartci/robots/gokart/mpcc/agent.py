@@ -15,10 +15,10 @@ from kartci.core import AgentContext, Outbox
 from kartci.logs.types import WORLD_FRAME, base_link, header, msg, yaw_of
 from kartci.robots.gokart import KartInput, column_for_wheel_angle, wheel_angles
 from kartci.robots.gokart.joy import kart_command
-from kartci.robots.gokart.mpcc import Mpcc, Obstacle, Plan, obstacle_from_xy
+from kartci.robots.gokart.mpcc.controller import Mpcc, Plan
 from kartci.robots.gokart.mpcc.params import MpccController
 from kartci.robots.gokart.mpcc.recovery import Measured, MpccStatus, Watchdog
-from kartci.robots.gokart.mpcc.reference import FrictionMap
+from kartci.robots.gokart.mpcc.reference import FrictionMap, Obstacle, obstacle_from_xy
 from kartci.robots.gokart.outline import footprint_m
 from kartci.robots.gokart.params import GokartModel, axle_distance_m, cog_x_m
 from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
