@@ -27,6 +27,7 @@ from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
 from kartci.sim.markers import COLLISION_MARKERS, collision_marker
 from kartci.sim.messages import WORLD_FRAME, frozen, joint_state, tf_message, transform
+from kartci.sim.reach import Reach
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.track_world import TrackWorld
@@ -90,6 +91,7 @@ class KartRobot(RobotBase):
         self.collisions_marked = 0
         self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
         self.bounds = bounds(outline(model))  # centre ahead, left, length, width, m
+        self.reach = Reach(world.client, self.body.body, world.floor, dt_s)
 
     def static_transforms(self) -> list[Any]:
         """tf of the CoG, IMU, lidar and camera mounts."""
@@ -260,7 +262,10 @@ class KartRobot(RobotBase):
     def post_step(self, t_ns: int, put: Put) -> None:
         """Contacts with anything but the floor, grouped into collisions (episodes)."""
         seen: set[str] = set()
-        for c in pb.getContactPoints(bodyA=self.body.body, physicsClientId=self.client):
+        # the reading is the one the sensors and the next step's tyres use: no extra cost
+        near = () if self.reach.clear(self.body.reading()) else pb.getContactPoints(
+            bodyA=self.body.body, physicsClientId=self.client)
+        for c in near:
             if c[2] == self.floor or c[2] == self.body.body:
                 continue
             other = self.names.get(c[2], f"body_{c[2]}")
