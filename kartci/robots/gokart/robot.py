@@ -10,7 +10,7 @@ import numpy as np
 
 from kartci._bullet import pb
 from kartci.errors import SpecError
-from kartci.logs import header, msg
+from kartci.logs import header, msg, typestore
 from kartci.metrics.outline import bounds
 from kartci.robots.gokart import noise
 from kartci.robots.gokart.body import Gokart
@@ -201,29 +201,33 @@ class KartRobot(RobotBase):
              r[6] * vb0 + r[7] * vb1 + r[8] * vb2 + (w0 * p1 - w1 * p0))
         prev, self._imu_prev = self._imu_prev, v
         period = self.imu_every * self.dt
-        a = (0.0, 0.0, 0.0) if prev is None else tuple((v[i] - prev[i]) / period
-                                                        for i in range(3))
-        a = (a[0] + 0.0, a[1] + 0.0, a[2] + 9.81)  # plus gravity
-        # imu_link's rotation in the world (rot), then both vectors in imu_link
+        a0 = a1 = a2 = 0.0
+        if prev is not None:
+            a0, a1, a2 = ((v[0] - prev[0]) / period, (v[1] - prev[1]) / period,
+                          (v[2] - prev[2]) / period)
+        a0, a1, a2 = a0 + 0.0, a1 + 0.0, a2 + 9.81  # plus gravity
+        # imu_link's rotation in the world (rot), then both vectors in imu_link, plus white
+        # noise and bias: numpy's element-wise sums of before, in floats (the same bits)
         rot = [[r[3 * i] * m[0][j] + r[3 * i + 1] * m[1][j] + r[3 * i + 2] * m[2][j]
                 for j in range(3)] for i in range(3)]
-        f = np.array([rot[0][i] * a[0] + rot[1][i] * a[1] + rot[2][i] * a[2] for i in range(3)])
-        g = np.array([rot[0][i] * w0 + rot[1][i] * w1 + rot[2][i] * w2 for i in range(3)])
         acc_std, gyro_std = self._imu_std
-        f = f + acc_std * self.rng.standard_normal(3)
-        g = g + gyro_std * self.rng.standard_normal(3)
-        acc_bias, gyro_bias = self._bias.sample()
-        f, g = f + acc_bias, g + gyro_bias
+        na, ng = self.rng.standard_normal(3).tolist(), self.rng.standard_normal(3).tolist()
+        ab, gb = ((b.tolist() for b in self._bias.sample()) if self._bias.active
+                  else (_ZERO3, _ZERO3))
+        f = [(rot[0][i] * a0 + rot[1][i] * a1 + rot[2][i] * a2 + acc_std * na[i]) + ab[i]
+             for i in range(3)]
+        g = [(rot[0][i] * w0 + rot[1][i] * w1 + rot[2][i] * w2 + gyro_std * ng[i]) + gb[i]
+             for i in range(3)]
         cov_a, cov_g = self._imu_cov
-        put("imu", msg("sensor_msgs/msg/Imu", header=header(t_ns, f"{self.name}/imu_link"),
-                       orientation=msg("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0,
-                                       w=1.0),
-                       orientation_covariance=NO_ORIENTATION,
-                       angular_velocity=msg("geometry_msgs/msg/Vector3", x=g[0], y=g[1], z=g[2]),
-                       angular_velocity_covariance=cov_g,
-                       linear_acceleration=msg("geometry_msgs/msg/Vector3", x=f[0], y=f[1],
-                                               z=f[2]),
-                       linear_acceleration_covariance=cov_a), t_ns)
+        types = typestore().types
+        vector3 = types["geometry_msgs/msg/Vector3"]
+        put("imu", types["sensor_msgs/msg/Imu"](
+            header=header(t_ns, f"{self.name}/imu_link"),
+            orientation=types["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
+            orientation_covariance=NO_ORIENTATION,
+            angular_velocity=vector3(g[0], g[1], g[2]), angular_velocity_covariance=cov_g,
+            linear_acceleration=vector3(f[0], f[1], f[2]),
+            linear_acceleration_covariance=cov_a), t_ns)
 
     def _lidar(self, st: BodyState, t_ns: int, put: Put) -> None:
         pos, _ = self.body.frame_pose("velodyne_link", st)
@@ -256,6 +260,9 @@ class KartRobot(RobotBase):
             data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns, record)
 
     def _zone_friction(self, st: BodyState) -> None:
+        if not self.world.spec.zones:  # one floor: no need to find where the wheels are
+            self.body.set_wheel_friction([self.world.spec.floor_friction] * 4)
+            return
         self.body.set_wheel_friction([self.world.friction_at(float(x), float(y))
                                       for x, y in self.body.wheel_contacts_xy(st)])
 
@@ -360,6 +367,7 @@ def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     return q[0], q[1], q[2], q[3]
 
 
+_ZERO3 = (0.0, 0.0, 0.0)  # no IMU bias
 NO_ORIENTATION = frozen(np.array([-1.0] + [0.0] * 8))  # REP 145: no orientation estimate
 
 # Table 3.6, read as 1-sigma white noise: accuracy x default full scale.
