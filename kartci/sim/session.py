@@ -250,13 +250,19 @@ class Bus:
 
     def putter(self, namespace: str) -> Put:
         """`put` for one robot: relative topics go under `/<namespace>/`."""
+        full: dict[str, str] = {}  # topic as put -> absolute topic (made once per topic)
+
         def put(topic: str, message: Any, t_ns: int, record: bool = True) -> None:
-            self.put(topic if topic.startswith("/") else f"/{namespace}/{topic}", message,
-                     t_ns, record)
+            name = full.get(topic)
+            if name is None:
+                name = full[topic] = topic if topic.startswith("/") else f"/{namespace}/{topic}"
+            self.put(name, message, t_ns, record)
         return put
 
     def take(self) -> tuple[Message, ...]:
         """The messages published since the last call."""
+        if not self.pending:
+            return ()  # most physics steps publish nothing
         out, self.pending = tuple(self.pending), []
         return out
 
