@@ -62,6 +62,8 @@ class Gokart(Base):
         self._four = FourTyres(model, off)
         self._arms = [(w.x_m - off[0], w.y_m - off[1]) for w in self.tyres]  # from the CoM, m
         self._floor_dz = -model.rear_wheel_radius_m - off[2]  # the floor, from the CoM, m
+        # the wheel centres' points on the floor in base_link (rl, rr, fl, fr), m
+        self._wheels_rel = np.column_stack([np.asarray(model.wheel_xy_m), np.zeros(4)])
         self._rd: Reading | None = None  # this step's reading of the base (see reading())
         self._st: BodyState | None = None
 
@@ -167,6 +169,5 @@ class Gokart(Base):
 
     def wheel_contacts_xy(self, state: BodyState) -> np.ndarray:
         """Points under the four wheel centres (rl, rr, fl, fr), from the model's geometry."""
-        rel = np.column_stack([np.asarray(self.model.wheel_xy_m), np.zeros(4)])
-        out: np.ndarray = (np.asarray(state.xyz) + rel @ state.rotation.T)[:, :2]
+        out: np.ndarray = (np.asarray(state.xyz) + self._wheels_rel @ state.rotation.T)[:, :2]
         return out

@@ -92,6 +92,9 @@ class KartRobot(RobotBase):
         self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
         self.bounds = bounds(outline(model))  # centre ahead, left, length, width, m
         self.reach = Reach(world.client, self.body.body, world.floor, dt_s)
+        self._moving_frames = _moving_frames(name, model)
+        # how far a wheel's floor point is from base_link, plus a centimetre for rounding, m
+        self._wheel_reach_m = max(math.hypot(x, y) for x, y in model.wheel_xy_m) + 0.01
 
     def static_transforms(self) -> list[Any]:
         """tf of the CoG, IMU, lidar and camera mounts."""
@@ -148,19 +151,11 @@ class KartRobot(RobotBase):
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
         """tf of the moving frames: steer links (about z) and wheel links (about y)."""
-        ns, (x_r, y_r), (x_f, y_f) = self.name, self.model.wheel_xy_m[0], (
-            self.model.wheel_xy_m[2])
-        out = []
-        for side, sign, angle in (("left", 1, steer[0]), ("right", -1, steer[1])):
-            out.append(transform(t_ns, f"{ns}/base_link", f"{ns}/front_{side}_wheel_steer_link",
-                                 (x_f, sign * y_f, -0.015), _axis_quat(2, angle)))
-        for i, (name, parent, xyz) in enumerate((
-                ("rear_left", "base_link", (x_r, y_r, 0.0)),
-                ("rear_right", "base_link", (x_r, -y_r, 0.0)),
-                ("front_left", "front_left_wheel_steer_link", (0.0, 0.0, 0.0)),
-                ("front_right", "front_right_wheel_steer_link", (0.0, 0.0, 0.0)))):
-            out.append(transform(t_ns, f"{ns}/{parent}", f"{ns}/{name}_wheel_link", xyz,
-                                 _axis_quat(1, spin[i])))
+        (left, right, *_), out = self._moving_frames, []
+        for (parent, child, xyz), angle in ((left, steer[0]), (right, steer[1])):
+            out.append(transform(t_ns, parent, child, xyz, _axis_quat(2, angle)))
+        for (parent, child, xyz), angle in zip(self._moving_frames[2:], spin, strict=True):
+            out.append(transform(t_ns, parent, child, xyz, _axis_quat(1, angle)))
         return out
 
     def _camera(self, st: BodyState, t_ns: int, put: Put) -> None:
@@ -260,7 +255,12 @@ class KartRobot(RobotBase):
             data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns, record)
 
     def _zone_friction(self, st: BodyState) -> None:
-        if not self.world.spec.zones:  # one floor: no need to find where the wheels are
+        """Each wheel's floor friction: the floor's where no zone is within a wheel's reach of
+        base_link (most ticks; no need to find where the wheels are), else the zone under it."""
+        x, y, _ = st.xyz
+        e = self._wheel_reach_m
+        if not any(z.min_m[0] - e <= x <= z.max_m[0] + e and z.min_m[1] - e <= y <= z.max_m[1] + e
+                   for z in self.world.spec.zones):
             self.body.set_wheel_friction([self.world.spec.floor_friction] * 4)
             return
         self.body.set_wheel_friction([self.world.friction_at(float(x), float(y))
@@ -355,6 +355,23 @@ class KartRobot(RobotBase):
         body.accel = (0.0, 0.0)  # no load transfer carried over from before the jump
         self._target, self._imu_prev = None, None
         self.contacts.clear()
+
+
+Frame = tuple[str, str, tuple[float, float, float]]  # parent, child, offset (m)
+
+
+def _moving_frames(ns: str, model: GokartModel) -> list[Frame]:
+    """Parent, child and offset (m) of the moving frames: the two steer links (turning about
+    z), then the wheel links rl, rr, fl, fr (spinning about y). Named once, not every tick."""
+    (x_r, y_r), (x_f, y_f) = model.wheel_xy_m[0], model.wheel_xy_m[2]
+    out = [(f"{ns}/base_link", f"{ns}/front_{side}_wheel_steer_link", (x_f, sign * y_f, -0.015))
+           for side, sign in (("left", 1), ("right", -1))]
+    out += [(f"{ns}/{parent}", f"{ns}/{name}_wheel_link", xyz) for name, parent, xyz in (
+        ("rear_left", "base_link", (x_r, y_r, 0.0)),
+        ("rear_right", "base_link", (x_r, -y_r, 0.0)),
+        ("front_left", "front_left_wheel_steer_link", (0.0, 0.0, 0.0)),
+        ("front_right", "front_right_wheel_steer_link", (0.0, 0.0, 0.0)))]
+    return out
 
 
 def _t3(v: np.ndarray) -> tuple[float, float, float]:
