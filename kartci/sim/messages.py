@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from kartci.logs import header, msg, typestore
+from kartci.logs import header, typestore
 from kartci.logs.types import WORLD_FRAME as WORLD_FRAME  # re-exported for the sim
 from kartci.sim.body import BodyState
 
@@ -78,11 +78,11 @@ def odometry(t_ns: int, ns: str, st: BodyState) -> Any:
 def joint_state(t_ns: int, frame: str, names: list[str], position: list[float],
                 velocity: list[float]) -> Any:
     """A sensor_msgs/JointState: joint positions (rad) and velocities (rad/s), no efforts."""
-    return msg("sensor_msgs/msg/JointState", header=header(t_ns, frame), name=names,
-               position=np.asarray(position, dtype=float),
-               velocity=np.asarray(velocity, dtype=float), effort=np.zeros(0))
+    return typestore().types["sensor_msgs/msg/JointState"](
+        header(t_ns, frame), names, np.asarray(position, dtype=float),
+        np.asarray(velocity, dtype=float), np.zeros(0))
 
 
 def tf_message(transforms: list[Any]) -> Any:
     """A tf2_msgs/TFMessage, for /tf and /tf_static."""
-    return msg("tf2_msgs/msg/TFMessage", transforms=transforms)
+    return typestore().types["tf2_msgs/msg/TFMessage"](transforms)

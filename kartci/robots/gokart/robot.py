@@ -145,9 +145,8 @@ class KartRobot(RobotBase):
             return
         fx, fy, grip = (np.array(v, dtype=float) for v in zip(*self.body.tyre_forces,
                                                                strict=True))
-        put("tyres", msg("kartci_msgs/msg/TyreForces",
-                         header=header(t_ns, f"{self.name}/base_link"),
-                         wheel=list(self.JOINTS[2:]), fx_n=fx, fy_n=fy, grip_n=grip), t_ns)
+        put("tyres", typestore().types["kartci_msgs/msg/TyreForces"](
+            header(t_ns, f"{self.name}/base_link"), list(self.JOINTS[2:]), fx, fy, grip), t_ns)
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
         """tf of the moving frames: steer links (about z) and wheel links (about y)."""
@@ -268,10 +267,18 @@ class KartRobot(RobotBase):
 
     def post_step(self, t_ns: int, put: Put) -> None:
         """Contacts with anything but the floor, grouped into collisions (episodes)."""
-        seen: set[str] = set()
         # the reading is the one the sensors and the next step's tyres use: no extra cost
-        near = () if self.reach.clear(self.body.reading()) else pb.getContactPoints(
-            bodyA=self.body.body, physicsClientId=self.client)
+        if self.reach.clear(self.body.reading()):
+            if self.contacts:  # nothing touches: collisions still open may end
+                self._touched(t_ns, (), put)
+            return
+        self._touched(t_ns, pb.getContactPoints(bodyA=self.body.body,
+                                                physicsClientId=self.client), put)
+
+    def _touched(self, t_ns: int, near: Any, put: Put) -> None:
+        """Contact points found after a step: each collision they continue or start, and the
+        collisions no longer touched for CONTACT_GAP_NS reported."""
+        seen: set[str] = set()
         for c in near:
             if c[2] == self.floor or c[2] == self.body.body:
                 continue
