@@ -87,9 +87,12 @@ def msg(typename: str, **fields: Any) -> Any:
 
 
 def header(t_ns: int, frame_id: str) -> Any:
+    """A std_msgs/Header stamped `t_ns`. Built by the classes, fields in the .msg's order: a
+    run makes one for nearly every message, and `msg`'s keywords cost twice the object."""
+    types = typestore().types
     sec, nsec = divmod(t_ns, 1_000_000_000)
-    stamp = msg("builtin_interfaces/msg/Time", sec=sec, nanosec=nsec)
-    return msg("std_msgs/msg/Header", stamp=stamp, frame_id=frame_id)
+    return types["std_msgs/msg/Header"](types["builtin_interfaces/msg/Time"](sec, nsec),
+                                        frame_id)
 
 
 def yaw_of(q: Any) -> float:

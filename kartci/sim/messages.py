@@ -7,33 +7,40 @@ from typing import Any
 
 import numpy as np
 
-from kartci.logs import header, msg
+from kartci.logs import header, typestore
 from kartci.logs.types import WORLD_FRAME as WORLD_FRAME  # re-exported for the sim
 from kartci.sim.body import BodyState
+
+# Messages are built by their classes, fields in the .msg's order: the loop makes about 40 a
+# kart's odometry tick, and `msg`'s keywords cost twice the object.
+_VECTOR3 = "geometry_msgs/msg/Vector3"
+_QUATERNION = "geometry_msgs/msg/Quaternion"
 
 
 def vec(x: float, y: float, z: float) -> Any:
     """A geometry_msgs/Vector3."""
-    return msg("geometry_msgs/msg/Vector3", x=x, y=y, z=z)
+    return typestore().types[_VECTOR3](x, y, z)
 
 
 def quat_msg(q: Any) -> Any:
     """A geometry_msgs/Quaternion from (x, y, z, w)."""
-    return msg("geometry_msgs/msg/Quaternion", x=q[0], y=q[1], z=q[2], w=q[3])
+    return typestore().types[_QUATERNION](q[0], q[1], q[2], q[3])
 
 
 def pose(xyz: Any, q: Any) -> Any:
     """A geometry_msgs/Pose from a position (m) and a quaternion (x, y, z, w)."""
-    return msg("geometry_msgs/msg/Pose",
-               position=msg("geometry_msgs/msg/Point", x=xyz[0], y=xyz[1], z=xyz[2]),
-               orientation=quat_msg(q))
+    types = typestore().types
+    return types["geometry_msgs/msg/Pose"](
+        types["geometry_msgs/msg/Point"](xyz[0], xyz[1], xyz[2]),
+        types[_QUATERNION](q[0], q[1], q[2], q[3]))
 
 
 def transform(t_ns: int, parent: str, child: str, xyz: Any, q: Any) -> Any:
     """A geometry_msgs/TransformStamped of frame `child` in `parent` at `t_ns`."""
-    tr = msg("geometry_msgs/msg/Transform", translation=vec(*xyz), rotation=quat_msg(q))
-    return msg("geometry_msgs/msg/TransformStamped", header=header(t_ns, parent),
-               child_frame_id=child, transform=tr)
+    types = typestore().types
+    tr = types["geometry_msgs/msg/Transform"](types[_VECTOR3](xyz[0], xyz[1], xyz[2]),
+                                              types[_QUATERNION](q[0], q[1], q[2], q[3]))
+    return types["geometry_msgs/msg/TransformStamped"](header(t_ns, parent), child, tr)
 
 
 def quat_from_matrix(r: np.ndarray) -> tuple[float, float, float, float]:
@@ -58,24 +65,24 @@ ZEROS36 = frozen(np.zeros(36))
 def odometry(t_ns: int, ns: str, st: BodyState) -> Any:
     """nav_msgs/Odometry of `<ns>/base_link` in the world frame from ground truth, twist in
     base_link; zero covariances."""
-    return msg("nav_msgs/msg/Odometry", header=header(t_ns, WORLD_FRAME),
-               child_frame_id=f"{ns}/base_link",
-               pose=msg("geometry_msgs/msg/PoseWithCovariance", pose=pose(st.xyz, st.quat),
-                        covariance=ZEROS36),
-               twist=msg("geometry_msgs/msg/TwistWithCovariance",
-                         twist=msg("geometry_msgs/msg/Twist", linear=vec(*st.v_body),
-                                   angular=vec(*st.w_body)),
-                         covariance=ZEROS36))
+    types = typestore().types
+    v, w = st.v_body, st.w_body
+    twist = types["geometry_msgs/msg/Twist"](types[_VECTOR3](v[0], v[1], v[2]),
+                                             types[_VECTOR3](w[0], w[1], w[2]))
+    return types["nav_msgs/msg/Odometry"](
+        header(t_ns, WORLD_FRAME), f"{ns}/base_link",
+        types["geometry_msgs/msg/PoseWithCovariance"](pose(st.xyz, st.quat), ZEROS36),
+        types["geometry_msgs/msg/TwistWithCovariance"](twist, ZEROS36))
 
 
 def joint_state(t_ns: int, frame: str, names: list[str], position: list[float],
                 velocity: list[float]) -> Any:
     """A sensor_msgs/JointState: joint positions (rad) and velocities (rad/s), no efforts."""
-    return msg("sensor_msgs/msg/JointState", header=header(t_ns, frame), name=names,
-               position=np.asarray(position, dtype=float),
-               velocity=np.asarray(velocity, dtype=float), effort=np.zeros(0))
+    return typestore().types["sensor_msgs/msg/JointState"](
+        header(t_ns, frame), names, np.asarray(position, dtype=float),
+        np.asarray(velocity, dtype=float), np.zeros(0))
 
 
 def tf_message(transforms: list[Any]) -> Any:
     """A tf2_msgs/TFMessage, for /tf and /tf_static."""
-    return msg("tf2_msgs/msg/TFMessage", transforms=transforms)
+    return typestore().types["tf2_msgs/msg/TFMessage"](transforms)

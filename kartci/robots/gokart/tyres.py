@@ -205,20 +205,24 @@ class FourTyres:
         out: list[tuple[float, float, float]] = []
         spins: list[float] = []
         fx_sum = fy_sum = 0.0
-        for (two_static, driven, y, two_y, dx, dy, d, b, c, radius, torque_cap), delta, mu in zip(
-                self.wheels, (0.0, 0.0, *steer_rad), mu_scale, strict=True):
+        atan, atan2, sin, sqrt, copysign = math.atan, math.atan2, math.sin, math.sqrt, (
+            math.copysign)
+        left, right = steer_rad  # cos and sin of each wheel's steer angle (rear: exactly 1, 0)
+        turns = ((1.0, 0.0), (1.0, 0.0), (math.cos(left), sin(left)),
+                 (math.cos(right), sin(right)))
+        for (two_static, driven, y, two_y, dx, dy, d, b, c, radius, torque_cap), (cs, sn), mu in (
+                zip(self.wheels, turns, mu_scale, strict=True)):
             a = two_static + (to_rear if driven else -to_rear)
             axle = a if a > 0.0 else 0.0
             across = axle / mass * per_g * ay / two_y
             half, reach = axle / 2, abs(across)
-            load = half - math.copysign(half if half < reach else reach, across * y)
-            cs, sn = math.cos(delta), math.sin(delta)
+            load = half - copysign(half if half < reach else reach, across * y)
             v0, v1 = vx_mps - yaw_rate_radps * dy, vy_mps + yaw_rate_radps * dx
             v_long, v_lat = cs * v0 + sn * v1, -sn * v0 + cs * v1
             speed = abs(v_long)
-            alpha = -math.atan2(v_lat, SLIP_SPEED_FLOOR_MPS if speed < SLIP_SPEED_FLOOR_MPS
-                                else speed)
-            f_lat = load * mu * (d * math.sin(c * math.atan(b * alpha)))
+            alpha = -atan2(v_lat, SLIP_SPEED_FLOOR_MPS if speed < SLIP_SPEED_FLOOR_MPS
+                           else speed)
+            f_lat = load * mu * (d * sin(c * atan(b * alpha)))
             q = v_long / STOP_SPEED_MPS
             q = q if q < 1.0 else 1.0
             want = -load * brake * (q if q > -1.0 else -1.0)
@@ -233,12 +237,12 @@ class FourTyres:
             f_long = q if q > -f_max else -f_max
             if f_max > 0:
                 q = 1.0 - (f_long / f_max) ** 2
-                f_lat *= math.sqrt(q if q > 0.0 else 0.0)
+                f_lat *= sqrt(q if q > 0.0 else 0.0)
             else:
                 f_lat *= 0.0
             stiffness = k_slip * load * GRAVITY_MPS2
             slip = (f_long / stiffness if abs(want) <= f_max and stiffness > 0
-                    else math.copysign(1.0, want))
+                    else copysign(1.0, want))
             fx, fy = cs * f_long - sn * f_lat, sn * f_long + cs * f_lat
             out.append((fx, fy, load_d * mu))
             spins.append((v_long + slip * speed) / radius)
