@@ -163,3 +163,15 @@ def shipped_run(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Pat
         return log
 
     return get
+
+
+@pytest.fixture
+def dds_alone(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """One DDS test at a time across xdist workers: the tests that check a run leaves no Fast
+    DDS shared memory compare /dev/shm before and after, which another worker's DDS processes
+    would fill meanwhile (each run has its own domain, but /dev/shm is the machine's)."""
+    base = tmp_path_factory.getbasetemp()
+    folder = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    with (folder / "dds.lock").open("w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield

@@ -35,7 +35,8 @@ def ros_python() -> Path:
 
 
 @pytest.fixture
-def example(tmp_path: Path, ros_python: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+def example(tmp_path: Path, ros_python: Path, monkeypatch: pytest.MonkeyPatch,
+            dds_alone: None) -> Path:
     """A copy of the example project, the current folder, with the ROS 2 Python named."""
     proj = tmp_path / "ros2_stack"
     shutil.copytree(EXAMPLE, proj, ignore=shutil.ignore_patterns("reports"))

@@ -25,7 +25,7 @@ CLOCK = "rosgraph_msgs/msg/Clock"
 
 
 @pytest.fixture
-def relay(tmp_path: Path) -> Iterator[Any]:
+def relay(tmp_path: Path, dds_alone: None) -> Iterator[Any]:
     """Start the relay under the ROS 2 Python; yields a function sending its `start`."""
     python = ros_python_or_skip()
     domain = Domain(tmp_path / "domains")
