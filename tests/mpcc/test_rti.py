@@ -17,8 +17,8 @@ from kartci.errors import SpecError
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.project import BUILTIN_SIMS
-from kartci.robots.gokart.mpcc import Mpcc
 from kartci.robots.gokart.mpcc.cache import solver_key
+from kartci.robots.gokart.mpcc.controller import Mpcc
 from kartci.robots.gokart.mpcc.direct import OcpQp
 from kartci.robots.gokart.mpcc.model import SingleTrack
 from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, QpSolver
