@@ -29,10 +29,11 @@ def finish(fig: Figure, ax: Axes, xlabel: str, ylabel: str, title: str) -> str:
     return svg(fig)
 
 
-def svg(fig: Figure) -> str:
-    """The figure as SVG text; laid out once (tight_layout), not cropped with
-    bbox_inches="tight", which draws every figure twice (a third of the static report's time)."""
-    fig.tight_layout()
+def svg(fig: Figure, tight: bool = True) -> str:
+    """The figure as SVG text; laid out once (tight_layout, unless the caller placed the axes),
+    not cropped with bbox_inches="tight", which draws every figure twice."""
+    if tight:
+        fig.tight_layout()
     buf = io.StringIO()
     fig.savefig(buf, format="svg", metadata={"Date": None})
     plt.close(fig)
