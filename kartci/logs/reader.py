@@ -306,7 +306,7 @@ def _salvaged(path: Path, why: str, err: Exception) -> tuple[_Streamed, str]:
         raise LogError(f"{path}: {why}") from err
     if not found.conns:
         raise LogError(f"{path}: {why}; reading it {found.how} found no topics either"
-                       ) from err
+                       + "".join(f"; {x}" for x in found.problems)) from err
     source = _Streamed(found)
     extra = [*found.problems, *source.problems]
     if found.skipped_chunks:
