@@ -242,9 +242,10 @@ class LogReader:
         passed, seen = position.passed, position.seen
         try:  # only the source raises in here (GeneratorExit at the yield is no Exception)
             for raw in self._source.raw(wanted):
-                if resume and seen(raw[0], raw[3]):
-                    continue
-                passed(raw[0], raw[3])
+                if not resume:
+                    passed(raw[0], raw[3])
+                elif seen(raw[0], raw[3]):  # the position stays where the first reader left
+                    continue  # off: two messages of a topic at one time are both new here
                 yield raw
         except Exception as err:  # damaged bytes make readers raise anything
             raise _SourceFailedError(err) from err
