@@ -425,7 +425,7 @@ def _db3_rows(con: sqlite3.Connection, part: int, into: Salvage) -> str | None:
     with suppress(sqlite3.Error):  # the rows after the damage, read from the end
         for _, tid, t_ns, data in con.execute(query + " DESC", (last,)):
             _db3_row(t_ns, (part, tid), data, into)
-    return f"damaged after message row {last}"
+    return f"damaged after message row {last}" if last else "damaged before its first message row"
 
 
 def _db3_row(t_ns: object, key: Key, data: object, into: Salvage) -> bool:
@@ -473,6 +473,11 @@ def _is_message(types: tuple[int, ...]) -> bool:
     return len(types) == 4 and ints[1] and ints[2] and types[3] >= 12 and types[3] % 2 == 0
 
 
+def _texts(types: tuple[int, ...]) -> bool:
+    """A row shaped as rosbag2's topics or message definitions: (id, text, text, ...)."""
+    return len(types) > 1 and types[0] == 0 and all(t >= 13 and t % 2 for t in types[1:])
+
+
 @dataclass
 class _Db3Pages:
     """The rows of rosbag2's tables found in the leaf pages, told apart by their shape:
@@ -493,7 +498,7 @@ class _Db3Pages:
             elif (isinstance(t_ns := values[2], int) and isinstance(tid := values[1], int)
                   and isinstance(raw := values[3], bytes)):
                 self.messages.setdefault(cell.rowid, (t_ns, tid, raw))
-        elif values is None or types[0] != 0 or not all(t >= 13 and t % 2 for t in types[1:]):
+        elif values is None or not _texts(types):
             return
         elif 4 <= len(types) <= 6 and str(values[1]).startswith("/"):
             self.topics.setdefault(cell.rowid, (str(values[1]), str(values[2])))

@@ -122,7 +122,7 @@ class Pages:
         (what could be read, whether it is whole)."""
         here = self.local(total)
         parts, have = [page[pos:pos + here]], here
-        if here < total:
+        if here < total <= len(self.data):  # a damaged length claims more than the file
             (nxt,) = struct.unpack_from(">I", page, pos + here)
             seen: set[int] = set()
             while have < total and 0 < nxt <= self.count and nxt not in seen:
@@ -189,8 +189,8 @@ def layout(data: bytes) -> Pages | None:
     if data[:16] == MAGIC:
         size = int.from_bytes(data[16:18], "big")
         size = 65536 if size == 1 else size
-        if size in _SIZES:
-            return Pages(data, size, size - data[20])
+        if size in _SIZES:  # sqlite's usable size is at least 480 bytes
+            return Pages(data, size, size - (data[20] if size - data[20] >= 480 else 0))
     sample = data[:1 << 24]
     best, most = None, 0
     for size in _SIZES:
