@@ -242,9 +242,10 @@ class LogReader:
         passed, seen = position.passed, position.seen
         try:  # only the source raises in here (GeneratorExit at the yield is no Exception)
             for raw in self._source.raw(wanted):
-                if resume and seen(raw[0], raw[3]):
-                    continue
-                passed(raw[0], raw[3])
+                if not resume:
+                    passed(raw[0], raw[3])
+                elif seen(raw[0], raw[3]):  # the position stays where the first reader left
+                    continue  # off: two messages of a topic at one time are both new here
                 yield raw
         except Exception as err:  # damaged bytes make readers raise anything
             raise _SourceFailedError(err) from err
@@ -306,7 +307,7 @@ def _salvaged(path: Path, why: str, err: Exception) -> tuple[_Streamed, str]:
         raise LogError(f"{path}: {why}") from err
     if not found.conns:
         raise LogError(f"{path}: {why}; reading it {found.how} found no topics either"
-                       ) from err
+                       + "".join(f"; {x}" for x in found.problems)) from err
     source = _Streamed(found)
     extra = [*found.problems, *source.problems]
     if found.skipped_chunks:

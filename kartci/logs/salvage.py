@@ -36,6 +36,7 @@ from mcap.stream_reader import StreamReader
 from rosbags.typesys.msg import normalize_msgtype
 
 from kartci.logs.damage import count_of, describe
+from kartci.logs.sqlitepages import Cell, table_rows
 
 if sys.version_info >= (3, 14):  # pragma: no cover
     from compression import zstd
@@ -45,6 +46,7 @@ else:
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 ROS1_MAGIC = b"#ROSBAG V2.0\n"
 _FORMATS = {"ros2msg": "msg", "ros2idl": "idl", "omgidl": "idl"}
+_PAGES = "page by page, as sqlite's .recover does"
 
 
 class NotStreamableError(Exception):
@@ -423,7 +425,7 @@ def _db3_rows(con: sqlite3.Connection, part: int, into: Salvage) -> str | None:
     with suppress(sqlite3.Error):  # the rows after the damage, read from the end
         for _, tid, t_ns, data in con.execute(query + " DESC", (last,)):
             _db3_row(t_ns, (part, tid), data, into)
-    return f"damaged after message row {last}"
+    return f"damaged after message row {last}" if last else "damaged before its first message row"
 
 
 def _db3_row(t_ns: object, key: Key, data: object, into: Salvage) -> bool:
@@ -446,30 +448,112 @@ def _listed(path: Path) -> int | None:
     return None
 
 
-def read_db3(path: Path, part: int, into: Salvage) -> None:
+def _db3_sql(path: Path, part: int, into: Salvage) -> str | None:
     """What sqlite can still read of a rosbag2 sqlite3 file: its topics and every message row
-    before and after the damage; the count lost (from metadata.yaml) among the problems."""
-    into.how = "row by row from its sqlite tables"
+    before and after the damage. None when it read cleanly, else why it stopped, in words."""
     try:
         con = _db3_connect(path)
     except (sqlite3.Error, OSError) as err:
-        into.problems.append(f"{path.name} does not open ({describe(err)})")
-        return
+        return f"does not open ({describe(err)})"
     with closing(con):
-        before = len(into.found)
         try:
             _db3_topics(con, part, into)
         except sqlite3.Error as err:
-            into.problems.append(f"{path.name}: its topics table is unreadable ({describe(err)})")
-            return
+            return f"has an unreadable topics table ({describe(err)})"
         stopped = _db3_rows(con, part, into)
-    got, listed = len(into.found) - before, _listed(path)
-    if stopped is None and (listed is None or got >= listed):
+    listed = _listed(path)
+    if stopped is None and (listed is None or len(into.found) >= listed):
+        return None
+    return stopped or "is damaged (its message table ends early)"
+
+
+def _is_message(types: tuple[int, ...]) -> bool:
+    """A row shaped as rosbag2's messages: (id, topic_id, timestamp: integers, data: blob)."""
+    ints = [1 <= t <= 6 or t in (8, 9) for t in types]
+    return len(types) == 4 and ints[1] and ints[2] and types[3] >= 12 and types[3] % 2 == 0
+
+
+def _texts(types: tuple[int, ...]) -> bool:
+    """A row shaped as rosbag2's topics or message definitions: (id, text, text, ...)."""
+    return len(types) > 1 and types[0] == 0 and all(t >= 13 and t % 2 for t in types[1:])
+
+
+@dataclass
+class _Db3Pages:
+    """The rows of rosbag2's tables found in the leaf pages, told apart by their shape:
+    messages (id, topic_id, timestamp, data), topics (id, name starting with "/", type,
+    serialization format[, QoS[, type hash]]) and message_definitions (id, type, encoding,
+    text, hash); `broken` counts message rows whose overflow chain is broken."""
+
+    topics: dict[int, tuple[str, str]] = field(default_factory=dict)
+    defs: dict[str, tuple[str, str]] = field(default_factory=dict)
+    messages: dict[int, tuple[int, int, bytes]] = field(default_factory=dict)
+    broken: set[int] = field(default_factory=set)
+
+    def take(self, cell: Cell) -> None:
+        types, values = cell.types, cell.values
+        if _is_message(types):
+            if values is None:
+                self.broken.add(cell.rowid)
+            elif (isinstance(t_ns := values[2], int) and isinstance(tid := values[1], int)
+                  and isinstance(raw := values[3], bytes)):
+                self.messages.setdefault(cell.rowid, (t_ns, tid, raw))
+        elif values is None or not _texts(types):
+            return
+        elif 4 <= len(types) <= 6 and str(values[1]).startswith("/"):
+            self.topics.setdefault(cell.rowid, (str(values[1]), str(values[2])))
+        elif len(types) == 5:
+            self.defs.setdefault(str(values[1]), (_FORMATS.get(str(values[2]), ""),
+                                                  str(values[3])))
+
+
+def _db3_pages(path: Path, part: int, into: Salvage) -> tuple[int, str]:
+    """The message rows of a rosbag2 sqlite3 file's intact leaf pages whose topic row was
+    found too, in time then id order, as rosbags reads them; (how many rows were found, in
+    all, what was lost beyond the metadata.yaml count, in words)."""
+    data = path.read_bytes()
+    found = _Db3Pages()
+    for cell in table_rows(data[:len(data) // 512 * 512]):
+        found.take(cell)
+    for tid, (name, msgtype) in found.topics.items():
+        fmt, text = found.defs.get(msgtype, ("", ""))
+        into.conns[part, tid] = Conn(name, msgtype, fmt, text, ros1=False)
+    orphans = 0
+    for _, (t_ns, tid, raw) in sorted(found.messages.items(), key=lambda m: (m[1][0], m[0])):
+        if tid in found.topics:
+            into.found.append((t_ns, (part, tid), raw))
+        else:
+            orphans += 1
+    broken = len(found.broken - found.messages.keys())
+    why = [f"{count_of(broken, 'row')} with a broken overflow chain"] if broken else []
+    if orphans:
+        why.append(f"{count_of(orphans, 'row')} of a topic whose row is lost")
+    return len(found.messages) + broken, ", ".join(why)
+
+
+def read_db3(path: Path, part: int, into: Salvage) -> None:
+    """A rosbag2 sqlite3 file through sqlite; when that stops early, page by page (as sqlite's
+    `.recover` does) if that finds more. What was lost (against metadata.yaml's count) is
+    among the problems."""
+    into.how = _PAGES if into.how == _PAGES else "row by row from its sqlite tables"
+    rows = Salvage()
+    stopped = _db3_sql(path, part, rows)
+    how, lost = "read", ""
+    if stopped is not None:
+        pages, seen = Salvage(), 0
+        with suppress(OSError):
+            seen, lost = _db3_pages(path, part, pages)
+        if len(pages.found) > len(rows.found) or (seen and not rows.found):
+            rows, how, into.how = pages, "read page by page", _PAGES
+    into.conns.update(rows.conns)
+    into.found.extend(rows.found)
+    if stopped is None:
         return
-    lost = ("an unknown number lost (no count in metadata.yaml)" if listed is None
-            else f"{count_of(max(listed - got, 0), 'message')} of {listed} lost")
-    where = stopped or "damaged (its message table ends early)"
-    into.problems.append(f"{path.name} {where}: {count_of(got, 'message')} read, {lost}")
+    got, listed = len(rows.found), _listed(path)
+    total = ("an unknown number lost (no count in metadata.yaml)" if listed is None
+             else f"{count_of(max(listed - got, 0), 'message')} of {listed} lost")
+    lost = f" ({lost})" if lost and how != "read" else ""
+    into.problems.append(f"{path.name} {stopped}: {count_of(got, 'message')} {how}, {total}{lost}")
 
 
 def salvage(path: Path) -> Salvage:
