@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import pytest
 from helpers import kartci
@@ -81,3 +82,75 @@ def test_detect_without_a_lidar_is_one_line(bags: Path, tmp_path: Path) -> None:
     assert r.stderr.strip().splitlines() == [
         f"kartci: error: {bags / BAG}: localization reads the lidar, the IMU and the odometry; "
         "profile tb3 names no lidar (LaserScan or PointCloud2) topic"]
+
+
+def _with_tf_static(bag: Path, dst: Path, yaw: float) -> None:
+    """`bag`'s /odom, /imu and /scan in a ROS 1 bag whose lidar is turned `yaw` rad left on
+    its mount (each scan's angles start `yaw` earlier, so its returns are the same points in
+    the base's frame), with the mount on /tf_static: base_footprint -> base_link (0.010 m up)
+    -> base_scan (-0.032 m, 0.171 m up, yaw)."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)  # has no tf2_msgs: its one message, as in ROS 1
+    store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms",
+                                      "tf2_msgs/msg/TFMessage"))
+    types = store.types
+
+    def edge(parent: str, child: str, x: float, z: float, turn: float) -> Any:
+        return types["geometry_msgs/msg/TransformStamped"](
+            header=types["std_msgs/msg/Header"](
+                seq=0, stamp=types["builtin_interfaces/msg/Time"](sec=112, nanosec=0),
+                frame_id=parent),
+            child_frame_id=child,
+            transform=types["geometry_msgs/msg/Transform"](
+                translation=types["geometry_msgs/msg/Vector3"](x=x, y=0.0, z=z),
+                rotation=types["geometry_msgs/msg/Quaternion"](
+                    x=0.0, y=0.0, z=math.sin(turn / 2), w=math.cos(turn / 2))))
+
+    with AnyReader([bag], default_typestore=store) as reader, Writer(dst) as writer:
+        conns = {c.topic: c for c in reader.connections if c.topic in ("/odom", "/imu", "/scan")}
+        out = {t: writer.add_connection(t, c.msgtype, typestore=store) for t, c in conns.items()}
+        tf = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=store,
+                                   latching=1)
+        static = types["tf2_msgs/msg/TFMessage"](transforms=[
+            edge("base_footprint", "base_link", 0.0, 0.010, 0.0),
+            edge("base_link", "base_scan", -0.032, 0.171, yaw)])
+        writer.write(tf, reader.start_time, store.serialize_ros1(static, "tf2_msgs/msg/TFMessage"))
+        for conn, t_ns, raw in reader.messages(connections=list(conns.values())):
+            if conn.topic == "/scan":
+                m: Any = reader.deserialize(raw, conn.msgtype)
+                m.angle_min -= yaw
+                raw = bytes(store.serialize_ros1(m, conn.msgtype))
+            writer.write(out[conn.topic], t_ns, raw)
+
+
+@pytest.mark.long(reason="end-to-end runs of real or synthetic logs")
+def test_the_mount_comes_from_tf_static_before_the_profile(bags: Path, tmp_path: Path) -> None:
+    """The same scans from a lidar turned 90 degrees on its mount, the mount on /tf_static (a
+    two-edge chain from the odometry's child frame): the same obstacles as with the unturned
+    scans and the mount in the profile; the profile's (wrong) mount is not used. Without
+    either, the mount is assumed at the base and the output says so."""
+    yaw = math.pi / 2
+    _with_tf_static(bags / BAG, tmp_path / "tf.bag", yaw)
+    docs: list[dict[str, Any]] = []
+    for log, mount in ((bags / BAG, ", mount: {x_m: -0.032, z_m: 0.181}"),
+                       (tmp_path / "tf.bag", ", mount: {x_m: 5.0}"), (bags / BAG, "")):
+        profile = tmp_path / "tb3.yaml"
+        profile.write_text("name: tb3\npose: {topic: /odom}\nimu: {topic: /imu}\n"
+                           f"lidar: {{topic: /scan{mount}}}\n")
+        out = tmp_path / f"out{len(docs)}"
+        r = kartci("localize", log, "--profile", profile, "--out", out, "--detect")
+        assert r.returncode == 0, r.stderr
+        docs.append(json.loads((out / "detections.json").read_text(encoding="utf-8")))
+    given, tf, assumed = docs
+    assert tf["mount"] == pytest.approx({"x_m": -0.032, "y_m": 0.0, "z_m": 0.181,
+                                         "yaw_rad": yaw, "source": "tf_static"})
+    for kind in ("static", "dynamic"):
+        assert [o["id"] for o in tf[kind]] == [o["id"] for o in given[kind]]
+        for a, b in zip(tf[kind], given[kind], strict=True):
+            assert a == pytest.approx(b, abs=1e-3)
+    assert assumed["mount"] == {"x_m": 0.0, "y_m": 0.0, "z_m": 0.0, "yaw_rad": 0.0,
+                                "source": "assumed at the base (no /tf_static chain, no "
+                                "profile mount)"}
