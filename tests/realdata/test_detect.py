@@ -28,8 +28,11 @@ import math
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from helpers import kartci
+
+from kartci.pointcloud import read_ply, write_ply
 
 BAG = "turtlebot3_gazebo_cmd_odom_scan.bag"
 PILLARS = [(x, y) for x in (-1.1, 0.0, 1.1) for y in (-1.1, 0.0, 1.1)]  # m, the SDF's
@@ -50,7 +53,8 @@ def test_the_detector_finds_the_pillars_of_turtlebot3_world(bags: Path, tmp_path
     stretch of it longer than 2 m whose box's centre falls inside where the wall bends (2 such,
     both dynamic: with no map to mask them, a wall whose seen part grows as the robot drives
     has a moving centre). Measured: 31 static tracks (15 at the 9 pillars, some pillars
-    re-acquired after hiding behind others for longer than keep_static_s), 14 dynamic."""
+    re-acquired after hiding behind others for longer than keep_static_s), 14 dynamic. With
+    the walls given as the map to mask, the 15 pillar tracks are all that is left."""
     profile = tmp_path / "tb3.yaml"
     profile.write_text("name: tb3\npose: {topic: /odom}\nimu: {topic: /imu}\n"
                        "lidar: {topic: /scan, mount: {x_m: -0.032, z_m: 0.181}}\n")
@@ -71,6 +75,19 @@ def test_the_detector_finds_the_pillars_of_turtlebot3_world(bags: Path, tmp_path
             at_wall = math.hypot(o["x_m"], o["y_m"]) >= WALL_R_M
             assert at_wall or (o in dynamic and o["length_m"] > WALL_STRETCH_M), o
     assert (out / "detections.mcap").is_file()
+
+    # the walls as the map (the log's own map beyond 2 m): every detection is a pillar
+    cloud = read_ply(out / "map.ply")
+    write_ply(tmp_path / "walls.ply", cloud[np.hypot(cloud[:, 0], cloud[:, 1]) > 2.0], "walls")
+    r = kartci("localize", bags / BAG, "--profile", profile, "--out", tmp_path / "masked",
+               "--detect", "--detect-map", tmp_path / "walls.ply")
+    assert r.returncode == 0, r.stderr
+    masked = json.loads((tmp_path / "masked" / "detections.json").read_text(encoding="utf-8"))
+    assert masked["dynamic"] == []
+    pillars = [(o["x_m"], o["y_m"], o["scans"]) for o in static
+               if _nearest_pillar_m(o) < PILLAR_TOL_M]
+    assert [(o["x_m"], o["y_m"], o["scans"]) for o in masked["static"]] == pillars
+    assert len(pillars) == 15
 
 
 def test_detect_without_a_lidar_is_one_line(bags: Path, tmp_path: Path) -> None:
