@@ -29,6 +29,13 @@ from kartci.realdata.tfchain import TF_TYPES, TfTree
 PoseAt = Callable[[int], tuple[float, float, float]]  # stamp ns -> x m, y m, yaw rad
 
 
+class DetectAt(StrEnum):
+    """Which poses the scans are placed at: the log's own, or the localization's estimate."""
+
+    REFERENCE = "reference"
+    ESTIMATE = "estimate"
+
+
 class MountSource(StrEnum):
     """Where the lidar's mount came from."""
 
@@ -70,6 +77,7 @@ class Detections:
     """What the detector found over the whole log."""
 
     frame: str  # the pose's frame, the obstacles' centres are in it
+    at: DetectAt
     mount: LidarMount
     scans: int
     static: tuple[Obstacle, ...]
@@ -77,7 +85,8 @@ class Detections:
 
     def as_json(self) -> dict[str, Any]:
         """The document written to OUT/detections.json."""
-        return {"frame": self.frame, "mount": asdict(self.mount), "scans": self.scans,
+        return {"frame": self.frame, "poses": self.at.value, "mount": asdict(self.mount),
+                "scans": self.scans,
                 **{kind: [{k: round(v, 4) if isinstance(v, float) else v
                            for k, v in asdict(o).items()} for o in tracks]
                    for kind, tracks in (("static", self.static), ("dynamic", self.dynamic))}}
@@ -213,11 +222,12 @@ class _Seen:
         return tuple(out)
 
 
-def detect_obstacles(scans: list[tuple[int, np.ndarray]], pose_at: PoseAt, planar: bool,
-                     mount: LidarMount, frame: str, ns: str, map_name: str | None,
-                     dst: Path) -> Detections:
+def detect_obstacles(scans: list[tuple[int, np.ndarray]], poses: tuple[DetectAt, PoseAt],
+                     planar: bool, mount: LidarMount, frame: str, ns: str,
+                     map_name: str | None, dst: Path) -> Detections:
     """Every scan (stamp ns, points in the lidar's frame) through the detector at the pose of
     its stamp; the detector's messages and the placed scans written to `dst` (MCAP)."""
+    at, pose_at = poses
     agent = _node(ns, planar, map_name)
     _feed_mount(agent, ns, mount)
     seen = _Seen({}, {})
@@ -233,4 +243,5 @@ def detect_obstacles(scans: list[tuple[int, np.ndarray]], pose_at: PoseAt, plana
             out.write(f"/{ns}/obstacle_detector/scan", cloud_msg(t_ns, placed, WORLD_FRAME),
                       t_ns)
             seen.note(agent.tracker.tracks, t_ns * 1e-9, confirm)
-    return Detections(frame, mount, len(scans), seen.obstacles(False), seen.obstacles(True))
+    return Detections(frame, at, mount, len(scans), seen.obstacles(False),
+                      seen.obstacles(True))

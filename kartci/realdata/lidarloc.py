@@ -22,7 +22,15 @@ from kartci.logs import header, messages, msg
 from kartci.metrics.trajectory import ErrorStats, Trajectory, ape, associate
 from kartci.pointcloud import cloud_xyz, voxel_downsample, write_ply
 from kartci.realdata.importer import import_log
-from kartci.realdata.lidardetect import Detections, cloud_msg, detect_obstacles, frames, lidar_mount
+from kartci.realdata.lidardetect import (
+    DetectAt,
+    Detections,
+    PoseAt,
+    cloud_msg,
+    detect_obstacles,
+    frames,
+    lidar_mount,
+)
 from kartci.realdata.profile import Profile, resolve_profile
 from kartci.track import TRACK_TOPIC
 
@@ -135,11 +143,13 @@ def _check_streams(profile: Any, log: Path) -> None:
                         f"profile {profile.name} names no {' and no '.join(missing)} topic")
 
 
-def replay_localization(log: Path, profile_path: Path | None, out: Path, detect: bool = False,
-                        detect_map: str | None = None) -> LocReplay:
+def replay_localization(log: Path, profile_path: Path | None, out: Path,
+                        detect: DetectAt | None = None, detect_map: str | None = None
+                        ) -> LocReplay:
     """Replay `log` through the localization node open loop (see the module docstring); the
     built map goes to OUT/map.ply. With `detect`, its scans also go through the obstacle
-    detector at the log's poses (on `detect_map`, default none): OUT/detections.mcap."""
+    detector at the log's poses or the estimate's (on `detect_map`, default none):
+    OUT/detections.mcap."""
     t_wall = time.perf_counter()
     profile, info = resolve_profile(log, profile_path)
     _check_streams(profile, log)
@@ -156,18 +166,30 @@ def replay_localization(log: Path, profile_path: Path | None, out: Path, detect:
     ref = Trajectory.planar(rec.t_ns * 1e-9, rec.pose[:, 0], rec.pose[:, 1], rec.pose[:, 2])
     r, e = associate(ref, est, max_diff_s=0.02)
     t_detect = time.perf_counter()
-    found = (_detect(log, profile, info["lidar"].msgtype, rec, out, detect_map) if detect
-             else None)
+    found = None
+    if detect is not None:
+        poses = (detect, rec.at if detect == DetectAt.REFERENCE else _pose_at(est))
+        found = _detect(log, profile, info["lidar"].msgtype, rec.scans, poses, out, detect_map)
     return LocReplay(ape(r, e), len(rec.scans), len(est), float(rec.t_ns[-1] - rec.t_ns[0])
                      * 1e-9, time.perf_counter() - t_wall, n_map, found,
                      time.perf_counter() - t_detect if detect else 0.0)
 
 
-def _detect(log: Path, profile: Profile, lidar_type: str, rec: _Recorded, out: Path,
-            detect_map: str | None) -> Detections:
-    """The recorded scans through the obstacle detector at the recorded poses."""
+def _pose_at(est: Trajectory) -> PoseAt:
+    """The estimate's planar pose at a stamp (interpolated; held before its first)."""
+    t = est.t_s
+    x, y = est.xyz_m[:, 0], est.xyz_m[:, 1]
+    yaw = np.unwrap(2 * np.arctan2(est.quat_xyzw[:, 2], est.quat_xyzw[:, 3]))
+    return lambda t_ns: (float(np.interp(t_ns * 1e-9, t, x)),
+                         float(np.interp(t_ns * 1e-9, t, y)),
+                         float(np.interp(t_ns * 1e-9, t, yaw)))
+
+
+def _detect(log: Path, profile: Profile, lidar_type: str, scans: list[tuple[int, np.ndarray]],
+            poses: tuple[DetectAt, PoseAt], out: Path, detect_map: str | None) -> Detections:
+    """The recorded scans through the obstacle detector at the chosen poses."""
     frame, base, sensor = frames(log, profile)
-    return detect_obstacles(rec.scans, rec.at, lidar_type == "sensor_msgs/msg/LaserScan",
+    return detect_obstacles(scans, poses, lidar_type == "sensor_msgs/msg/LaserScan",
                             lidar_mount(log, profile, base, sensor), frame, profile.agent,
                             detect_map, out / "detections.mcap")
 
