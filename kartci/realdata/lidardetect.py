@@ -103,13 +103,17 @@ def cloud_msg(t_ns: int, xyz: np.ndarray, frame: str = "velodyne_link") -> Any:
 
 
 def _first(log: Path, topic: str) -> Any:
-    return next(m for _, _, m in messages(log, [topic]))
+    found = next((m for _, _, m in messages(log, [topic])), None)
+    if found is None:
+        raise LogError(f"{log}: no message of {topic} could be read")
+    return found
 
 
 def frames(log: Path, profile: Profile) -> tuple[str, str, str]:
     """The pose's frame, its child (the base) and the lidar's frame, from their first
     messages (a TF pose names its frames in the profile)."""
-    assert profile.lidar is not None  # localize checked the streams
+    if profile.lidar is None:
+        raise SpecError(f"profile {profile.name} names no lidar topic to detect obstacles in")
     sensor = str(_first(log, profile.lidar.topic).header.frame_id).lstrip("/")
     if profile.pose.is_tf:
         return str(profile.pose.parent), str(profile.pose.child), sensor

@@ -172,7 +172,7 @@ def replay_localization(log: Path, profile_path: Path | None, out: Path,
         found = _detect(log, profile, info["lidar"].msgtype, rec.scans, poses, out, detect_map)
     return LocReplay(ape(r, e), len(rec.scans), len(est), float(rec.t_ns[-1] - rec.t_ns[0])
                      * 1e-9, time.perf_counter() - t_wall, n_map, found,
-                     time.perf_counter() - t_detect if detect else 0.0)
+                     time.perf_counter() - t_detect if detect is not None else 0.0)
 
 
 def _pose_at(est: Trajectory) -> PoseAt:

@@ -184,3 +184,28 @@ def test_the_mount_comes_from_tf_static_before_the_profile(bags: Path, tmp_path:
     assert assumed["mount"] == {"x_m": 0.0, "y_m": 0.0, "z_m": 0.0, "yaw_rad": 0.0,
                                 "source": "assumed at the base (no /tf_static chain, no "
                                 "profile mount)"}
+
+
+def test_a_post_seen_from_a_turned_lidar_lands_where_it_stands(tmp_path: Path) -> None:
+    """A post (a ring of returns, radius 0.15 m) at (2, 1) m seen in 12 scans from a robot
+    driving by, its lidar 0.1 m forward, 0.3 m up and turned 90 degrees: one static obstacle at
+    (2, 1) to float32's rounding, seen in every scan, its centre never moving (spread 0)."""
+    from kartci.realdata.lidardetect import DetectAt, LidarMount, MountSource, detect_obstacles
+
+    mount = LidarMount(0.1, 0.0, 0.3, math.pi / 2, MountSource.PROFILE)
+    ring = np.array([(2 + 0.15 * math.cos(a), 1 + 0.15 * math.sin(a))
+                     for a in np.linspace(0, math.tau, 36, endpoint=False)])
+    poses = {k * 100_000_000: (0.1 * k, 0.05 * k, 0.02 * k) for k in range(12)}  # 10 Hz
+    scans = []
+    for t_ns, (x, y, yaw) in poses.items():
+        c, s = math.cos(yaw), math.sin(yaw)  # world -> base, then base -> the turned lidar
+        bx = c * (ring[:, 0] - x) + s * (ring[:, 1] - y) - mount.x_m
+        by = -s * (ring[:, 0] - x) + c * (ring[:, 1] - y)
+        scans.append((t_ns, np.column_stack([by, -bx, np.zeros(len(ring))])))
+    found = detect_obstacles(scans, (DetectAt.REFERENCE, poses.__getitem__), True, mount,
+                             "odom", "robot", None, tmp_path / "d.mcap")
+    assert found.dynamic == () and len(found.static) == 1
+    post = found.static[0]
+    assert (post.x_m, post.y_m) == pytest.approx((2.0, 1.0), abs=1e-5)
+    assert post.scans == 12 and post.height_m == pytest.approx(0.3)
+    assert post.spread_m == pytest.approx(0.0, abs=1e-5)
