@@ -45,6 +45,13 @@ class AlignChoice(StrEnum):
     ORIGIN = "origin"
 
 
+class DetectAtChoice(StrEnum):
+    """`--detect-at`'s choices (kartci.realdata.lidardetect.DetectAt's values)."""
+
+    REFERENCE = "reference"
+    ESTIMATE = "estimate"
+
+
 @app.command("score")
 def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
               baselines: BaselinesOpt = None, strict: StrictOpt = None,
@@ -116,15 +123,32 @@ def simreal_cmd(
 
 
 @app.command("localize")
-def localize_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None) -> None:
+def localize_cmd(
+    log: LogArg,
+    profile: ProfileOpt = None,
+    out: OutOpt = None,
+    detect: Annotated[bool, typer.Option(
+        "--detect", help="Also run the obstacle detector over every scan at the log's pose of "
+        "its stamp (lidar mount from /tf_static, else the profile's lidar.mount, else assumed "
+        "at the base): the static tracks in OUT/detections.json, its detections, markers and "
+        "the placed scans in OUT/detections.mcap (Foxglove).")] = False,
+    detect_at: Annotated[DetectAtChoice, typer.Option(
+        "--detect-at", help="The poses --detect places the scans at: the log's own "
+        "(reference) or the localization's estimate.")] = DetectAtChoice.REFERENCE,
+    detect_map: Annotated[str | None, typer.Option(
+        "--detect-map", help="Map (PLY, the pose's frame) whose points the detector ignores; "
+        "default none: every obstacle, walls included, is reported.")] = None,
+) -> None:
     """Replay a real robot's lidar (LaserScan or PointCloud2), IMU and odometry open loop
     through kartci's localization node, on a map built from the log's own scans at its
     recorded poses (OUT/map.ply), and score the estimate against the log's pose (APE, as
     evo_ape); writes OUT/localization.json."""
+    from kartci.realdata.lidardetect import DetectAt  # CLI start-up: scipy
     from kartci.realdata.lidarloc import replay_localization  # CLI start-up: small_gicp, scipy
 
     out = out_dir(out, "localize")
-    r = replay_localization(log, profile, out)
+    r = replay_localization(log, profile, out, DetectAt(detect_at.value) if detect else None,
+                            detect_map)
     doc = {"ape_rmse_m": r.ape.rmse, "ape_max_m": r.ape.max, "poses": r.ape.count,
            "scans": r.scans, "estimates": r.estimates, "log_s": r.log_s,
            "wall_s": round(r.wall_s, 3), "map_points": r.map_points}
@@ -133,6 +157,17 @@ def localize_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None) ->
                       f"estimates; APE against its odometry: RMSE {r.ape.rmse:.4f} m, max "
                       f"{r.ape.max:.4f} m ({r.ape.count} poses); {r.wall_s:.1f} s wall; "
                       f"wrote {out / 'localization.json'}", highlight=False)
+    if r.detections is not None:
+        d = r.detections
+        write_text_atomic(out / "detections.json", json.dumps(
+            {**d.as_json(), "wall_s": round(r.detect_s, 3)}, indent=2) + "\n")
+        m = d.mount
+        out_console.print(
+            f"detector at the {d.at.value} poses: {len(d.static)} static obstacles ({d.frame} "
+            f"frame), {len(d.dynamic)} dynamic tracks, over {d.scans} scans; lidar mount x "
+            f"{m.x_m:.3f} y {m.y_m:.3f} z {m.z_m:.3f} m yaw {m.yaw_rad:.3f} rad "
+            f"({m.source.value}); {r.detect_s:.1f} s; "
+            f"wrote {out / 'detections.json'}, {out / 'detections.mcap'}", highlight=False)
 
 
 @app.command("calibrate")

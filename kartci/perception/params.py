@@ -13,15 +13,16 @@ class DetectorParams(NodeParams):
 
     period_s: Period_s = Field(0.02, description="node period, s (a scan is processed at "
                                "the first tick after it arrives)")
-    map: str = Field("winti/hall_map.ply", description="the map (PLY, world frame): points "
-                     "near it are the hall, not obstacles")
+    map: str | None = Field("winti/hall_map.ply", description="the map (PLY, world frame): "
+                            "points near it are the hall, not obstacles; none: no map, every "
+                            "obstacle is reported (a foreign log's replay)")
     pose_topic: str = Field("localization/odom", description="where the kart is "
                             "(nav_msgs/Odometry): the localization's estimate, or `odom` for "
                             "ground truth")
     sensor_height_m: Length_m = Field(1.154, description="velodyne_link above base_link, m, "
                                       "until /tf_static says")
-    ground_m: Distance_m = Field(0.12, description="points lower than this above the floor "
-                                 "are ground, m")
+    ground_m: Length_m = Field(0.12, description="points lower than this above the floor "
+                               "are ground, m (below the scan: a planar LaserScan has no ground)")
     top_m: Size_m = Field(2.2, description="points higher than this are not "
                           "obstacles a kart meets (ceiling, walls' tops), m")
     map_clearance_m: Size_m = Field(0.3, description="points this close (x, y) to "

@@ -22,7 +22,16 @@ from kartci.logs import header, messages, msg
 from kartci.metrics.trajectory import ErrorStats, Trajectory, ape, associate
 from kartci.pointcloud import cloud_xyz, voxel_downsample, write_ply
 from kartci.realdata.importer import import_log
-from kartci.realdata.profile import resolve_profile
+from kartci.realdata.lidardetect import (
+    DetectAt,
+    Detections,
+    PoseAt,
+    cloud_msg,
+    detect_obstacles,
+    frames,
+    lidar_mount,
+)
+from kartci.realdata.profile import Profile, resolve_profile
 from kartci.track import TRACK_TOPIC
 
 MAP_VOXEL_M = 0.05  # a small robot's scans: a few cm between points
@@ -38,6 +47,8 @@ class LocReplay:
     log_s: float
     wall_s: float
     map_points: int
+    detections: Detections | None = None  # with `detect`
+    detect_s: float = 0.0  # wall time of the detection, s
 
 
 def scan_points(m: Any) -> np.ndarray:
@@ -48,16 +59,6 @@ def scan_points(m: Any) -> np.ndarray:
     a = float(m.angle_min) + float(m.angle_increment) * np.arange(len(r))
     ok = np.isfinite(r) & (r >= float(m.range_min)) & (r <= float(m.range_max))
     return np.column_stack([r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok]), np.zeros(ok.sum())])
-
-
-def _cloud(t_ns: int, xyz: np.ndarray) -> Any:
-    """A PointCloud2 (x, y, z float32) of these points, as the node reads a lidar."""
-    fields = [msg("sensor_msgs/msg/PointField", name=n, offset=4 * i, datatype=7, count=1)
-              for i, n in enumerate("xyz")]
-    data = np.ascontiguousarray(xyz, dtype="<f4").tobytes()
-    return msg("sensor_msgs/msg/PointCloud2", header=header(t_ns, "velodyne_link"), height=1,
-               width=len(xyz), fields=fields, is_bigendian=False, point_step=12,
-               row_step=12 * len(xyz), data=np.frombuffer(data, np.uint8), is_dense=True)
 
 
 @dataclass(frozen=True)
@@ -142,9 +143,13 @@ def _check_streams(profile: Any, log: Path) -> None:
                         f"profile {profile.name} names no {' and no '.join(missing)} topic")
 
 
-def replay_localization(log: Path, profile_path: Path | None, out: Path) -> LocReplay:
+def replay_localization(log: Path, profile_path: Path | None, out: Path,
+                        detect: DetectAt | None = None, detect_map: str | None = None
+                        ) -> LocReplay:
     """Replay `log` through the localization node open loop (see the module docstring); the
-    built map goes to OUT/map.ply."""
+    built map goes to OUT/map.ply. With `detect`, its scans also go through the obstacle
+    detector at the log's poses or the estimate's (on `detect_map`, default none):
+    OUT/detections.mcap."""
     t_wall = time.perf_counter()
     profile, info = resolve_profile(log, profile_path)
     _check_streams(profile, log)
@@ -160,8 +165,33 @@ def replay_localization(log: Path, profile_path: Path | None, out: Path) -> LocR
     est = _run(agent, rec, wheels)
     ref = Trajectory.planar(rec.t_ns * 1e-9, rec.pose[:, 0], rec.pose[:, 1], rec.pose[:, 2])
     r, e = associate(ref, est, max_diff_s=0.02)
+    t_detect = time.perf_counter()
+    found = None
+    if detect is not None:
+        poses = (detect, rec.at if detect == DetectAt.REFERENCE else _pose_at(est))
+        found = _detect(log, profile, info["lidar"].msgtype, rec.scans, poses, out, detect_map)
     return LocReplay(ape(r, e), len(rec.scans), len(est), float(rec.t_ns[-1] - rec.t_ns[0])
-                     * 1e-9, time.perf_counter() - t_wall, n_map)
+                     * 1e-9, time.perf_counter() - t_wall, n_map, found,
+                     time.perf_counter() - t_detect if detect is not None else 0.0)
+
+
+def _pose_at(est: Trajectory) -> PoseAt:
+    """The estimate's planar pose at a stamp (interpolated; held before its first)."""
+    t = est.t_s
+    x, y = est.xyz_m[:, 0], est.xyz_m[:, 1]
+    yaw = np.unwrap(2 * np.arctan2(est.quat_xyzw[:, 2], est.quat_xyzw[:, 3]))
+    return lambda t_ns: (float(np.interp(t_ns * 1e-9, t, x)),
+                         float(np.interp(t_ns * 1e-9, t, y)),
+                         float(np.interp(t_ns * 1e-9, t, yaw)))
+
+
+def _detect(log: Path, profile: Profile, lidar_type: str, scans: list[tuple[int, np.ndarray]],
+            poses: tuple[DetectAt, PoseAt], out: Path, detect_map: str | None) -> Detections:
+    """The recorded scans through the obstacle detector at the chosen poses."""
+    frame, base, sensor = frames(log, profile)
+    return detect_obstacles(scans, poses, lidar_type == "sensor_msgs/msg/LaserScan",
+                            lidar_mount(log, profile, base, sensor), frame, profile.agent,
+                            detect_map, out / "detections.mcap")
 
 
 def _run(agent: Any, rec: _Recorded, wheels: Any) -> Trajectory:
@@ -185,7 +215,7 @@ def _run(agent: Any, rec: _Recorded, wheels: Any) -> Trajectory:
 
 def _message(topic: str, value: Any, t_ns: int, wheels: Any) -> Any:
     if topic == "velodyne_points":
-        return _cloud(t_ns, value)
+        return cloud_msg(t_ns, value)
     if topic == "joint_states":
         spin = value / wheels.radius_m
         return msg("sensor_msgs/msg/JointState", header=header(t_ns, "base_link"),

@@ -56,6 +56,22 @@ class PoseRole(TopicRole):
         return self.parent is not None
 
 
+class Mount(Frozen):
+    """Where a sensor sits on the robot: its frame in the pose's child frame (base_link)."""
+
+    x_m: float = Field(0.0, ge=-100.0, le=100.0, description="forward of the base, m")
+    y_m: float = Field(0.0, ge=-100.0, le=100.0, description="left of the base, m")
+    z_m: float = Field(0.0, ge=-100.0, le=100.0, description="above the base, m")
+    yaw_rad: float = Field(0.0, ge=-7.0, le=7.0, description="turned left of the base's x, rad")
+
+
+class LidarRole(TopicRole):
+    """The lidar, and its mount when the log's /tf_static does not give it."""
+
+    mount: Mount | None = Field(None, description="the lidar's frame in the base's, when the "
+                                "log has no /tf_static chain from the pose's child frame to it")
+
+
 class CommandRole(TopicRole):
     """The command stream and how the real robot turned it into actuation."""
 
@@ -101,7 +117,7 @@ class Profile(Frozen):
     commands: CommandRole | None = Field(None, description="the command stream: Twist, "
                                          "TwistStamped, AckermannDriveStamped, Joy, KartCommand")
     imu: TopicRole | None = Field(None, description="sensor_msgs/Imu")
-    lidar: TopicRole | None = Field(None, description="LaserScan or PointCloud2")
+    lidar: LidarRole | None = Field(None, description="LaserScan or PointCloud2, and its mount")
     collisions: TopicRole | None = Field(None, description="recorded collisions "
                                          "(kartci_msgs/Collision): counted as `collisions`")
     robot: dict[str, Any] | None = Field(None, description="the robot for simreal/calibrate: "
