@@ -375,8 +375,10 @@ def _load_named(reg: Registry[Any], name: str) -> bool:
     """Import only the entry points named `name` in `reg`'s group; True when that registered
     it. Start-up: importing every plugin costs ~0.2 s (the bridge's Zenoh, every robot kind)
     where a command names two or three. Only without project plugin modules: one of those
-    may register or replace any name, so with them every plugin loads, in `load`'s order."""
-    if "entry points" in _LOADED or project_mod.current().plugins:
+    may register or replace any name, so with them every plugin loads, in `load`'s order.
+    A caller's own registry (a subset, a test's) is never filled from entry points."""
+    if (all(reg is not r for r in REGISTRIES) or "entry points" in _LOADED
+            or project_mod.current().plugins):
         return False
     if (reg.group, name) not in _NAMED:
         _NAMED.add((reg.group, name))
