@@ -11,13 +11,16 @@ import io
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from kartci.errors import SpecError
 from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 Array = NDArray[np.float64]
 SAMPLE_M = 0.05  # spacing of the dense centreline samples
@@ -123,6 +126,7 @@ def track_from_text(text: str, name: str) -> Track:
 def track_from_rows(rows: Array, path: Path) -> Track:
     """The Track splined through CSV rows; refuses coincident points and splined widths <= 0."""
     from scipy.interpolate import CubicSpline  # start-up: +0.25 s (scipy.optimize) on import
+    from scipy.spatial import cKDTree  # start-up: +0.3 s, not for a log without a track
 
     pts = np.vstack([rows, rows[:1]])
     seg = np.hypot(*np.diff(pts[:, :2], axis=0).T)

@@ -17,7 +17,8 @@ import sys
 import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from importlib.metadata import entry_points
+from functools import cache
+from importlib.metadata import EntryPoints, entry_points
 from pathlib import Path
 from typing import Any, ClassVar, Generic, TypeVar
 
@@ -249,8 +250,11 @@ class Registry(Generic[T]):
 
     def get(self, name: str) -> T:
         """The plugin of that name; a PluginError when it (or a project plugin module, which
-        might have registered it) failed to load, a SpecError naming the known ones otherwise."""
-        load()
+        might have registered it) failed to load, a SpecError naming the known ones otherwise.
+        Only the entry points of that name are imported when they provide it (see
+        `_load_named`); anything else loads every plugin first, as `load` does."""
+        if not _load_named(self, name):
+            load()
         item = self.items.get(name)
         if item is not None:
             return item
@@ -349,14 +353,38 @@ def catalogue(project: Project | None = None) -> list[PluginInfo]:
 
 
 def broken() -> list[BrokenPlugin]:
-    """Every plugin that failed to load (after `load`), entry points then project modules:
-    what a command reports once before running what does not need them."""
+    """Every plugin that failed to load (all are loaded first), entry points then project
+    modules: what a command reports once before running what does not need them."""
+    load()
     return [*(b for reg in REGISTRIES for _, b in sorted(reg.broken.items())),
             *_BROKEN_MODULES.values()]
 
 
 _LOADED: set[str] = set()  # "entry points" and the roots whose project plugins are imported
 _BROKEN_MODULES: dict[str, BrokenPlugin] = {}  # project plugin modules that failed, by module
+_NAMED: set[tuple[str, str]] = set()  # (group, name): entry points imported by `_load_named`
+
+
+@cache
+def _installed(group: str) -> EntryPoints:
+    """A group's installed entry points, read once (a read scans every distribution: ~10 ms)."""
+    return entry_points(group=group)
+
+
+def _load_named(reg: Registry[Any], name: str) -> bool:
+    """Import only the entry points named `name` in `reg`'s group; True when that registered
+    it. Start-up: importing every plugin costs ~0.2 s (the bridge's Zenoh, every robot kind)
+    where a command names two or three. Only without project plugin modules: one of those
+    may register or replace any name, so with them every plugin loads, in `load`'s order.
+    A caller's own registry (a subset, a test's) is never filled from entry points."""
+    if (all(reg is not r for r in REGISTRIES) or "entry points" in _LOADED
+            or project_mod.current().plugins):
+        return False
+    if (reg.group, name) not in _NAMED:
+        _NAMED.add((reg.group, name))
+        for ep in sorted(_installed(reg.group).select(name=name), key=lambda e: e.name):
+            _load_entry_point(reg, ep)
+    return name in reg.items and name not in reg.broken
 
 
 def load(project: Project | None = None) -> None:
@@ -367,8 +395,9 @@ def load(project: Project | None = None) -> None:
     if "entry points" not in _LOADED:
         _LOADED.add("entry points")
         for reg in REGISTRIES:
-            for ep in sorted(entry_points(group=reg.group), key=lambda e: e.name):
-                _load_entry_point(reg, ep)
+            for ep in sorted(_installed(reg.group), key=lambda e: e.name):
+                if (reg.group, ep.name) not in _NAMED:
+                    _load_entry_point(reg, ep)
     proj = project or project_mod.current()
     key = str(proj.root)
     if key in _LOADED or not proj.plugins:
@@ -407,5 +436,12 @@ def definitions(metrics: Registry[MetricSet] = METRICS) -> dict[str, MetricDef]:
 
 
 def definition(name: str) -> MetricDef | None:
-    """The definition of a metric (`name` or `agent.name`), or None for an unknown one."""
-    return definitions().get(name.rsplit(".", 1)[-1])
+    """The definition of a metric (`name` or `agent.name`), or None for an unknown one. The
+    sets already loaded are asked first (a scored metric's own set: no need to import every
+    plugin); the sets that define a name alike give the same definition."""
+    base = name.rsplit(".", 1)[-1]
+    for key in sorted(METRICS.items):
+        found = METRICS.items[key].defs.get(base)
+        if found is not None:
+            return found
+    return definitions().get(base)

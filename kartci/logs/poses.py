@@ -21,7 +21,7 @@ import numpy as np
 from rosbags.typesys.store import Typestore
 
 from kartci.logs.reader import Raw
-from kartci.logs.types import stamp_ns, typestore, yaw_from
+from kartci.logs.types import stamp_ns, typestore, yaws_from
 
 ODOMETRY = "nav_msgs/msg/Odometry"
 LAID_OUT = (ODOMETRY, "geometry_msgs/msg/PoseStamped",
@@ -183,7 +183,7 @@ def _fill_planar(m: Any, fields: tuple[str | None, ...], i: int, xyz: np.ndarray
 def body_twist(t_ns: np.ndarray, xyz: np.ndarray, quat: np.ndarray) -> np.ndarray:
     """The body-frame twist of a pose stream without one, from finite differences of the poses
     (numpy.gradient; the heading unwrapped), (n, 6)."""
-    yaw = np.unwrap([yaw_from(*q) for q in quat.tolist()])
+    yaw = np.unwrap(yaws_from(quat))
     t_s = (t_ns - t_ns[0]) * 1e-9
     out = np.zeros((len(t_ns), 6))
     if len(t_ns) < 2 or float(t_s[-1]) <= 0:

@@ -13,7 +13,7 @@ import pandas as pd
 
 from kartci.errors import LogError
 from kartci.logs.reader import open_log
-from kartci.logs.types import stamp_ns, yaw_from, yaw_of
+from kartci.logs.types import stamp_ns, yaw_of, yaws_from
 
 Row = dict[str, Any]
 
@@ -139,7 +139,7 @@ def odometry_table(stamp_ns: np.ndarray, xyz: np.ndarray, quat: np.ndarray,
     quaternion x y z w, body twist vx vy vz wx wy wz), equal to the one their messages make."""
     return pd.DataFrame({
         "t": stamp_ns.astype(np.float64) * 1e-9, "x": xyz[:, 0], "y": xyz[:, 1],
-        "z": xyz[:, 2], "yaw": [yaw_from(*q) for q in quat.tolist()], "qx": quat[:, 0],
+        "z": xyz[:, 2], "yaw": yaws_from(quat), "qx": quat[:, 0],
         "qy": quat[:, 1], "qz": quat[:, 2], "qw": quat[:, 3], "vx": twist[:, 0],
         "vy": twist[:, 1], "wz": twist[:, 5]})
 

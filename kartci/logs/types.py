@@ -7,6 +7,7 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
+import numpy as np
 from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
@@ -103,6 +104,13 @@ def yaw_of(q: Any) -> float:
 def yaw_from(x: float, y: float, z: float, w: float) -> float:
     """Heading (rad) of the quaternion (x, y, z, w), rotation about z."""
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def yaws_from(quat: np.ndarray) -> np.ndarray:
+    """`yaw_from` of each row (x, y, z, w) of an n x 4 array, in one pass: the same bits in
+    kartci's pinned process, where numpy's arctan2 is libm's atan2."""
+    x, y, z, w = np.asarray(quat, float).reshape(-1, 4).T
+    return np.asarray(np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
 
 
 def stamp_ns(hdr: Any) -> int:

@@ -15,7 +15,6 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from kartci.core import Outline, Polygon
 from kartci.errors import SpecError
@@ -90,6 +89,8 @@ def _origin(el: ET.Element | None) -> tuple[Array, Array]:
         np.zeros(3))
     if xyz.shape != (3,) or rpy.shape != (3,):
         raise SpecError("URDF: an origin needs three numbers in xyz and rpy")
+    from scipy.spatial.transform import Rotation  # start-up: 0.3 s, for robots with a URDF
+
     return xyz, Rotation.from_euler("xyz", rpy).as_matrix()
 
 

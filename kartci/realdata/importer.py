@@ -230,13 +230,17 @@ def _tf_poses(log: Path, tree: TfTree, role: PoseRole, at: Poses | None) -> Pose
     return Poses(t_ns, t_ns, np.asarray(xyz, float), np.asarray(quat, float), None, (parent,))
 
 
-def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path) -> Imported:
+def import_log(log: Path, profile: Profile, types: dict[str, str], dst: Path,
+               reader: LogReader | None = None) -> Imported:
     """Write `dst` (a kartci run log) from `log` as the profile maps it; returns its scenario
-    and warnings. `types`: the message type of each role's topic (from `check_profile`)."""
+    and warnings. `types`: the message type of each role's topic (from `check_profile`);
+    `reader`: `log` already open (a damaged log is then not salvaged twice)."""
+    if reader is None:
+        with open_log(log) as opened:
+            return import_log(log, profile, types, dst, opened)
     ns = profile.agent
-    with open_log(log) as reader:
-        store = for_writing(reader.typestore)
-        got = _collect(log, reader, profile, types)
+    store = for_writing(reader.typestore)
+    got = _collect(log, reader, profile, types)
     poses = got.poses
     if not len(poses["pose"]):
         raise LogError(f"{log}: {profile.pose.topic} holds no readable pose")

@@ -15,7 +15,7 @@ from pydantic import Field, ValidationError, model_validator
 from kartci import project
 from kartci.core import Frozen
 from kartci.errors import SpecError
-from kartci.logs import TopicInfo, topics
+from kartci.logs import LogReader, TopicInfo, topics
 from kartci.logs.poses import POSE_TYPES
 from kartci.metrics.alignment import Alignment
 from kartci.realdata.tfchain import TF_TYPES
@@ -181,10 +181,12 @@ def auto_profile(log: Path, info: list[TopicInfo]) -> Profile:
                    commands=CommandRole(topic=cmds[0].topic) if len(cmds) == 1 else None)
 
 
-def check_profile(log: Path, profile: Profile) -> dict[str, TopicInfo]:
+def check_profile(log: Path, profile: Profile, known: list[TopicInfo] | None = None
+                  ) -> dict[str, TopicInfo]:
     """The log's topic for every role of the profile; a SpecError naming the first role whose
-    topic is missing, empty or of a type that role cannot use."""
-    info = {i.topic: i for i in topics(log)}
+    topic is missing, empty or of a type that role cannot use. `known`: the log's topics when
+    the caller has read them (the log is not opened again)."""
+    info = {i.topic: i for i in (topics(log) if known is None else known)}
     listed = ", ".join(f"{i.topic} ({i.msgtype}, {i.count})" for i in info.values()) or "none"
     out: dict[str, TopicInfo] = {}
     for name, (role, types) in profile.roles().items():
@@ -204,9 +206,11 @@ def check_profile(log: Path, profile: Profile) -> dict[str, TopicInfo]:
     return out
 
 
-def resolve_profile(log: Path, path: Path | None, allow_outside: bool = False
-                    ) -> tuple[Profile, dict[str, TopicInfo]]:
-    """The profile (from its file, else guessed from the log) and the log's topic per role."""
-    profile = (load_profile(path, allow_outside) if path is not None
-               else auto_profile(log, topics(log)))
-    return profile, check_profile(log, profile)
+def resolve_profile(log: Path, path: Path | None, allow_outside: bool = False,
+                    reader: LogReader | None = None) -> tuple[Profile, dict[str, TopicInfo]]:
+    """The profile (from its file, else guessed from the log) and the log's topic per role;
+    the log's topics are read once (from `reader` when the caller has the log open)."""
+    loaded = load_profile(path, allow_outside) if path is not None else None
+    known = reader.topics() if reader is not None else topics(log)
+    profile = loaded if loaded is not None else auto_profile(log, known)
+    return profile, check_profile(log, profile, known)

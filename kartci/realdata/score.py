@@ -9,6 +9,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from kartci import project
+from kartci.logs import open_log
 from kartci.metrics.alignment import Alignment
 from kartci.realdata.importer import import_log
 from kartci.realdata.profile import Profile, resolve_profile
@@ -26,15 +27,15 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
     paths too (only an HTML report draws them). Bad input (profile, missing topics, a
     profile's track outside the project without `allow_outside_paths`) raises before anything
     is written. The project is looked up once (every registry lookup would read its file)."""
-    with project.held():
-        profile, info = resolve_profile(log, profile_path, allow_outside_paths)
+    with project.held(), open_log(log) as reader:  # opened once: checked, then imported
+        profile, info = resolve_profile(log, profile_path, allow_outside_paths, reader)
         update = {k: v for k, v in (("align", align), ("align_first", align_first))
                   if v is not None}
         profile = Profile.model_validate({**profile.model_dump(), **update})
         types = {role: i.msgtype for role, i in info.items()}
         folder = out / profile.name
         write_result(folder, profile.name,
-                     lambda dst: import_log(log, profile, types, dst).warnings,
+                     lambda dst: import_log(log, profile, types, dst, reader).warnings,
                      {"imported_from": str(log.resolve()), "profile": profile.name})
         return evaluate(folder, baselines, with_plots)
 

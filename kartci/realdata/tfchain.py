@@ -10,12 +10,14 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
 from kartci.errors import LogError
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 TF_TYPES = ("tf2_msgs/msg/TFMessage", "tf/msg/tfMessage")
 
@@ -35,6 +37,8 @@ class _Edge:
 
     def at(self, t_ns: np.ndarray) -> tuple[np.ndarray, Rotation, np.ndarray]:
         """Translations (n x 3), rotations and a mask of the stamps inside the edge's span."""
+        from scipy.spatial.transform import Rotation, Slerp  # start-up: 0.3 s, TF sources only
+
         if self.static:
             n = len(t_ns)
             return (np.tile(self.xyz[-1], (n, 1)), Rotation.from_quat([self.quat[-1]] * n),
@@ -108,6 +112,8 @@ class TfTree:
 
     def _compose(self, edges: Iterable[tuple[str, str]], t_ns: np.ndarray
                  ) -> tuple[np.ndarray, Rotation, np.ndarray]:
+        from scipy.spatial.transform import Rotation  # start-up: 0.3 s, TF sources only
+
         pos = np.zeros((len(t_ns), 3))
         rot = Rotation.identity(len(t_ns))
         ok = np.ones(len(t_ns), bool)
