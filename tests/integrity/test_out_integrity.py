@@ -51,6 +51,13 @@ def _run_here(proj: Path, out: Path, baselines: Path, *names: str) -> None:
     write_all(results, out)
 
 
+def _sigint_as_a_terminal_has_it() -> None:
+    """In the child before exec: Ctrl-C's default action. A test run started in the background
+    of a shell script (`.ci/run &`) inherits SIGINT ignored, Python then keeps ignoring it, and
+    the run this test interrupts would finish (exit 0), as a backgrounded kartci rightly does."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupt_while(busy: Path, args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
     """Run the CLI in its own session and Ctrl-C it (SIGINT to its process group) as soon as a
     run is under way in the folder `busy` (its staging folder exists)."""
@@ -58,7 +65,7 @@ def _interrupt_while(busy: Path, args: list[str], cwd: Path) -> subprocess.Compl
            if k not in ("GITHUB_ACTIONS", "GITHUB_STEP_SUMMARY")}
     p = subprocess.Popen([sys.executable, "-m", "kartci.cli", *args], cwd=cwd, env=env,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         start_new_session=True)
+                         start_new_session=True, preexec_fn=_sigint_as_a_terminal_has_it)
     try:
         deadline = time.monotonic() + 120  # only a guard against a hang, never asserted
         while not any(busy.glob(".new-*")):
