@@ -22,7 +22,7 @@ import numpy as np
 from kartci.core import NODES, ROBOTS, AgentContext
 from kartci.errors import LogError, SpecError
 from kartci.logs import McapLogWriter, header, messages, msg, topics
-from kartci.logs.types import WORLD_FRAME
+from kartci.logs.types import WORLD_FRAME, yaw_from
 from kartci.realdata.profile import Profile
 from kartci.realdata.tfchain import TF_TYPES, TfTree
 
@@ -135,13 +135,11 @@ def lidar_mount(log: Path, profile: Profile, base: str, sensor: str) -> LidarMou
         except LogError:
             xyz = np.zeros((0, 3))
         if len(xyz):
-            x, y, z, w = quat[0]
-            yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-            return LidarMount(float(xyz[0, 0]), float(xyz[0, 1]), float(xyz[0, 2]), yaw,
-                              MountSource.TF_STATIC)
+            return LidarMount(float(xyz[0, 0]), float(xyz[0, 1]), float(xyz[0, 2]),
+                              yaw_from(*(float(v) for v in quat[0])), MountSource.TF_STATIC)
     given = profile.lidar.mount if profile.lidar is not None else None
     if given is not None:
-        return LidarMount(given.x_m, given.y_m, given.z_m, given.yaw_rad, MountSource.PROFILE)
+        return LidarMount(**given.model_dump(), source=MountSource.PROFILE)
     return LidarMount(0.0, 0.0, 0.0, 0.0, MountSource.ASSUMED)
 
 
