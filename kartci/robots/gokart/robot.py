@@ -74,6 +74,11 @@ class KartRobot(RobotBase):
         self.imu_every = every(1.0 / sensors.imu.rate_hz, dt_s)
         self.lidar_every = every(1.0 / sensors.lidar.rate_hz, dt_s)
         self.camera_every = every(1.0 / sensors.camera.rate_hz, dt_s)
+        # every step a sensor is due on is a multiple of this: the other steps return at once
+        self._due_every = math.gcd(ctx.odom_every, *(
+            n for n, on in ((self.imu_every, sensors.imu.enabled),
+                            (self.lidar_every, sensors.lidar.enabled),
+                            (self.camera_every, sensors.camera.enabled)) if on))
         self.lidar = lidar_mod.MODELS[sensors.lidar.model]
         self.azimuths = self.lidar.azimuths(sensors.lidar.rate_hz)
         self.blocks = world.blocks
@@ -112,6 +117,8 @@ class KartRobot(RobotBase):
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         """At the odometry rate: odometry, joint states, tf of the moving frames, floor friction and
         the speed loop; camera, IMU and lidar at their own rates."""
+        if k % self._due_every:
+            return
         odom = k % self.odom_every == 0
         camera = self.sensors.camera.enabled and k % self.camera_every == 0
         imu = self.sensors.imu.enabled and k % self.imu_every == 0
@@ -205,7 +212,8 @@ class KartRobot(RobotBase):
         rot = [[r[3 * i] * m[0][j] + r[3 * i + 1] * m[1][j] + r[3 * i + 2] * m[2][j]
                 for j in range(3)] for i in range(3)]
         acc_std, gyro_std = self._imu_std
-        na, ng = self.rng.standard_normal(3).tolist(), self.rng.standard_normal(3).tolist()
+        noise = self.rng.standard_normal(6).tolist()  # the same draws as two of three
+        na, ng = noise[:3], noise[3:]
         ab, gb = ((b.tolist() for b in self._bias.sample()) if self._bias.active
                   else (_ZERO3, _ZERO3))
         f = [(rot[0][i] * a0 + rot[1][i] * a1 + rot[2][i] * a2 + acc_std * na[i]) + ab[i]
