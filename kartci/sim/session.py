@@ -34,7 +34,7 @@ from kartci import core, portable
 from kartci.core import Agent, AgentContext
 from kartci.errors import KartciError, SpecError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, msg
-from kartci.project import did_you_mean
+from kartci.project import did_you_mean, held
 from kartci.scenario import Scenario
 from kartci.scenario.models import Carry
 from kartci.sim.messages import tf_message
@@ -342,9 +342,10 @@ class Session:
                               "make a new one")
         self._started = True
         try:
-            self._world = build_world(self.scenario, self.agents,
-                                      self.log_path.parent if self.log_path else None)
-            self._nodes = build_nodes(self.scenario)
+            with held():  # every registry lookup asks for the project: found once, not 3+
+                self._world = build_world(self.scenario, self.agents,
+                                          self.log_path.parent if self.log_path else None)
+                self._nodes = build_nodes(self.scenario)
             robots = self._world.robots
             self._carries = {r.name: c for r in robots
                              if (c := self.scenario.agents[r.name].carry) is not None}
