@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci.errors import LogError
-from kartci.logs import messages, topics
+from kartci.logs import TopicInfo, open_log
 from kartci.scenario.models import LogSource
 
 JOY = ("sensor_msgs/msg/Joy",)
@@ -27,23 +27,9 @@ class Recorded:
 
     def __init__(self, source: LogSource, types: tuple[str, ...]) -> None:
         path = resolve(source.log)
-        info = topics(path)
-        if source.topic is not None:
-            match = [i for i in info if i.topic == source.topic]
-            if not match:
-                known = ", ".join(f"{i.topic} ({i.msgtype})" for i in info) or "none"
-                raise LogError(f"{path}: no topic {source.topic} (topics: {known})")
-            if match[0].msgtype not in types:
-                raise LogError(f"{path}: {source.topic} is {match[0].msgtype}; expected one of "
-                               f"{', '.join(types)}")
-        else:
-            match = [i for i in info if i.msgtype in types and i.count > 0]
-            if len(match) != 1:
-                found = "none" if not match else ", ".join(i.topic for i in match)
-                raise LogError(f"{path}: needs exactly one topic of type {' or '.join(types)} "
-                               f"with messages (found: {found}); name one with a topic option")
-        self.topic, self.msgtype = match[0].topic, match[0].msgtype
-        stream = [(t, m) for _, t, m in messages(path, [self.topic])]
+        with open_log(path) as log:  # opened once: its topics, then the stream's messages
+            self.topic, self.msgtype = _pick(path, log.topics(), source, types)
+            stream = [(t, m) for _, t, m in log.messages([self.topic])]
         if not stream:
             raise LogError(f"{path}: topic {self.topic} has no messages")
         t0 = stream[0][0]
@@ -65,3 +51,23 @@ class Recorded:
     def index(self, t_ns: int) -> int:
         """Index of the latest message at or before sim time t (-1: none yet)."""
         return bisect.bisect_right(self.times, t_ns) - 1
+
+
+def _pick(path: Path, info: list[TopicInfo], source: LogSource, types: tuple[str, ...],
+          ) -> tuple[str, str]:
+    """The topic and type of the stream: the source's topic, or the one topic of `types`."""
+    if source.topic is not None:
+        match = [i for i in info if i.topic == source.topic]
+        if not match:
+            known = ", ".join(f"{i.topic} ({i.msgtype})" for i in info) or "none"
+            raise LogError(f"{path}: no topic {source.topic} (topics: {known})")
+        if match[0].msgtype not in types:
+            raise LogError(f"{path}: {source.topic} is {match[0].msgtype}; expected one of "
+                           f"{', '.join(types)}")
+    else:
+        match = [i for i in info if i.msgtype in types and i.count > 0]
+        if len(match) != 1:
+            found = "none" if not match else ", ".join(i.topic for i in match)
+            raise LogError(f"{path}: needs exactly one topic of type {' or '.join(types)} "
+                           f"with messages (found: {found}); name one with a topic option")
+    return match[0].topic, match[0].msgtype

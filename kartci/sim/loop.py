@@ -27,11 +27,8 @@ def simulate(scenario: Scenario, log_path: Path,
         agents: Agent objects by agent name, replacing those agents' controllers.
     """
     with Session(scenario, log_path, agents) as session:
-        r = session.reset()
-        while not r.done:
-            r = session.step()
-            if on_progress is not None:
-                on_progress(r.t_s)
+        session.reset()
+        session._run(on_progress)  # step() without a result a step: nothing here reads one
         return session.info()
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -37,10 +38,17 @@ def pose(xyz: Any, q: Any) -> Any:
 
 def transform(t_ns: int, parent: str, child: str, xyz: Any, q: Any) -> Any:
     """A geometry_msgs/TransformStamped of frame `child` in `parent` at `t_ns`."""
+    stamped, tr, vector3, quaternion = _transform_types()
+    return stamped(header(t_ns, parent), child, tr(vector3(xyz[0], xyz[1], xyz[2]),
+                                                   quaternion(q[0], q[1], q[2], q[3])))
+
+
+@functools.cache
+def _transform_types() -> tuple[Any, Any, Any, Any]:
+    """The classes a transform is made of, looked up once (a kart's odometry tick makes 7)."""
     types = typestore().types
-    tr = types["geometry_msgs/msg/Transform"](types[_VECTOR3](xyz[0], xyz[1], xyz[2]),
-                                              types[_QUATERNION](q[0], q[1], q[2], q[3]))
-    return types["geometry_msgs/msg/TransformStamped"](header(t_ns, parent), child, tr)
+    return (types["geometry_msgs/msg/TransformStamped"], types["geometry_msgs/msg/Transform"],
+            types[_VECTOR3], types[_QUATERNION])
 
 
 def quat_from_matrix(r: np.ndarray) -> tuple[float, float, float, float]:

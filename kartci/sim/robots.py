@@ -48,7 +48,7 @@ class RobotBase:
     def publish_pose(self, st: BodyState, t_ns: int, put: Put) -> None:
         """Odometry and base_link's tf at `t_ns`; a RunError once the state is not finite (the
         simulation blew up)."""
-        if not all(math.isfinite(v) for v in (*st.xyz, *st.v_body)):
+        if not all(map(math.isfinite, (*st.xyz, *st.v_body))):
             raise RunError(f"agent {self.name}: non-finite state at t={t_ns * 1e-9:.3f} s")
         put("odom", odometry(t_ns, self.name, st), t_ns)
         put("/tf", tf_message([transform(t_ns, WORLD_FRAME, f"{self.name}/base_link", st.xyz,

@@ -34,7 +34,7 @@ from kartci import core, portable
 from kartci.core import Agent, AgentContext
 from kartci.errors import KartciError, SpecError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, msg
-from kartci.project import did_you_mean
+from kartci.project import did_you_mean, held
 from kartci.scenario import Scenario
 from kartci.scenario.models import Carry
 from kartci.sim.messages import tf_message
@@ -311,6 +311,7 @@ class Session:
         self._log: McapLogWriter | None = None
         self._bus: Bus | None = None
         self._puts: list[Put] = []
+        self._lanes: list[tuple[Robot, Put, tuple[NodeRun, ...]]] = []  # each robot's round
         self._nodes: dict[str, list[NodeRun]] = {}
         self._carries: dict[str, Carry] = {}  # robots still to be carried, by name
         self._started = self._closed = self._failed = False
@@ -341,9 +342,10 @@ class Session:
                               "make a new one")
         self._started = True
         try:
-            self._world = build_world(self.scenario, self.agents,
-                                      self.log_path.parent if self.log_path else None)
-            self._nodes = build_nodes(self.scenario)
+            with held():  # every registry lookup asks for the project: found once, not 3+
+                self._world = build_world(self.scenario, self.agents,
+                                          self.log_path.parent if self.log_path else None)
+                self._nodes = build_nodes(self.scenario)
             robots = self._world.robots
             self._carries = {r.name: c for r in robots
                              if (c := self.scenario.agents[r.name].carry) is not None}
@@ -356,6 +358,8 @@ class Session:
                 self._log = McapLogWriter(self.log_path)
             bus = self._bus = Bus(self._log, robots, self._nodes)
             self._puts = [bus.putter(r.name) for r in robots]
+            self._lanes = [(r, put, tuple(self._nodes.get(r.name, ())))
+                           for r, put in zip(robots, self._puts, strict=True)]
             bus.taps = list(self.taps)
             bus.put(SCENARIO_TOPIC, msg("std_msgs/msg/String",
                                         data=self.scenario.model_dump_json()), 0, latched=True)
@@ -385,16 +389,37 @@ class Session:
             raise KartciError(f"Session.step: the run is over (at step {self.k}, "
                               f"t={self.t_ns * 1e-9:g} s)")
         try:
-            world, k = self.world, self.k
-            robots = world.robots
-            for r in robots:
-                r.pre_step(k)
-            world.step()
-            t_next = (k + 1) * self.dt_ns
-            for r, put in zip(robots, self._puts, strict=True):
-                r.post_step(t_next, put)
-            self.k += 1
+            self._advance()
             return self._tick()
+        except BaseException:
+            self._fail()
+            raise
+
+    def _advance(self) -> None:
+        """Actuators, one physics step, contacts; the step count moves on."""
+        world, k = self._world, self.k
+        assert world is not None  # step() checked that the run started
+        for r in world.robots:
+            r.pre_step(k)
+        world.step()
+        t_next = (k + 1) * self.dt_ns
+        for r, put, _ in self._lanes:
+            r.post_step(t_next, put)
+        self.k = k + 1
+
+    def _run(self, on_progress: Callable[[float], None] | None) -> None:
+        """`step()` until the run is over, for `simulate()`, which reads no step's result:
+        none is made and the messages are not kept. `on_progress` gets the sim time reached,
+        s, after every step."""
+        bus = self._bus
+        assert bus is not None  # reset() made it
+        try:
+            while not self.done:
+                self._advance()
+                self._sense_and_control()
+                bus.pending.clear()
+                if on_progress is not None:
+                    on_progress(self.k * self.dt_ns * 1e-9)
         except BaseException:
             self._fail()
             raise
@@ -414,12 +439,20 @@ class Session:
 
     def _tick(self) -> StepResult:
         """Sense and control at the current step; ends the run when it is over."""
-        k, robots = self.k, self.world.robots
+        self._sense_and_control()
+        assert self._bus is not None
+        return StepResult(self.k, self.k * self.dt_ns, self._bus.take(), self.done,
+                          self.finished_course)
+
+    def _sense_and_control(self) -> None:
+        """`_tick` without its result: `simulate()` steps on this, reading nothing back."""
+        k = self.k
         t_ns = k * self.dt_ns
-        for r, put in zip(robots, self._puts, strict=True):
-            self._carry(r, t_ns)
+        for r, put, nodes in self._lanes:
+            if self._carries:
+                self._carry(r, t_ns)
             r.sense(k, t_ns, put)
-            for node in self._nodes.get(r.name, ()):
+            for node in nodes:
                 if k % node.every == 0:
                     for topic, m in node.agent.step(t_ns):
                         put(topic, m, t_ns)
@@ -427,14 +460,19 @@ class Session:
                 for topic, m in r.agent.step(t_ns):
                     put(topic, m, t_ns)
                     r.apply(topic, m)
-        if all(r.done(k) for r in robots):
+        self._end_if_over(k)
+
+    def _end_if_over(self, k: int) -> None:
+        """The run is over when every robot has finished its course, or at the last step."""
+        for r, _, _ in self._lanes:
+            if not r.done(k):  # a robot still on its course: over when the time is up
+                if k == self.steps:
+                    self.done = True
+                break
+        else:
             self.finished_course = self.done = True
-        elif k == self.steps:
-            self.done = True
         if self.done:
             self._finish()
-        assert self._bus is not None
-        return StepResult(k, t_ns, self._bus.take(), self.done, self.finished_course)
 
     def _carry(self, r: Robot, t_ns: int) -> None:
         """Carry a robot whose `carry` time has come: its pose jumps, its speed and yaw rate are

@@ -114,20 +114,21 @@ class Gokart(Base):
         one force and one torque about the centre of mass: two calls into PyBullet, not five.
         Summed as Bullet sums what it is given (the force in order, each torque as (point -
         centre of mass) x force), so the body gets the same bits."""
-        com, r = rd.com, rd.rotation
+        (c0, c1, c2), (r0, r1, r2, r3, r4, r5, r6, r7, r8) = rd.com, rd.rotation
         dz = self._floor_dz
+        z0, z1, z2 = r2 * dz, r5 * dz, r8 * dz
         fx_w = fy_w = fz_w = tx = ty = tz = 0.0
         for (fx, fy, _), (dx, dy) in zip(self.tyre_forces, self._arms, strict=True):
-            px = com[0] + r[0] * dx + r[1] * dy + r[2] * dz - com[0]
-            py = com[1] + r[3] * dx + r[4] * dy + r[5] * dz - com[1]
-            pz = com[2] + r[6] * dx + r[7] * dy + r[8] * dz - com[2]
-            f0, f1, f2 = r[0] * fx + r[1] * fy, r[3] * fx + r[4] * fy, r[6] * fx + r[7] * fy
+            px = c0 + r0 * dx + r1 * dy + z0 - c0
+            py = c1 + r3 * dx + r4 * dy + z1 - c1
+            pz = c2 + r6 * dx + r7 * dy + z2 - c2
+            f0, f1, f2 = r0 * fx + r1 * fy, r3 * fx + r4 * fy, r6 * fx + r7 * fy
             fx_w, fy_w, fz_w = fx_w + f0, fy_w + f1, fz_w + f2
             tx, ty, tz = (tx + (py * f2 - pz * f1), ty + (pz * f0 - px * f2),
                           tz + (px * f1 - py * f0))
         c = self.client
-        pb.applyExternalForce(self.body, -1, (fx_w + r[0] * drag_n, fy_w + r[3] * drag_n,
-                                              fz_w + r[6] * drag_n), com, pb.WORLD_FRAME,
+        pb.applyExternalForce(self.body, -1, (fx_w + r0 * drag_n, fy_w + r3 * drag_n,
+                                              fz_w + r6 * drag_n), rd.com, pb.WORLD_FRAME,
                               physicsClientId=c)
         pb.applyExternalTorque(self.body, -1, (tx, ty, tz), pb.WORLD_FRAME, physicsClientId=c)
 

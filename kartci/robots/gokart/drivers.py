@@ -12,7 +12,7 @@ import numpy as np
 
 from kartci.core import AgentContext, ControllerParams, Outbox
 from kartci.logs.recorded import COMMANDS, JOY, Recorded
-from kartci.logs.types import base_link, header, msg, yaw_of
+from kartci.logs.types import base_link, header, typestore, yaw_of
 from kartci.robots.gokart import KartInput, axle_distance_m, column_for_wheel_angle, speed_to_pedals
 from kartci.robots.gokart.controllers import (
     CommandsController,
@@ -64,11 +64,11 @@ class ManualAgent:
             return [("cmd", kart_command(KartInput(), t_ns, self.frame))]
         joy = self.source.msgs[i]
         out: Outbox = []
+        joy_type = typestore().types["sensor_msgs/msg/Joy"]  # header, axes, buttons
         for j in range(self._last + 1, i + 1):  # every message since the last step, re-stamped
             m = self.source.msgs[j]
-            out.append(("joy", msg("sensor_msgs/msg/Joy",
-                                   header=header(self.source.times[j], m.header.frame_id),
-                                   axes=m.axes, buttons=m.buttons)))
+            out.append(("joy", joy_type(header(self.source.times[j], m.header.frame_id), m.axes,
+                                        m.buttons)))
         self._last = i
         return [*out, ("cmd", kart_command(to_command(self.mapping, self.model, joy), t_ns,
                                            self.frame))]

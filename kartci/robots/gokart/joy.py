@@ -16,7 +16,7 @@ from kartci import project
 from kartci.core import JoyCommand, RobotParams
 from kartci.errors import SpecError
 from kartci.logs import messages
-from kartci.logs.types import header, msg, stamp_ns
+from kartci.logs.types import header, msg, stamp_ns, typestore
 from kartci.project import did_you_mean
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput
@@ -175,6 +175,6 @@ def joystick(model: RobotParams, mapping: str) -> JoyCommand:
 
 def kart_command(cmd: KartInput, t_ns: int, frame: str) -> Any:
     """A command as the seed's kartci_msgs/KartCommand, stamped `t_ns` in `frame`."""
-    return msg("kartci_msgs/msg/KartCommand", header=header(t_ns, frame),
-               steering_wheel_angle_rad=cmd.steering_rad, acceleration_mps2=cmd.accel_mps2,
-               brake_mps2=cmd.brake_mps2, reverse=cmd.reverse, emergency_stop=cmd.estop)
+    return typestore().types["kartci_msgs/msg/KartCommand"](  # fields in the .msg's order
+        header(t_ns, frame), cmd.steering_rad, cmd.accel_mps2, cmd.brake_mps2, cmd.reverse,
+        cmd.estop)

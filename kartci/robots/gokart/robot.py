@@ -74,12 +74,21 @@ class KartRobot(RobotBase):
         self.imu_every = every(1.0 / sensors.imu.rate_hz, dt_s)
         self.lidar_every = every(1.0 / sensors.lidar.rate_hz, dt_s)
         self.camera_every = every(1.0 / sensors.camera.rate_hz, dt_s)
+        # every step a sensor is due on is a multiple of this: the other steps return at once
+        self._due_every = math.gcd(ctx.odom_every, *(
+            n for n, on in ((self.imu_every, sensors.imu.enabled),
+                            (self.lidar_every, sensors.lidar.enabled),
+                            (self.camera_every, sensors.camera.enabled)) if on))
         self.lidar = lidar_mod.MODELS[sensors.lidar.model]
         self.azimuths = self.lidar.azimuths(sensors.lidar.rate_hz)
         self.blocks = world.blocks
         self._imu_prev: tuple[float, ...] | None = None  # the IMU point's last velocity, m/s
         rel, rel_rot = self.frames["imu_link"]
         self._imu_mount = (_t3(rel), rel_rot.tolist())  # position (m) and rotation in base_link
+        self._imu_frame = f"{name}/imu_link"
+        types = typestore().types
+        self._imu_types = (types["sensor_msgs/msg/Imu"], types["geometry_msgs/msg/Vector3"],
+                           types["geometry_msgs/msg/Quaternion"])
         acc_std, gyro_std = _imu_noise(model, sensors)
         self._imu_std = acc_std, gyro_std
         self._imu_cov = (frozen(np.diag([acc_std**2] * 3).ravel()),
@@ -112,6 +121,8 @@ class KartRobot(RobotBase):
     def sense(self, k: int, t_ns: int, put: Put) -> None:
         """At the odometry rate: odometry, joint states, tf of the moving frames, floor friction and
         the speed loop; camera, IMU and lidar at their own rates."""
+        if k % self._due_every:
+            return
         odom = k % self.odom_every == 0
         camera = self.sensors.camera.enabled and k % self.camera_every == 0
         imu = self.sensors.imu.enabled and k % self.imu_every == 0
@@ -150,11 +161,12 @@ class KartRobot(RobotBase):
 
     def _joint_tf(self, t_ns: int, steer: list[float], spin: list[float]) -> list[Any]:
         """tf of the moving frames: steer links (about z) and wheel links (about y)."""
-        (left, right, *_), out = self._moving_frames, []
-        for (parent, child, xyz), angle in ((left, steer[0]), (right, steer[1])):
-            out.append(transform(t_ns, parent, child, xyz, _axis_quat(2, angle)))
-        for (parent, child, xyz), angle in zip(self._moving_frames[2:], spin, strict=True):
-            out.append(transform(t_ns, parent, child, xyz, _axis_quat(1, angle)))
+        cos, sin, out = math.cos, math.sin, []
+        for i, ((parent, child, xyz), angle) in enumerate(
+                zip(self._moving_frames, (*steer, *spin), strict=True)):
+            c, s = cos(angle / 2), sin(angle / 2)
+            out.append(transform(t_ns, parent, child, xyz,
+                                 (0.0, 0.0, s, c) if i < 2 else (0.0, s, 0.0, c)))
         return out
 
     def _camera(self, st: BodyState, t_ns: int, put: Put) -> None:
@@ -180,19 +192,19 @@ class KartRobot(RobotBase):
         """Specific force (gravity included) and angular rate in imu_link, from the finite
         difference of the IMU point's velocity over one IMU period. Scalar arithmetic on the
         odometry's state (numpy's 3x3 products summed in the same order: the same bits)."""
-        r = pb.getMatrixFromQuaternion(st.quat)  # row-major body-to-world
+        r0, r1, r2, r3, r4, r5, r6, r7, r8 = pb.getMatrixFromQuaternion(st.quat)  # row-major
         (x0, x1, x2), m = self._imu_mount
         wb0, wb1, wb2 = st.w_body
         vb0, vb1, vb2 = st.v_body
-        w0 = r[0] * wb0 + r[1] * wb1 + r[2] * wb2  # angular rate in the world
-        w1 = r[3] * wb0 + r[4] * wb1 + r[5] * wb2
-        w2 = r[6] * wb0 + r[7] * wb1 + r[8] * wb2
-        p0 = r[0] * x0 + r[1] * x1 + r[2] * x2  # the IMU's lever arm in the world
-        p1 = r[3] * x0 + r[4] * x1 + r[5] * x2
-        p2 = r[6] * x0 + r[7] * x1 + r[8] * x2
-        v = (r[0] * vb0 + r[1] * vb1 + r[2] * vb2 + (w1 * p2 - w2 * p1),
-             r[3] * vb0 + r[4] * vb1 + r[5] * vb2 + (w2 * p0 - w0 * p2),
-             r[6] * vb0 + r[7] * vb1 + r[8] * vb2 + (w0 * p1 - w1 * p0))
+        w0 = r0 * wb0 + r1 * wb1 + r2 * wb2  # angular rate in the world
+        w1 = r3 * wb0 + r4 * wb1 + r5 * wb2
+        w2 = r6 * wb0 + r7 * wb1 + r8 * wb2
+        p0 = r0 * x0 + r1 * x1 + r2 * x2  # the IMU's lever arm in the world
+        p1 = r3 * x0 + r4 * x1 + r5 * x2
+        p2 = r6 * x0 + r7 * x1 + r8 * x2
+        v = (r0 * vb0 + r1 * vb1 + r2 * vb2 + (w1 * p2 - w2 * p1),
+             r3 * vb0 + r4 * vb1 + r5 * vb2 + (w2 * p0 - w0 * p2),
+             r6 * vb0 + r7 * vb1 + r8 * vb2 + (w0 * p1 - w1 * p0))
         prev, self._imu_prev = self._imu_prev, v
         period = self.imu_every * self.dt
         a0 = a1 = a2 = 0.0
@@ -200,28 +212,23 @@ class KartRobot(RobotBase):
             a0, a1, a2 = ((v[0] - prev[0]) / period, (v[1] - prev[1]) / period,
                           (v[2] - prev[2]) / period)
         a0, a1, a2 = a0 + 0.0, a1 + 0.0, a2 + 9.81  # plus gravity
-        # imu_link's rotation in the world (rot), then both vectors in imu_link, plus white
-        # noise and bias: numpy's element-wise sums of before, in floats (the same bits)
-        rot = [[r[3 * i] * m[0][j] + r[3 * i + 1] * m[1][j] + r[3 * i + 2] * m[2][j]
-                for j in range(3)] for i in range(3)]
         acc_std, gyro_std = self._imu_std
-        na, ng = self.rng.standard_normal(3).tolist(), self.rng.standard_normal(3).tolist()
+        n = self.rng.standard_normal(6).tolist()  # white noise: the same draws as two of three
         ab, gb = ((b.tolist() for b in self._bias.sample()) if self._bias.active
                   else (_ZERO3, _ZERO3))
-        f = [(rot[0][i] * a0 + rot[1][i] * a1 + rot[2][i] * a2 + acc_std * na[i]) + ab[i]
-             for i in range(3)]
-        g = [(rot[0][i] * w0 + rot[1][i] * w1 + rot[2][i] * w2 + gyro_std * ng[i]) + gb[i]
-             for i in range(3)]
+        # both vectors in imu_link, plus noise and bias: column j of imu_link's rotation in the
+        # world is (c0, c1, c2); numpy's element-wise sums of before, in floats (the same bits)
+        f, g = [], []
+        for j, (m0, m1, m2) in enumerate(zip(*m, strict=True)):  # m's columns
+            c0, c1, c2 = r0 * m0 + r1 * m1 + r2 * m2, r3 * m0 + r4 * m1 + r5 * m2, (
+                r6 * m0 + r7 * m1 + r8 * m2)
+            f.append((c0 * a0 + c1 * a1 + c2 * a2 + acc_std * n[j]) + ab[j])
+            g.append((c0 * w0 + c1 * w1 + c2 * w2 + gyro_std * n[3 + j]) + gb[j])
         cov_a, cov_g = self._imu_cov
-        types = typestore().types
-        vector3 = types["geometry_msgs/msg/Vector3"]
-        put("imu", types["sensor_msgs/msg/Imu"](
-            header=header(t_ns, f"{self.name}/imu_link"),
-            orientation=types["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
-            orientation_covariance=NO_ORIENTATION,
-            angular_velocity=vector3(g[0], g[1], g[2]), angular_velocity_covariance=cov_g,
-            linear_acceleration=vector3(f[0], f[1], f[2]),
-            linear_acceleration_covariance=cov_a), t_ns)
+        imu, vector3, quaternion = self._imu_types
+        put("imu", imu(header(t_ns, self._imu_frame), quaternion(0.0, 0.0, 0.0, 1.0),
+                       NO_ORIENTATION, vector3(g[0], g[1], g[2]), cov_g,
+                       vector3(f[0], f[1], f[2]), cov_a), t_ns)
 
     def _lidar(self, st: BodyState, t_ns: int, put: Put) -> None:
         pos, _ = self.body.frame_pose("velodyne_link", st)
@@ -383,12 +390,6 @@ def _moving_frames(ns: str, model: GokartModel) -> list[Frame]:
 
 def _t3(v: np.ndarray) -> tuple[float, float, float]:
     return float(v[0]), float(v[1]), float(v[2])
-
-
-def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
-    q = [0.0, 0.0, 0.0, math.cos(angle / 2)]
-    q[axis] = math.sin(angle / 2)
-    return q[0], q[1], q[2], q[3]
 
 
 _ZERO3 = (0.0, 0.0, 0.0)  # no IMU bias

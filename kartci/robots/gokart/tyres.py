@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from kartci.robots.gokart.params import (
     GRAVITY_MPS2,
@@ -88,10 +89,9 @@ def normal_loads(model: GokartModel, tyres: list[Wheel], ax_mps2: float, ay_mps2
     return out
 
 
-@dataclass(frozen=True)
-class Demand:
+class Demand(NamedTuple):
     """What the driver asks of the wheels: drive acceleration (m/s^2, signed: negative in
-    reverse) and brake deceleration (m/s^2)."""
+    reverse) and brake deceleration (m/s^2). A NamedTuple: one is made every physics step."""
 
     drive_mps2: float
     brake_mps2: float
@@ -174,12 +174,13 @@ class FourTyres:
 
     def __init__(self, model: GokartModel, com_offset_m: tuple[float, float, float]) -> None:
         """Work out the per-wheel constants."""
-        self.model = model
         self.mass = model.mass_kg
         self.per_g = model.mass_kg * model.cog_height_m / GRAVITY_MPS2
         self.axle_m = axle_distance_m(model)
         self.rolling = rolling_decel_mps2(model)
         self.drag_k = -0.5 * model.air_density_kgpm3 * model.drag_area_m2
+        self.grip_slip_power = (model.long_grip_ratio, model.long_slip_stiffness,
+                                model.motor_power_w)
         ox, oy, _ = com_offset_m
         self.wheels = tuple(
             (2 * w.static_kg, w.driven, w.y_m, 2 * abs(w.y_m), w.x_m - ox, w.y_m - oy,
@@ -196,8 +197,8 @@ class FourTyres:
         for the front wheels at `steer_rad` and the centre of mass moving at (vx, vy) in the
         body frame and turning at `yaw_rate_radps`, after a step whose forces accelerated the
         body by `accel_mps2`."""
-        m, mass, per_g = self.model, self.mass, self.per_g
-        ratio, k_slip, power = m.long_grip_ratio, m.long_slip_stiffness, m.motor_power_w
+        mass, per_g = self.mass, self.per_g
+        ratio, k_slip, power = self.grip_slip_power
         ax, ay = accel_mps2
         to_rear = per_g * ax / self.axle_m
         brake = demand.brake_mps2 + self.rolling
