@@ -20,8 +20,9 @@ from typing import Any
 import numpy as np
 from rosbags.typesys.store import Typestore
 
+from kartci.logs.bulk import standard
 from kartci.logs.reader import Raw
-from kartci.logs.types import stamp_ns, typestore, yaws_from
+from kartci.logs.types import stamp_ns, yaws_from
 
 ODOMETRY = "nav_msgs/msg/Odometry"
 LAID_OUT = (ODOMETRY, "geometry_msgs/msg/PoseStamped",
@@ -93,13 +94,7 @@ def same_definitions(store: Typestore, msgtype: str) -> bool:
     """Whether `msgtype` is decoded in bulk: one of LAID_OUT, which `store` defines as kartci's
     standard store does (else the bytes are decoded by the log's own definition, one by
     one)."""
-    if msgtype not in LAID_OUT:
-        return False
-    try:
-        return bool(store.generate_msgdef(msgtype, ros_version=2)
-                    == typestore().generate_msgdef(msgtype, ros_version=2))
-    except Exception:  # a broken or missing definition fails in many ways
-        return False
+    return msgtype in LAID_OUT and standard(store, msgtype)
 
 
 def decode_poses(raws: Sequence[Raw], standard: bool, decode: Callable[[Raw], Any]) -> Poses:

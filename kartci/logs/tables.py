@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import stat
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Sequence
@@ -12,16 +13,25 @@ import numpy as np
 import pandas as pd
 
 from kartci.errors import LogError
-from kartci.logs.reader import open_log
+from kartci.logs.bulk import bulk_table, standard
+from kartci.logs.reader import LogReader, Raw, open_log
 from kartci.logs.types import stamp_ns, yaw_of, yaws_from
 
 Row = dict[str, Any]
 
 
+def _yaw(q: Any) -> Any:
+    """yaw_of, also of columns (kartci.logs.bulk): libm's atan2 on numpy's same arithmetic."""
+    if not isinstance(q.x, np.ndarray):
+        return yaw_of(q)
+    num, den = 2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)
+    return np.fromiter(map(math.atan2, num.tolist(), den.tolist()), np.float64, len(num))
+
+
 def _odometry(m: Any) -> Row:
     p, q = m.pose.pose.position, m.pose.pose.orientation
     tw = m.twist.twist
-    return {"x": p.x, "y": p.y, "z": p.z, "yaw": yaw_of(q), "qx": q.x, "qy": q.y, "qz": q.z,
+    return {"x": p.x, "y": p.y, "z": p.z, "yaw": _yaw(q), "qx": q.x, "qy": q.y, "qz": q.z,
             "qw": q.w, "vx": tw.linear.x, "vy": tw.linear.y, "wz": tw.angular.z}
 
 
@@ -33,6 +43,16 @@ def _joint_state(m: Any) -> Row:
         if i < len(m.position):
             row[f"{name}.position"] = m.position[i]
     return row
+
+
+def _listed(values: list[Any]) -> Any:
+    """`values`; of columns (kartci.logs.bulk), one list of Python floats per row."""
+    if not values or not isinstance(values[0], np.ndarray):
+        return values
+    out = np.empty(len(values[0]), object)
+    for i, row in enumerate(np.stack(values, axis=1).tolist()):
+        out[i] = row
+    return out
 
 
 def _fields(*names: str) -> Callable[[Any], Row]:
@@ -57,14 +77,17 @@ FLATTENERS: dict[str, Callable[[Any], Row]] = {
     "kartci_msgs/msg/SolverStats": _fields("success", "status", "solve_ms", "iterations",
                                            "cost", "failures", "max_slack_m"),
     "kartci_msgs/msg/TyreForces": lambda m: {
-        f"{w}.{k}": float(getattr(m, k)[i]) for i, w in enumerate(m.wheel)
+        f"{w}.{k}": getattr(m, k)[i] for i, w in enumerate(m.wheel)
         for k in ("fx_n", "fy_n", "grip_n")},
-    "nav_msgs/msg/Path": lambda m: {"xs": [p.pose.position.x for p in m.poses],
-                                    "ys": [p.pose.position.y for p in m.poses]},
+    "nav_msgs/msg/Path": lambda m: {"xs": _listed([p.pose.position.x for p in m.poses]),
+                                    "ys": _listed([p.pose.position.y for p in m.poses])},
     "sensor_msgs/msg/Imu": lambda m: {"ax": m.linear_acceleration.x,
                                       "ay": m.linear_acceleration.y,
                                       "az": m.linear_acceleration.z, "wz": m.angular_velocity.z},
 }
+# decoded in bulk (kartci.logs.bulk); the others are few, or strings that change from message
+# to message
+BULK = frozenset(FLATTENERS) - {"sensor_msgs/msg/Joy", "std_msgs/msg/String"}
 
 
 def _row(path: Path, topic: str, t_ns: int, m: Any, flat: Callable[[Any], Row]) -> Row:
@@ -117,10 +140,63 @@ def _identity(path: Path) -> _File | None:
 
 
 def _read(path: Path, wanted: Sequence[str] | None) -> dict[str, pd.DataFrame]:
+    """tables_of(log.messages(wanted)), with the topics of BULK types that the log defines as
+    kartci does held back and decoded in bulk (message by message where that fails)."""
     with open_log(path) as log:
         if wanted is None:
             wanted = [t.topic for t in log.topics() if t.msgtype in FLATTENERS]
-        return tables_of(path, log.messages(wanted))
+        rows: dict[str, list[Row]] = defaultdict(list)
+        first: dict[str, int] = {}  # a topic's first row: the tables' order
+        held: dict[str, list[tuple[int, Raw]]] = defaultdict(list)
+        bulk: dict[str, bool] = {}
+        for k, raw in enumerate(log.raw(wanted)):
+            msgtype = raw[1]
+            if msgtype in BULK and msgtype not in bulk:
+                bulk[msgtype] = standard(log.typestore, msgtype)
+            if not raw[2] and bulk.get(msgtype, False):
+                held[raw[0]].append((k, raw))
+                continue
+            m = log.decode(raw)
+            flat = None if m is None else FLATTENERS.get(m.__msgtype__)
+            if flat is not None:
+                first.setdefault(raw[0], k)
+                rows[raw[0]].append(_row(path, raw[0], raw[3], m, flat))
+        read = {topic: pd.DataFrame(r) for topic, r in rows.items()}
+        for topic, raws in held.items():
+            table, k = _held(path, log, raws)
+            if table is not None:
+                read[topic], first[topic] = table, k
+        log.report_undecodable()
+    return {topic: read[topic] for topic in sorted(read, key=first.__getitem__)}
+
+
+def _held(path: Path, log: LogReader, held: list[tuple[int, Raw]]
+          ) -> tuple[pd.DataFrame | None, int]:
+    """One held topic's table (None: none of its messages decodes) and its first row's index
+    in the log."""
+    topic, msgtype = held[0][1][0], held[0][1][1]
+    flat = FLATTENERS[msgtype]
+    decoded: dict[int, Any] = {}
+
+    def message(i: int) -> Any:
+        if i not in decoded:
+            decoded[i] = log.decode(held[i][1])
+        return decoded[i]
+
+    def reference(i: int) -> tuple[Any, Row] | None:
+        m = message(i)
+        return None if m is None else (m, _row(path, topic, held[i][1][3], m, flat))
+
+    t_log = np.array([raw[3] for _, raw in held], np.int64)
+    table = bulk_table(log.typestore, msgtype, [raw[4] for _, raw in held], t_log, reference,
+                       flat)
+    if table is not None:
+        return table, held[0][0]
+    found = [(k, raw, m) for i, (k, raw) in enumerate(held) if (m := message(i)) is not None]
+    if not found:
+        return None, 0
+    return (pd.DataFrame([_row(path, topic, raw[3], m, flat) for _, raw, m in found]),
+            found[0][0])
 
 
 def tables_of(path: Path, messages: Iterable[tuple[str, int, Any]]) -> dict[str, pd.DataFrame]:
