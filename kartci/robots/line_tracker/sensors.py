@@ -67,13 +67,13 @@ class LineCamera:
         rays = self._u * rot[:, :, 1, None]
         rays += self._v * rot[:, :, 2, None]
         rays += rot[:, :, 0, None]
-        along = pos[:, 2, None] / rays[:, 2]  # where each ray meets the floor
+        reach = pos[:, 2, None] / rays[:, 2]  # how far down each ray the floor is
         pixel = 0.0
         for z in pos[:, 2].tolist():
             pixel = max(pixel, 2.0 * z * self._tan_half / GEOMETRIC_GRID_PX)
         ink = geometry.ink_coverage(self.world.course, self.world.line_width_m,
-                                    pos[:, 0, None] - along * rays[:, 0],
-                                    pos[:, 1, None] - along * rays[:, 1], pixel)
+                                    pos[:, 0, None] - reach * rays[:, 0],
+                                    pos[:, 1, None] - reach * rays[:, 1], pixel)
         means = np.add.reduce(ink, axis=1) / ink.shape[1]  # ndarray.mean's sums, less wrapper
         return [self.world.light_level * (1.0 - m) for m in means.tolist()]
 
