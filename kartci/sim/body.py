@@ -19,6 +19,12 @@ def _t3(v: np.ndarray) -> tuple[float, float, float]:
     return float(v[0]), float(v[1]), float(v[2])
 
 
+def flat_frames(frames: Frames) -> dict[str, tuple[tuple[float, float, float],
+                                                    tuple[float, ...]]]:
+    """Each frame's position and row-major rotation as plain floats (for `Base.frame_pose`)."""
+    return {name: (_t3(pos), tuple(rot.ravel().tolist())) for name, (pos, rot) in frames.items()}
+
+
 def rotation(quat: tuple[float, float, float, float]) -> np.ndarray:
     """The 3x3 rotation matrix of a quaternion (x, y, z, w)."""
     return np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
@@ -65,6 +71,7 @@ class Base:
 
     def __init__(self, client: int, body: int, frames: Frames) -> None:
         self.client, self.body, self.frames = client, body, frames
+        self._flat_frames = flat_frames(frames)
         self._com_offset = np.asarray(pb.getDynamicsInfo(body, -1, physicsClientId=client)[3])
         self._com_off = _t3(self._com_offset)
 
@@ -105,11 +112,22 @@ class Base:
 
     def frame_pose(self, name: str, state: BodyState | None = None) -> tuple[np.ndarray,
                                                                                 np.ndarray]:
-        """World position and 3x3 rotation of a fixed frame of the URDF (e.g. a sensor mount)."""
+        """World position and 3x3 rotation of a fixed frame of the URDF (e.g. a sensor mount).
+        Scalar arithmetic, summed as numpy's 3x3 products sum (from +0.0, so a sum of -0.0
+        terms is +0.0 as there): the same bits, where two BLAS calls cost several µs after a
+        physics step has cooled the caches."""
         st = state or self.state()
-        rot = st.rotation
-        rel_pos, rel_rot = self.frames[name]
-        return np.asarray(st.xyz) + rot @ rel_pos, rot @ rel_rot
+        a0, a1, a2, b0, b1, b2, c0, c1, c2 = pb.getMatrixFromQuaternion(st.quat)
+        (p0, p1, p2), (m0, m1, m2, m3, m4, m5, m6, m7, m8) = self._flat_frames[name]
+        x, y, z = st.xyz
+        return (np.array((x + (0.0 + a0 * p0 + a1 * p1 + a2 * p2),
+                          y + (0.0 + b0 * p0 + b1 * p1 + b2 * p2),
+                          z + (0.0 + c0 * p0 + c1 * p1 + c2 * p2))),
+                np.array((0.0 + a0 * m0 + a1 * m3 + a2 * m6, 0.0 + a0 * m1 + a1 * m4 + a2 * m7,
+                          0.0 + a0 * m2 + a1 * m5 + a2 * m8, 0.0 + b0 * m0 + b1 * m3 + b2 * m6,
+                          0.0 + b0 * m1 + b1 * m4 + b2 * m7, 0.0 + b0 * m2 + b1 * m5 + b2 * m8,
+                          0.0 + c0 * m0 + c1 * m3 + c2 * m6, 0.0 + c0 * m1 + c1 * m4 + c2 * m7,
+                          0.0 + c0 * m2 + c1 * m5 + c2 * m8)).reshape(3, 3))
 
     def place(self, x_m: float, y_m: float, yaw_rad: float, v_mps: float,
               yaw_rate_radps: float) -> None:

@@ -5,8 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from kartci import geometry
+from kartci._bullet import pb
 from kartci.robots.line_tracker.characterise import Sweep, sweep
-from kartci.scenario import load_scenario
+from kartci.robots.line_tracker.params import LineSensorSpec
+from kartci.robots.line_tracker.sensors import GEOMETRIC_GRID_PX, LineCamera
+from kartci.scenario import CircleCourse, StraightCourse, load_scenario
+from kartci.scenario.models import LineLabWorld
 
 OFFSETS = np.round(np.arange(-0.025, 0.02501, 0.0005), 6)
 
@@ -61,3 +66,70 @@ def test_wider_field_of_view_flattens_the_response() -> None:
     slopes = [sweep(spec, "lt0", OFFSETS, fov_rad=f).fit()[0] for f in (0.75, 1.2, 1.4, 2.0)]
     assert slopes[0] > slopes[1] > slopes[2] > slopes[3]
     assert abs(slopes[3]) < 1.0  # the dead zone beyond 2 atan(12 / 14.5) = 1.38 rad (Eq. 5.2)
+
+
+def _luminances_before(cam: LineCamera, poses: list[tuple[np.ndarray, np.ndarray]]
+                       ) -> list[float]:
+    """The geometric camera as it was computed before its in-place rewrite (one numpy
+    expression per step, `rel @ u` for a straight line's progress, np.clip, ndarray.mean)."""
+    pos, rot = np.array([p for p, _ in poses]), np.array([r for _, r in poses])
+    t = np.tan(cam.spec.fov_rad / 2)
+    u = (np.arange(GEOMETRIC_GRID_PX) + 0.5) / GEOMETRIC_GRID_PX * 2.0 - 1.0
+    uu, vv = np.meshgrid(u, u)
+    uv = np.stack([uu.ravel(), vv.ravel()], axis=1) * t
+    dirs = uv[:, :1] * rot[:, None, :, 1] + uv[:, 1:] * rot[:, None, :, 2] + rot[:, None, :, 0]
+    xy = (pos[:, None, :2] - (pos[:, None, 2:] / dirs[:, :, 2:]) * dirs[:, :, :2]).reshape(-1, 2)
+    pixel = max(2.0 * z * t / GEOMETRIC_GRID_PX for z in pos[:, 2].tolist())
+    means = _ink_before(cam.world, xy, pixel).reshape(len(poses), -1).mean(axis=1)
+    return [float(cam.world.light_level * (1.0 - m)) for m in means]
+
+
+def _ink_before(world: LineLabWorld, xy: np.ndarray, pixel: float) -> np.ndarray:
+    """geometry.ink_coverage before its in-place rewrite."""
+    course, half = world.course, world.line_width_m / 2.0
+    if isinstance(course, StraightCourse):
+        d = np.subtract(course.end_m, course.start_m)
+        u = d / np.linalg.norm(d)
+        rel = xy - np.asarray(course.start_m)
+        along = rel @ u
+        off = rel[..., 1] * u[0] - rel[..., 0] * u[1]
+    else:
+        rel = xy - np.asarray(course.center_m)
+        off = course.radius_m - np.hypot(rel[..., 0], rel[..., 1])
+    ink = np.clip((half - np.abs(off)) / pixel + 0.5, 0.0, 1.0)
+    if isinstance(course, StraightCourse):
+        total = geometry.length_m(course)
+        ink = ink * np.clip(along / pixel + 0.5, 0, 1)
+        ink = ink * np.clip((total - along) / pixel + 0.5, 0, 1)
+    out: np.ndarray = ink
+    return out
+
+
+@pytest.mark.parametrize("course", [
+    StraightCourse(), StraightCourse(start_m=(0.1, 0.2), end_m=(1.3, 2.9)),
+    CircleCourse(center_m=(0.3, -0.2), radius_m=0.362)], ids=["straight", "diagonal", "circle"])
+def test_geometric_camera_gives_the_bits_it_gave_before(course: StraightCourse | CircleCourse
+                                                        ) -> None:
+    """Random camera poses over the line, its ends included, most looking down, some tilted
+    up to the horizon and beyond: the same floats as the computation it replaced."""
+    world = LineLabWorld(course=course)
+    cam = LineCamera(0, LineSensorSpec(), world)
+    rng = np.random.default_rng(7)
+    length = geometry.length_m(course)
+    for k in range(300):
+        along = rng.uniform(-0.02, 0.02) + (length if k % 3 == 1 else 0.0)
+        if k % 3 == 2:
+            along = rng.uniform(0.0, length)
+        poses = []
+        for _ in range(1 + k % 2):
+            x, y, h = geometry.pose_at(course, along, rng.uniform(-0.03, 0.03))
+            tilt = rng.normal(0.0, 0.1 if k % 10 else 1.5)
+            quat = pb.getQuaternionFromEuler((rng.normal(0.0, 0.1), np.pi / 2 + tilt, h))
+            rot = np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
+            poses.append((np.array([x, y, rng.uniform(0.005, 0.03)]), rot))
+        new, old = cam.luminances(poses), _luminances_before(cam, poses)
+        assert np.array_equal(new, old, equal_nan=True), (k, new, old)
+        xy = np.array(poses[0][0][:2]) + rng.normal(0.0, 0.01, (256, 2))
+        pixel = rng.uniform(0.0005, 0.003)
+        new_ink = geometry.ink_coverage(course, world.line_width_m, xy[:, 0], xy[:, 1], pixel)
+        assert np.array_equal(new_ink, _ink_before(world, xy, pixel), equal_nan=True), k

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from kartci._bullet import pb
-from kartci.sim.body import Base, BodyState, Reading
+from kartci.sim.body import Base, BodyState, Reading, flat_frames
 
 
 def _numpy_state(rd: Reading, offset: np.ndarray) -> BodyState:
@@ -36,3 +36,25 @@ def test_state_of_a_reading_equals_numpys_products() -> None:
                      tuple(rng.normal(scale=5.0, size=3).tolist()),
                      tuple(rng.normal(size=3).tolist()), pb.getMatrixFromQuaternion(quat))
         assert base.state_of(rd) == _numpy_state(rd, offset)
+
+
+def test_frame_pose_equals_numpys_products() -> None:
+    """A fixed frame's world pose, in scalars: the bits of the numpy products it replaced."""
+    rng = np.random.default_rng(12)
+    for k in range(2000):
+        q = rng.normal(size=4)
+        st = BodyState(tuple(rng.normal(scale=10.0, size=3).tolist()),
+                       tuple((q / np.linalg.norm(q)).tolist()), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        qf = rng.normal(size=4)
+        rel_pos = rng.normal(scale=0.3, size=3)
+        rel_rot = np.array(pb.getMatrixFromQuaternion(qf / np.linalg.norm(qf))).reshape(3, 3)
+        if k % 4 == 0:  # URDF mounts: exact (signed) zeros, and poses with exact zeros
+            rel_pos, rel_rot = np.array([0.1, -0.0, 0.0]), np.array([[0.0, -0.0, 1.0],
+                                                                    [-1.0, 0.0, -0.0],
+                                                                    [-0.0, -1.0, 0.0]])
+            st = BodyState(st.xyz, (0.0, 0.0, -0.0, 1.0), st.v_body, st.w_body)
+        base = Base.__new__(Base)  # no body: frame_pose of a given state needs the frames only
+        base._flat_frames = flat_frames({"mount": (rel_pos, rel_rot)})
+        pos, rot = base.frame_pose("mount", st)
+        want_pos, want_rot = np.asarray(st.xyz) + st.rotation @ rel_pos, st.rotation @ rel_rot
+        assert pos.tobytes() == want_pos.tobytes() and rot.tobytes() == want_rot.tobytes()

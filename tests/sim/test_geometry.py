@@ -34,5 +34,5 @@ def test_pose_at_circle_is_tangent() -> None:
 def test_ink_coverage_antialiases_edges() -> None:
     c = StraightCourse(start_m=(0.0, 0.0), end_m=(1.0, 0.0))
     pts = np.array([[0.5, 0.0], [0.5, 0.007], [0.5, 0.02]])
-    cov = geometry.ink_coverage(c, 0.014, pts, pixel_m=0.002)
+    cov = geometry.ink_coverage(c, 0.014, pts[:, 0], pts[:, 1], pixel_m=0.002)
     assert cov == pytest.approx([1.0, 0.5, 0.0])

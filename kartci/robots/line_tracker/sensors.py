@@ -42,8 +42,8 @@ class LineCamera:
         u = (np.arange(n) + 0.5) / n * 2.0 - 1.0
         uu, vv = np.meshgrid(u, u)
         self._tan_half = math.tan(spec.fov_rad / 2)
-        self._uv = np.stack([uu.ravel(), vv.ravel()], axis=1) * self._tan_half
-        t = self._tan_half  # the image's corner rays, as `_uv`
+        self._u, self._v = uu.ravel() * self._tan_half, vv.ravel() * self._tan_half
+        t = self._tan_half  # the image's corner rays, as `_u` and `_v`
         self._corner_uv = [(a * t, b * t) for a in (-1.0, 1.0) for b in (-1.0, 1.0)]
         self._proj = pb.computeProjectionMatrixFOV(math.degrees(spec.fov_rad), 1.0, NEAR_M, FAR_M)
 
@@ -62,18 +62,20 @@ class LineCamera:
                    ) -> list[float]:
         pos = np.array([p for p, _ in poses])
         rot = np.array([r for _, r in poses])
-        # one ray per pixel and camera, world frame; elementwise, not `@`: BLAS kernels differ by
-        # CPU
-        dirs = (self._uv[:, :1] * rot[:, None, :, 1] + self._uv[:, 1:] * rot[:, None, :, 2]
-                + rot[:, None, :, 0])
-        grounds = pos[:, None, :2] - (pos[:, None, 2:] / dirs[:, :, 2:]) * dirs[:, :, :2]
+        # one ray per pixel and camera, world frame, (camera, axis, pixel): u y + v z + x,
+        # elementwise (not `@`: BLAS kernels differ by CPU), pixels innermost (fewer loops)
+        rays = self._u * rot[:, :, 1, None]
+        rays += self._v * rot[:, :, 2, None]
+        rays += rot[:, :, 0, None]
+        reach = pos[:, 2, None] / rays[:, 2]  # how far down each ray the floor is
         pixel = 0.0
         for z in pos[:, 2].tolist():
             pixel = max(pixel, 2.0 * z * self._tan_half / GEOMETRIC_GRID_PX)
         ink = geometry.ink_coverage(self.world.course, self.world.line_width_m,
-                                    grounds.reshape(-1, 2), pixel)
-        means = ink.reshape(len(poses), -1).mean(axis=1)
-        return [float(self.world.light_level * (1.0 - m)) for m in means]
+                                    pos[:, 0, None] - reach * rays[:, 0],
+                                    pos[:, 1, None] - reach * rays[:, 1], pixel)
+        means = np.add.reduce(ink, axis=1) / ink.shape[1]  # ndarray.mean's sums, less wrapper
+        return [self.world.light_level * (1.0 - m) for m in means.tolist()]
 
     def _footprint(self, pos: NDArray[np.float64], rot: NDArray[np.float64]
                    ) -> tuple[float, float, float, float] | None:
