@@ -105,11 +105,13 @@ def ink_coverage(course: Course, width_m: float, x: Array, y: Array, pixel_m: fl
     _ramp(ink, pixel_m)
     if isinstance(course, StraightCourse):
         # the ramps at the line's ends, skipped when 1 at every point: the ramp is monotonic
-        # in `along` and a product with 1.0 the same bits (NaN, from min or max, is not skipped)
+        # in `along` and a product with 1.0 the same bits (NaN, from min or max, is not skipped);
+        # numpy scalars, not floats: a pose gone non-finite divides as the arrays do, without
+        # raising, and the run ends on its non-finite state
         total = length_m(course)
-        if not float(along.min()) / pixel_m + 0.5 >= 1.0:
+        if not along.min() / pixel_m + 0.5 >= 1.0:
             ink *= _ramp(along.copy(), pixel_m)
-        if not (total - float(along.max())) / pixel_m + 0.5 >= 1.0:
+        if not (total - along.max()) / pixel_m + 0.5 >= 1.0:
             ink *= _ramp(total - along, pixel_m)
     return ink
 

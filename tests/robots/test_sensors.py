@@ -133,3 +133,19 @@ def test_geometric_camera_gives_the_bits_it_gave_before(course: StraightCourse |
         pixel = rng.uniform(0.0005, 0.003)
         new_ink = geometry.ink_coverage(course, world.line_width_m, xy[:, 0], xy[:, 1], pixel)
         assert np.array_equal(new_ink, _ink_before(world, xy, pixel), equal_nan=True), k
+
+
+@pytest.mark.parametrize("course", [StraightCourse(), CircleCourse()], ids=["straight", "circle"])
+@pytest.mark.parametrize("pixel", [0.0, np.nan, np.inf, 0.002])
+def test_ink_of_a_pose_gone_non_finite_is_what_it_was_not_an_exception(
+        course: StraightCourse | CircleCourse, pixel: float) -> None:
+    """A controller that drives the state to NaN makes the camera's pixel size 0 or NaN and its
+    points NaN: the ink is the old computation's (NaN, inf), never a ZeroDivisionError, so
+    the run ends on its non-finite state and says so (tests/runner/test_crash.py)."""
+    world = LineLabWorld(course=course)
+    xy = np.array([[0.1, 0.0], [np.nan, 0.0], [0.2, np.inf], [-0.3, 0.01]])
+    with np.errstate(all="ignore"):
+        new = geometry.ink_coverage(course, world.line_width_m, xy[:, 0].copy(),
+                                    xy[:, 1].copy(), pixel)
+        old = _ink_before(world, xy, pixel)
+    assert np.array_equal(new, old, equal_nan=True)
