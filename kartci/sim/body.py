@@ -40,10 +40,15 @@ class BodyState:
     w_body: tuple[float, float, float]  # rad/s in base_link
 
     @cached_property
+    def rows(self) -> tuple[float, ...]:
+        """base_link's rotation (body to world), PyBullet's row-major 9 floats; made once per
+        state, however many sensor frames and the IMU read it."""
+        return tuple(pb.getMatrixFromQuaternion(self.quat))
+
+    @cached_property
     def rotation(self) -> np.ndarray:
-        """base_link's orientation as a 3x3 rotation matrix (body to world); made once per
-        state, however many sensor frames read it (read-only: it is shared)."""
-        r = rotation(self.quat)
+        """`rows` as a 3x3 matrix (read-only: it is shared)."""
+        r = np.array(self.rows).reshape(3, 3)
         r.setflags(write=False)
         return r
 
@@ -117,7 +122,7 @@ class Base:
         terms is +0.0 as there): the same bits, where two BLAS calls cost several µs after a
         physics step has cooled the caches."""
         st = state or self.state()
-        a0, a1, a2, b0, b1, b2, c0, c1, c2 = pb.getMatrixFromQuaternion(st.quat)
+        a0, a1, a2, b0, b1, b2, c0, c1, c2 = st.rows
         (p0, p1, p2), (m0, m1, m2, m3, m4, m5, m6, m7, m8) = self._flat_frames[name]
         x, y, z = st.xyz
         return (np.array((x + (0.0 + a0 * p0 + a1 * p1 + a2 * p2),

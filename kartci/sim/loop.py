@@ -28,7 +28,7 @@ def simulate(scenario: Scenario, log_path: Path,
     """
     with Session(scenario, log_path, agents) as session:
         session.reset()
-        session._run(on_progress)  # step() without a result a step: nothing here reads one
+        session.run_to_end(on_progress)  # step() without a result a step: nothing here reads one
         return session.info()
 
 

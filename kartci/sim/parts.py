@@ -95,7 +95,7 @@ def measure(scenario: Scenario, log_path: Path) -> Parts:
                 if hasattr(obj, attr):  # records in batches, or (writers before) one at a time
                     clock.wrap(obj, attr, "log: MCAP records")
         t0 = CLOCK()
-        s._run(None)  # as simulate() steps
+        s.run_to_end(None)  # as simulate() steps
         total = CLOCK() - t0
         steps = s.k
     timers = _overhead_ns() * sum(clock.calls.values())

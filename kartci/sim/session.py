@@ -407,7 +407,7 @@ class Session:
             r.post_step(t_next, put)
         self.k = k + 1
 
-    def _run(self, on_progress: Callable[[float], None] | None) -> None:
+    def run_to_end(self, on_progress: Callable[[float], None] | None) -> None:
         """`step()` until the run is over, for `simulate()`, which reads no step's result:
         none is made and the messages are not kept. `on_progress` gets the sim time reached,
         s, after every step."""

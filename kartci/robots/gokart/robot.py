@@ -192,7 +192,7 @@ class KartRobot(RobotBase):
         """Specific force (gravity included) and angular rate in imu_link, from the finite
         difference of the IMU point's velocity over one IMU period. Scalar arithmetic on the
         odometry's state (numpy's 3x3 products summed in the same order: the same bits)."""
-        r0, r1, r2, r3, r4, r5, r6, r7, r8 = pb.getMatrixFromQuaternion(st.quat)  # row-major
+        r0, r1, r2, r3, r4, r5, r6, r7, r8 = st.rows  # row-major body-to-world
         (x0, x1, x2), m = self._imu_mount
         wb0, wb1, wb2 = st.w_body
         vb0, vb1, vb2 = st.v_body
