@@ -22,6 +22,7 @@ import rclpy
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from std_msgs.msg import String
 
 
@@ -37,11 +38,17 @@ class PurePursuit(Node):  # type: ignore[misc]  # rclpy is untyped where mypy ru
         self.xy: np.ndarray | None = None
         self.kappa = np.zeros(0)
         self.waiting: Odometry | None = None  # a pose that came before the track
+        # `qos:=sensor_data`: best effort for odometry and commands, as many drivers publish;
+        # `track_latched:=true`: the track as a latched (transient-local) topic, as a map is
+        qos = qos_profile_sensor_data if self.declare_parameter(
+            "qos", "default").value == "sensor_data" else 10
+        track_qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL) if (
+            self.declare_parameter("track_latched", False).value) else 10
         # subscriptions before the publisher: a simulator that waits for our publisher then
         # finds our subscriptions declared too
-        self.create_subscription(String, "track", self.on_track, 10)
-        self.create_subscription(Odometry, "odom", self.on_odom, 10)
-        self.cmd = self.create_publisher(Twist, "cmd_vel", 10)
+        self.create_subscription(String, "track", self.on_track, track_qos)
+        self.create_subscription(Odometry, "odom", self.on_odom, qos)
+        self.cmd = self.create_publisher(Twist, "cmd_vel", qos)
         self.count = 0
 
     def on_track(self, m: String) -> None:

@@ -87,21 +87,34 @@ class Ros2Node:
             self.key(topic, typename), zenoh.handlers.Callback(take, indirect=False)))
         self._token("MS", topic, typename)
 
-    def publisher(self, topic: str, typename: str) -> Callable[[Any], None]:
-        """A function that publishes a message with rmw_zenoh's attachment; an `MP` token."""
+    def raw_subscribe(self, topic: str, typename: str, take: Callable[[bytes], None]) -> None:
+        """`take(payload)` for each CDR payload of `topic`, on the network thread; an `MS`
+        token (declared after the subscriber, as rmw_zenoh does)."""
+        self.keep.append(self.session.declare_subscriber(
+            self.key(topic, typename),
+            zenoh.handlers.Callback(lambda s: take(s.payload.to_bytes()), indirect=False)))
+        self._token("MS", topic, typename)
+
+    def raw_publisher(self, topic: str, typename: str) -> Callable[[bytes], None]:
+        """A function that publishes a CDR payload with rmw_zenoh's attachment; an `MP` token."""
         # BLOCK: never drop a command under load (zenoh's default drops when a queue is full,
         # and kartci, in lockstep, would wait for the lost answer until its deadline)
         pub = self.session.declare_publisher(self.key(topic, typename), express=True,
                                              congestion_control=zenoh.CongestionControl.BLOCK)
+        self.keep.append(pub)
         gid = hashlib.sha256(f"{self.zid}/{self._token('MP', topic, typename)}".encode()
                              ).digest()[:16]
         seq = [0]
 
-        def put(message: Any) -> None:
+        def put(payload: bytes) -> None:
             seq[0] += 1
-            pub.put(bytes(self.store.serialize_cdr(message, typename)),
-                    attachment=struct.pack("<qqB16s", seq[0], time.time_ns(), 16, gid))
+            pub.put(payload, attachment=struct.pack("<qqB16s", seq[0], time.time_ns(), 16, gid))
         return put
+
+    def publisher(self, topic: str, typename: str) -> Callable[[Any], None]:
+        """A function that publishes a message (serialised here) on `topic`."""
+        put = self.raw_publisher(topic, typename)
+        return lambda message: put(bytes(self.store.serialize_cdr(message, typename)))
 
 
 class PurePursuit:
@@ -150,6 +163,8 @@ def parse() -> argparse.Namespace:
                    help="Zenoh endpoint of the simulator (default $KARTCI_ZENOH_ENDPOINT)")
     p.add_argument("--namespace", default=os.environ.get("KARTCI_NAMESPACE", "kart0"))
     p.add_argument("--domain-id", type=int, default=int(os.environ.get("ROS_DOMAIN_ID", "0")))
+    p.add_argument("--odom-topic", default="odom",
+                   help="odometry topic, relative to the namespace (odom_relay behind a relay)")
     p.add_argument("--speed-mps", type=float, default=5.0)
     p.add_argument("--lookahead-m", type=float, default=3.5)
     p.add_argument("--wheelbase-m", type=float, default=1.27)
@@ -164,13 +179,20 @@ def parse() -> argparse.Namespace:
 
 
 def config(endpoint: str) -> zenoh.Config:
-    """A peer that connects to the simulator only: loopback, no multicast, no gossip."""
+    """A peer that connects to the simulator only (loopback, no multicast, no gossip), then
+    $ZENOH_CONFIG_OVERRIDE's `key=value;...` applied as rmw_zenoh applies it (kartci makes the
+    programs it starts clients of its session this way)."""
     conf = zenoh.Config()
     conf.insert_json5("mode", '"peer"')
     conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
     conf.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
     conf.insert_json5("scouting/multicast/enabled", "false")
     conf.insert_json5("scouting/gossip/enabled", "false")
+    for item in filter(None, os.environ.get("ZENOH_CONFIG_OVERRIDE", "").split(";")):
+        key, _, value = item.partition("=")
+        conf.insert_json5(key.strip(), value.strip())
+    if json.loads(conf.get_json("mode")) == "client":
+        conf.insert_json5("listen/endpoints", "[]")
     return conf
 
 
@@ -183,11 +205,12 @@ def main() -> int:
     node = Ros2Node(session, store, args.domain_id, "pure_pursuit")
     inbox: queue.Queue[Any] = queue.Queue()
     ns = f"/{args.namespace}"
-    node.subscribe(f"{ns}/odom", "nav_msgs/msg/Odometry", inbox)
+    node.subscribe(f"{ns}/{args.odom_topic}", "nav_msgs/msg/Odometry", inbox)
     node.subscribe("/kartci/track", "std_msgs/msg/String", inbox)
     publish = node.publisher(f"{ns}/ackermann_cmd", "ackermann_msgs/msg/AckermannDriveStamped")
     node.subscribe("/clock", "rosgraph_msgs/msg/Clock", inbox)  # last: kartci starts on it
-    print(f"pure_pursuit: connected to {args.connect}, namespace {ns}", flush=True)
+    mode = json.loads(session.config().get_json("mode")) if hasattr(session, "config") else "?"
+    print(f"pure_pursuit: connected to {args.connect} as a {mode}, namespace {ns}", flush=True)
     driver, pose = PurePursuit(args), None
     header_t = store.types["std_msgs/msg/Header"]
     drive_t = store.types["ackermann_msgs/msg/AckermannDrive"]
@@ -196,7 +219,7 @@ def main() -> int:
         topic, m = inbox.get()
         if topic == "/kartci/track":
             driver.set_track(m.data)
-        elif topic.endswith("/odom"):
+        elif topic == f"{ns}/{args.odom_topic}":
             p, q = m.pose.pose.position, m.pose.pose.orientation
             yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
             pose = (p.x, p.y, yaw, m.twist.twist.linear.x)

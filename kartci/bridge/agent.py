@@ -2,12 +2,19 @@
 commands come back and are published into the loop like an in-process agent's outbox (so they
 are recorded and applied as usual).
 
-Lockstep (the default): at every control tick the bridge publishes the tick's sensor messages,
-then `/clock` at the tick's sim time, and waits until every command topic has answered that tick
-(a stamped command must carry the tick's stamp; earlier ones are stale and dropped). A tick whose
-answer misses `tick_timeout_s` of wall clock is a `late_commands` event (the last command holds);
-`max_late_in_row` of them in a row, the stack's exit, or its absence at startup end the run as an
-error naming the program's last output.
+Lockstep (the default, `kartci.bridge.lockstep`): at every control tick the bridge publishes the
+tick's sensor messages, waits until the stack's own topics that answer data have published for
+the tick, then publishes `/clock` and waits until the topics that answer time and every command
+topic have (a stamped command must carry the tick's stamp; an unstamped one is matched by count;
+earlier ones are stale and dropped). t = 0 waits for the stack's graph to be complete and
+settled. A tick whose answer misses `tick_timeout_s` of wall clock is a `late_commands` event
+(the last command holds); `max_late_in_row` of them in a row, the stack's exit, or its absence at
+startup end the run as an error naming the program's last output.
+
+The stack kartci starts is told (rmw_zenoh's $ZENOH_CONFIG_OVERRIDE) to be a Zenoh client of
+kartci's session: every message between its nodes then passes through kartci, in one ordered
+link per node, so kartci sees each one and a node gets a tick's data from the others before the
+tick's `/clock`.
 """
 
 from __future__ import annotations
@@ -23,6 +30,17 @@ from kartci import project
 from kartci.bridge import ros2
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening
+from kartci.bridge.lockstep import (
+    LEARN_QUIET_S,
+    Endpoint,
+    Expect,
+    Kind,
+    Ledger,
+    Phase,
+    mismatches,
+    offer_for,
+    plan,
+)
 from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
 from kartci.core import ROBOTS, AgentContext, JoyCommand, Outbox, RobotParams
 from kartci.errors import RunError, SpecError
@@ -34,9 +52,10 @@ LATE_TOPIC = "bridge/late_commands"  # std_msgs/UInt32: the count so far, at eac
 
 def child_env(endpoint: str, domain_id: int, namespace: str) -> dict[str, str]:
     """What the stack is told: the endpoint to connect to (kartci's variable, and Zenoh's
-    override for rmw_zenoh nodes, which also need no router check), the domain, the namespace."""
-    override = (f'mode="peer";connect/endpoints=["{endpoint}"];'
-                'listen/endpoints=["tcp/127.0.0.1:0"];scouting/multicast/enabled=false')
+    override for rmw_zenoh nodes: a client of kartci's session, so kartci routes every message
+    between them; no router check), the domain, the namespace."""
+    override = (f'mode="client";connect/endpoints=["{endpoint}"];'
+                'scouting/multicast/enabled=false')
     return {"KARTCI_ZENOH_ENDPOINT": endpoint, "ZENOH_CONFIG_OVERRIDE": override,
             "ZENOH_ROUTER_CHECK_ATTEMPTS": "-1", "ROS_DOMAIN_ID": str(domain_id),
             "KARTCI_NAMESPACE": namespace}
@@ -66,11 +85,13 @@ class ExternalAgent:
     _wall0: float | None
     _latest: dict[str, Any]
     child: Child | None
+    ledger: Ledger | None
 
     def __init__(self, spec: ExternalController, ctx: AgentContext) -> None:
         self._lockstep_state(spec, ctx)
         self._pubs: dict[tuple[str, str], Publisher] = {}
         self._tokens: set[str] = set()
+        self._tokens_changed = time.perf_counter()
         session, self.endpoint = open_listening(
             spec.port, connect=spec.connect, router=spec.zenoh_mode == "router",
             allow_remote=spec.allow_remote)
@@ -79,7 +100,7 @@ class ExternalAgent:
             self.clock = self.node.publisher("/clock", CLOCK)
             for topic, typename in self.commands.items():
                 self.node.subscription(topic, typename, self._pusher(topic))
-            self.node.watch_tokens(self._tokens.add)
+            self.node.watch_tokens(self._token)
             if spec.command:
                 self.child = self._start(ctx.run_dir)
         except BaseException:
@@ -99,8 +120,14 @@ class ExternalAgent:
         self._ready = False
         self._wall0 = None
         self._latest = {}
+        self._got: dict[str, Any] = {}
         self.child = None
+        self.ledger = None
         self.inbox = Inbox()
+
+    def _token(self, key: str) -> None:
+        self._tokens.add(key)
+        self._tokens_changed = time.perf_counter()
 
     def _pusher(self, topic: str) -> Callable[[bytes], None]:
         def push(payload: bytes) -> None:
@@ -126,34 +153,135 @@ class ExternalAgent:
         self._pending.append((self._full(topic), message))
 
     def step(self, t_ns: int) -> Outbox:
-        """Publish the tick's sensors and /clock; in lockstep wait for the stack's answer."""
+        """Publish the tick's sensors, wait for what answers them, publish /clock, wait for
+        what answers it (in lockstep; paced: publish both and take the latest commands)."""
         if not self._ready:
             self._wait_ready()
         if self.spec.mode is Mode.PACED:
             self._pace(t_ns)
-        else:
-            self.inbox.take()  # answers to earlier ticks that came after their deadline
-        self._publish(t_ns)
-        if self.spec.mode is Mode.PACED:
+            self._publish_sensors(t_ns)
+            self._publish_clock(t_ns)
             self._receive(self.inbox.take(), None)
             return self._outbox(self._latest)
-        got = self._await(t_ns)
-        if got is None:
+        assert self.ledger is not None
+        learning = self.ledger.learning()
+        deadline = time.perf_counter() + self.spec.tick_timeout_s + (
+            2 * LEARN_QUIET_S if learning else 0.0)
+        self._got = {}
+        self._publish_sensors(t_ns)
+        on_time = self._phase(Phase.SENSORS, t_ns, deadline, learning)
+        if self.ledger.awaits(Phase.SENSORS):
+            time.sleep(self.spec.fence_s)  # the hand-off of what kartci saw to the other nodes
+        self._publish_clock(t_ns)
+        on_time = on_time and self._phase(Phase.CLOCK, t_ns, deadline, learning)
+        if learning:
+            self._learnt()
+        self.ledger.next_tick(stamped=self._stamped())
+        if not on_time:
+            self._count_late(t_ns)
             return [(LATE_TOPIC, msg("std_msgs/msg/UInt32", data=self.late))]
-        return self._outbox(got)
+        self._late_in_row = 0
+        return self._outbox(self._got)
+
+    def _stamped(self) -> list[str]:
+        """Command topics whose type has a header: matched to ticks by stamp."""
+        fields = ros2.typestore(self.spec.ros_distro).fielddefs
+        return [t for t, ty in self.commands.items()
+                if any(name == "header" for name, _ in fields[ty][1])]
+
+    def _learnt(self) -> None:
+        """Tick 0 is over: say what every tick waits for (a team pins it with waits_for)."""
+        assert self.ledger is not None
+        if self.ledger.waits_for() and len(self.ledger.expect) > len(self.commands):
+            print(f"{self.name}: lockstep waits for "
+                  + ", ".join(f"{w['topic']} after {w['after']}"
+                              for w in self.ledger.waits_for()), file=sys.stderr)
+
+    def _phase(self, phase: Phase, t_ns: int, deadline: float, learning: bool) -> bool:
+        """Wait until every topic of `phase` has published for this tick; False when the
+        deadline passed first. Learning (tick 0), a topic that may answer this phase but has
+        not published `LEARN_QUIET_S` after the last message does not answer it."""
+        assert self.ledger is not None
+        quiet_since = time.perf_counter()
+        while True:
+            items = self.inbox.take()
+            now = time.perf_counter()
+            if items:
+                quiet_since = now
+                self._receive(items, t_ns)
+            if not self.ledger.missing(phase, learnt_only=learning
+                                       and now - quiet_since >= LEARN_QUIET_S):
+                break
+            left = deadline - now
+            if left <= 0:
+                return False
+            if not self.inbox.wait(min(left, 0.05)):
+                self._check_alive(t_ns)
+        if learning:
+            self.ledger.learn(phase)
+        return True
+
+    def _receive(self, items: list[tuple[str, bytes | None]],
+                 t_ns: int | None) -> dict[str, Any]:
+        """Count and decode what arrived; in lockstep (`t_ns` given) keep as this tick's
+        answer only a command of this tick (its stamp, or its count), drop earlier ones, and
+        stop at a topic that published more than it was due. The answers among `items`."""
+        stamped = set(self._stamped()) if t_ns is not None else set()
+        got: dict[str, Any] = {}
+        for topic, payload in items:
+            if payload is None or topic not in self.commands:  # the stack's own topic, counted
+                self._count(topic, t_ns)
+                continue
+            typename = self.commands[topic]
+            try:
+                m = ros2.deserialize(payload, typename, self.spec.ros_distro)
+            except Exception as err:  # a malformed payload is the stack's error, named
+                raise RunError(f"external controller of {self.name}: a {typename} on {topic} "
+                               f"does not decode ({type(err).__name__}: {err})") from err
+            self._latest[topic] = m
+            if t_ns is None:
+                continue
+            if topic in stamped:
+                if stamp_ns(m.header) != t_ns:
+                    continue  # stale: an earlier tick's answer
+                if topic not in self._got:
+                    self._count(topic, t_ns)
+                got[topic] = self._got[topic] = m
+            elif self._count(topic, t_ns) == 0:
+                got[topic] = self._got[topic] = m
+        return got
+
+    def _count(self, topic: str, t_ns: int | None) -> int:
+        """Count one message into the ledger: -1 stale, 0 this tick's; beyond is an error."""
+        if self.ledger is None or t_ns is None or topic not in self.ledger.expect:
+            return 0
+        where = self.ledger.belongs(topic, self.ledger.count(topic))
+        if where > 0:
+            e = self.ledger.expect[topic]
+            raise RunError(
+                f"external controller of {self.name}: {topic} published more than the "
+                f"{e.count} message(s) due in the tick at t={t_ns * 1e-9:.3f} s; if a node "
+                f"publishes it more often, say so in the scenario: waits_for: [{{topic: "
+                f"{topic}, count: N}}] (or count: 0 not to wait for it)")
+        return where
 
     def _declare(self) -> None:
-        """A publisher for each new (topic, type) of the pending messages; before its first
-        put, it waits until the stack's subscription (if its tokens show one) has matched."""
+        """A publisher for each new (topic, type) of the pending messages, offering what the
+        stack's subscriptions to it ask; before its first put, it waits until the stack's
+        subscriptions (if its tokens show any) have matched."""
         new = []
+        stack = self._stack_endpoints()
         for topic, m in self._pending:
             typename = type(m).__msgtype__
             if (topic, typename) not in self._pubs:
-                self._pubs[(topic, typename)] = pub = self.node.publisher(topic, typename)
+                offer = offer_for(e.qos for e in stack if e.kind is Kind.SUBSCRIPTION
+                                  and e.topic == topic and e.typename == typename)
+                self._pubs[(topic, typename)] = pub = self.node.publisher(topic, typename,
+                                                                          offer)
                 new.append((topic, typename, pub))
         if not new:
             return
-        subscribed = self._stack_subscriptions()
+        subscribed = {(e.topic, e.typename) for e in stack if e.kind is Kind.SUBSCRIPTION}
         deadline = time.perf_counter() + self.spec.startup_timeout_s
         for topic, typename, pub in new:
             while (topic, typename) in subscribed and not pub.matched():
@@ -162,24 +290,32 @@ class ExternalAgent:
                                    f"subscription to {topic} never matched; {self._output()}")
                 time.sleep(0.001)
 
-    def _stack_subscriptions(self) -> set[tuple[str, str]]:
-        """(topic, type) of every subscription the stack's liveliness tokens announce."""
-        have = {(p[5], *p[9:12]) for p in (k.split("/") for k in list(self._tokens))
-                if len(p) == 13}
-        return {(topic, typename) for topic, typename in
-                {(t, type(m).__msgtype__) for t, m in self._pending} | set(self._pubs)
-                if ("MS", ros2.mangle(topic), ros2.dds_type_name(typename),
-                    ros2.type_hash(typename, self.spec.ros_distro)) in have}
+    def _stack_endpoints(self) -> list[Endpoint]:
+        """Every publisher and subscription of the stack (not kartci's own) its tokens show,
+        with kartci's type names (token fields 2, 5, 7-12: session, kind, namespace, node,
+        mangled topic, DDS type name, hash, QoS)."""
+        own = str(self.node.session.zid())
+        kinds = {"MP": Kind.PUBLISHER, "MS": Kind.SUBSCRIPTION}
+        out = []
+        for p in (k.split("/") for k in list(self._tokens)):
+            if len(p) != 13 or p[2] == own or p[5] not in kinds:
+                continue
+            namespace = p[7].replace("%", "/") if p[7] != "%" else ""
+            out.append(Endpoint(f"{namespace}/{p[8]}", kinds[p[5]], p[9].replace("%", "/"),
+                                ros2.ros_type_name(p[10]), ros2.parse_qos(p[12])))
+        return out
 
-    def _publish(self, t_ns: int) -> None:
+    def _publish_sensors(self, t_ns: int) -> None:
         self._declare()
         distro = self.spec.ros_distro
         for topic, m in self._pending:
             self._pubs[(topic, type(m).__msgtype__)].put(ros2.serialize(m, distro))
         self._pending.clear()
+
+    def _publish_clock(self, t_ns: int) -> None:
         sec, nanosec = divmod(t_ns, 1_000_000_000)
         self.clock.put(ros2.serialize(msg(CLOCK, clock=msg(
-            "builtin_interfaces/msg/Time", sec=sec, nanosec=nanosec)), distro))
+            "builtin_interfaces/msg/Time", sec=sec, nanosec=nanosec)), self.spec.ros_distro))
 
     def _pace(self, t_ns: int) -> None:
         now = time.perf_counter()
@@ -190,45 +326,17 @@ class ExternalAgent:
             time.sleep(ahead_s)
         self._check_alive(t_ns)
 
-    def _receive(self, items: list[tuple[str, bytes]], t_ns: int | None) -> dict[str, Any]:
-        """Decode answers; in lockstep (`t_ns` given) keep only those for this tick."""
-        got: dict[str, Any] = {}
-        for topic, payload in items:
-            typename = self.commands[topic]
-            try:
-                m = ros2.deserialize(payload, typename, self.spec.ros_distro)
-            except Exception as err:  # a malformed payload is the stack's error, named
-                raise RunError(f"external controller of {self.name}: a {typename} on {topic} "
-                               f"does not decode ({type(err).__name__}: {err})") from err
-            if t_ns is not None and hasattr(m, "header") and stamp_ns(m.header) != t_ns:
-                continue  # stale: an earlier tick's answer
-            got[topic] = m
-        self._latest.update(got)
-        return got
-
-    def _await(self, t_ns: int) -> dict[str, Any] | None:
-        """Every command topic's answer to tick `t_ns`, or None when the deadline passed."""
-        deadline = time.perf_counter() + self.spec.tick_timeout_s
-        got: dict[str, Any] = {}
-        while len(got) < len(self.commands):
-            left = deadline - time.perf_counter()
-            if left <= 0:
-                self._count_late(t_ns)
-                return None
-            if self.inbox.wait(min(left, 0.05)):
-                got.update(self._receive(self.inbox.take(), t_ns))
-            else:
-                self._check_alive(t_ns)
-        self._late_in_row = 0
-        return got
-
     def _count_late(self, t_ns: int) -> None:
         self.late += 1
         self._late_in_row += 1
         if self._late_in_row >= self.spec.max_late_in_row:
-            raise RunError(f"external controller of {self.name}: no command within "
+            waiting = ""
+            if self.ledger is not None:
+                missing = self.ledger.missing(Phase.SENSORS) + self.ledger.missing(Phase.CLOCK)
+                waiting = f" (waiting for {', '.join(missing)})" if missing else ""
+            raise RunError(f"external controller of {self.name}: no answer within "
                            f"{self.spec.tick_timeout_s:g} s for {self._late_in_row} ticks in a "
-                           f"row (t={t_ns * 1e-9:.3f} s, {self.late} late in all); "
+                           f"row (t={t_ns * 1e-9:.3f} s, {self.late} late in all){waiting}; "
                            f"{self._output()}")
 
     def _check_alive(self, t_ns: int) -> None:
@@ -254,18 +362,43 @@ class ExternalAgent:
                     ros2.type_hash(typename, self.spec.ros_distro)) not in have]
 
     def _wait_ready(self) -> None:
+        """The start barrier: the stack has declared its /clock subscription and command
+        publishers, and its graph has not changed for graph_settle_s; then what every tick
+        waits for is planned, the stack's own topics are watched, and QoS checked."""
         deadline = time.perf_counter() + self.spec.startup_timeout_s
-        while self._missing():
+        while (missing := self._missing()) or (
+                time.perf_counter() - self._tokens_changed < self.spec.graph_settle_s):
             self._check_alive(0)
             if time.perf_counter() > deadline:
                 raise RunError(f"external controller of {self.name}: within "
                                f"{self.spec.startup_timeout_s:g} s the stack declared no "
-                               f"{', no '.join(self._missing())} on {self.endpoint}; "
+                               f"{', no '.join(missing)} on {self.endpoint}; "
                                f"{self._output()}")
             time.sleep(0.01)
         while not self.clock.matched():
             time.sleep(0.001)
+        self._plan(self._stack_endpoints())
+        assert self.ledger is not None
+        for topic in self.ledger.expect:
+            if topic not in self.commands:
+                self.node.observe(topic, self._observer(topic))
         self._ready = True
+
+    def _observer(self, topic: str) -> Callable[[], None]:
+        def seen() -> None:
+            self.inbox.push(topic, None)
+        return seen
+
+    def _plan(self, stack: list[Endpoint]) -> None:
+        """The ledger of what each tick waits for, from the stack's graph and waits_for; a
+        QoS pair of the stack that can never match is an error naming both sides."""
+        if problems := mismatches(stack):
+            raise RunError(f"external controller of {self.name}: {'; '.join(problems)}")
+        sensors = {self._full(t) for t in self.inputs}
+        declared = {self._full(w.topic): Expect(w.count, w.every, w.after)
+                    for w in self.spec.waits_for}
+        wanted, may_answer_data = plan(stack, sensors, self.commands, declared)
+        self.ledger = Ledger(wanted, may_answer_data, self.commands)
 
     def _outbox(self, got: dict[str, Any]) -> Outbox:
         out: Outbox = []

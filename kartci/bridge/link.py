@@ -25,6 +25,7 @@ from typing import Any
 import zenoh
 
 from kartci.bridge import ros2
+from kartci.bridge.lockstep import Qos
 from kartci.errors import RunError, SpecError
 
 LOOPBACK = "127.0.0.1"
@@ -132,7 +133,8 @@ def open_listening(port: int | None = None, *, connect: tuple[str, ...] = (),
 class Publisher:
     """A ROS 2 publisher: CDR payloads with rmw_zenoh's attachment, and its `MP` token."""
 
-    def __init__(self, node: Node, topic: str, typename: str, entity_id: int) -> None:
+    def __init__(self, node: Node, topic: str, typename: str, entity_id: int,
+                 qos: Qos) -> None:
         self.typename = typename
         self.key = ros2.topic_key(node.name.domain_id, topic, typename, node.name.distro)
         # express: sent at once rather than batched (a batch waits up to a millisecond); one
@@ -144,7 +146,7 @@ class Publisher:
             self.key, express=True, congestion_control=zenoh.CongestionControl.BLOCK,
             reliability=zenoh.Reliability.RELIABLE)
         token = ros2.entity_token(node.name, entity_id, ros2.EntityKind.PUBLISHER, topic,
-                                  typename)
+                                  typename, ros2.qos_text(qos))
         self._gid = ros2.gid(token)
         self._seq = 0
         self._token = node.session.liveliness().declare_token(token)
@@ -177,9 +179,9 @@ class Node:
         self._next_id += 1
         return self._next_id
 
-    def publisher(self, topic: str, typename: str) -> Publisher:
-        """Declare a publisher (and its token) on a fully qualified topic."""
-        pub = Publisher(self, topic, typename, self._entity_id())
+    def publisher(self, topic: str, typename: str, qos: Qos | None = None) -> Publisher:
+        """Declare a publisher (and its token, saying `qos`) on a fully qualified topic."""
+        pub = Publisher(self, topic, typename, self._entity_id(), qos or Qos())
         self._entities.append(pub)
         return pub
 
@@ -196,6 +198,17 @@ class Node:
         token = self.session.liveliness().declare_token(ros2.entity_token(
             self.name, self._entity_id(), ros2.EntityKind.SUBSCRIPTION, topic, typename))
         self._entities += [sub, token]
+
+    def observe(self, topic: str, on_sample: Callable[[], None]) -> None:
+        """Call `on_sample()` for every message on `topic`, whatever its type, on the network
+        thread (so in order with the other subscriptions). No token: the stack's graph does
+        not show it (a node that counts its subscribers sees none more)."""
+        key = f"{self.name.domain_id}/{ros2.fully_qualified(topic)[1:]}/*/*"
+        def seen(_: zenoh.Sample) -> None:
+            on_sample()
+
+        self._entities.append(self.session.declare_subscriber(
+            key, zenoh.handlers.Callback(seen, indirect=True)))
 
     def watch_tokens(self, on_token: Callable[[str], None]) -> None:
         """Call `on_token(key)` for every liveliness token of the domain, present or new."""
@@ -215,15 +228,15 @@ class Inbox:
 
     def __init__(self) -> None:
         self._cond = threading.Condition()
-        self._items: list[tuple[str, bytes]] = []
+        self._items: list[tuple[str, bytes | None]] = []
 
-    def push(self, topic: str, payload: bytes) -> None:
-        """Add one payload (called on a Zenoh thread)."""
+    def push(self, topic: str, payload: bytes | None) -> None:
+        """Add one payload, or None for a message only counted (called on a Zenoh thread)."""
         with self._cond:
             self._items.append((topic, payload))
             self._cond.notify_all()
 
-    def take(self) -> list[tuple[str, bytes]]:
+    def take(self) -> list[tuple[str, bytes | None]]:
         """Everything received so far, oldest first."""
         with self._cond:
             out, self._items = self._items, []

@@ -7,6 +7,7 @@ from typing import Literal
 
 from pydantic import Field
 
+from kartci.bridge.lockstep import Phase
 from kartci.bridge.ros2 import DEFAULT_DISTRO, Distro
 from kartci.core import ControllerParams, Frozen
 from kartci.core.params import Count, Period_s
@@ -36,6 +37,20 @@ class CommandTopic(Frozen):
     topic: str = Field(description="topic the stack publishes on; relative names are in the "
                        "agent's namespace (`ackermann_cmd` is `/<agent>/ackermann_cmd`)")
     type: CommandType = Field(description="its message type")
+
+
+class WaitFor(Frozen):
+    """A topic of the stack that each lockstep tick waits for (docs/explain/lockstep.md)."""
+
+    topic: str = Field(description="topic a node of the stack publishes; relative names are in "
+                       "the agent's namespace")
+    count: int = Field(1, ge=0, le=1000, description="messages per tick it is due (0: never "
+                       "wait for it)")
+    every: int = Field(1, ge=1, le=1_000_000, description="it is due every this many ticks "
+                       "(a node slower than the control period)")
+    after: Phase | None = Field(None, description="what it answers: `sensors` (awaited before "
+                                "/clock is published) or `clock` (after); default learnt at "
+                                "tick 0")
 
 
 class ExternalController(ControllerParams):
@@ -98,6 +113,21 @@ class ExternalController(ControllerParams):
         "session) or dds (Fast DDS through rclpy in a relay process under a ROS 2 Python: "
         "`kartci ros2 env` or $KARTCI_ROS2_PYTHON; shared memory only, a domain id per run "
         "when kartci starts the stack)")
+    # left out of a dump at their defaults: baselines accepted before they existed stay current
+    waits_for: tuple[WaitFor, ...] = Field(
+        (), exclude_if=lambda v: v == (),
+        description="lockstep: topics of the stack to wait for at each tick, with their "
+        "counts and phases, beyond or instead of those the graph shows (every topic the "
+        "stack publishes and subscribes to, once a tick, and every command topic)")
+    graph_settle_s: float = Field(
+        0.3, ge=0.0, le=60.0, exclude_if=lambda v: v == 0.3,
+        description="lockstep: wall-clock time, s, the stack's graph must stay unchanged "
+        "before t = 0 (its nodes' links to each other are not visible to kartci)")
+    fence_s: float = Field(
+        0.002, ge=0.0, le=1.0, exclude_if=lambda v: v == 0.002,
+        description="lockstep: wall-clock pause, s, between the stack's answers to a tick's "
+        "sensors and the tick's /clock: kartci sees a message between the stack's nodes when "
+        "its session has it, not when the receiving node's link does (docs/explain/lockstep.md)")
     command: tuple[str, ...] = Field((), description="program kartci starts for the run "
                                      "(empty: start the stack yourself, connecting to "
                                      "`port`); `{python}` is kartci's Python, "

@@ -20,6 +20,7 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from kartci.bridge.lockstep import Durability, Qos, Reliability
 from kartci.logs.types import typestore as kartci_store
 
 LIVELINESS_PREFIX = "@ros2_lv"
@@ -121,6 +122,14 @@ def dds_type_name(typename: str) -> str:
     return f"{package}::{kind}::dds_::{name}_"
 
 
+def ros_type_name(dds_name: str) -> str:
+    """`sensor_msgs::msg::dds_::Imu_` -> `sensor_msgs/msg/Imu` (another name is kept)."""
+    parts = dds_name.split("::")
+    if len(parts) == 4 and parts[2] == "dds_" and parts[3].endswith("_"):
+        return f"{parts[0]}/{parts[1]}/{parts[3][:-1]}"
+    return dds_name
+
+
 @cache
 def type_hash(typename: str, distro: Distro = DEFAULT_DISTRO) -> str:
     """The RIHS01 hash (REP 2011) of `distro`'s definition of a type (Humble: no hash)."""
@@ -173,6 +182,29 @@ def entity_token(node: NodeName, entity_id: int, kind: EntityKind, topic: str, t
             f"{entity_id}/{kind.value}/{mangle(node.enclave)}/{mangle(node.namespace)}/"
             f"{node.name}/{mangle(fully_qualified(topic))}/{dds_type_name(typename)}/"
             f"{type_hash(typename, node.distro)}/{qos}")
+
+
+def qos_text(qos: Qos) -> str:
+    """A QoS as rmw_zenoh writes it into a token (`<reliability>:<durability>:<history>,<depth>:
+    <deadline>:<lifespan>:<liveliness>`, a field empty at rmw's default: reliable, volatile,
+    keep last)."""
+    rel = "" if qos.reliable else str(Reliability.BEST_EFFORT.value)
+    dur = str(Durability.TRANSIENT_LOCAL.value) if qos.latched else ""
+    return f"{rel}:{dur}:,{qos.depth}:,:,:,,"
+
+
+def parse_qos(text: str) -> Qos:
+    """The reliability, durability and depth of a token's QoS field (defaults where empty or
+    unreadable: a token from another implementation still names its endpoint)."""
+    fields = text.split(":")
+    def number(i: int, default: int) -> int:
+        try:
+            return int(fields[i].split(",")[-1] if i == 2 else fields[i])
+        except (IndexError, ValueError):
+            return default
+    rel, dur = number(0, 1), number(1, 2)
+    return Qos(Reliability.BEST_EFFORT if rel == 2 else Reliability.RELIABLE,
+               Durability.TRANSIENT_LOCAL if dur == 1 else Durability.VOLATILE, number(2, 10))
 
 
 def gid(token: str) -> bytes:

@@ -146,9 +146,9 @@ def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) 
     assert all(summary[n]["status"] == "error" for n in errors)
     assert "exited with code 3 at t=0.500 s" in errors["crash"]
     assert "crashing on purpose at t=0.50 s" in errors["crash"]
-    assert "no command within 0.2 s for 3 ticks in a row" in errors["hang"]
+    assert "no answer within 0.2 s for 3 ticks in a row" in errors["hang"]
     assert "hanging on purpose" in errors["hang"]
-    assert "no command within 0.2 s for 3 ticks in a row" in errors["late"]
+    assert "no answer within 0.2 s for 3 ticks in a row" in errors["late"]
     assert "no such stack" in errors["dead"] and "exited with code 4" in errors["dead"]
     assert "within 0.5 s the stack declared no subscription to /clock" in errors["silent"]
     assert summary["missing"]["status"] == "error"

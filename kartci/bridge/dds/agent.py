@@ -34,6 +34,7 @@ from kartci.bridge.dds import env as ros_env
 from kartci.bridge.dds import relay as wire
 from kartci.bridge.dds.env import dds_env
 from kartci.bridge.dds.shm import Domain, clean_zombies
+from kartci.bridge.lockstep import Durability, Endpoint, Kind, Qos, Reliability
 from kartci.bridge.params import ExternalController
 from kartci.core import AgentContext
 from kartci.errors import RunError, SpecError
@@ -60,6 +61,7 @@ class DdsAgent(ExternalAgent):
         self.relay: Child | None = None
         self._missing_now = ["an answer from the DDS relay"]
         self._relay_ready = threading.Event()
+        self._graph: list[Endpoint] = []
         self._relay_error: str | None = None
         self._lock = threading.Lock()
         self._run_dir = ctx.run_dir
@@ -108,7 +110,9 @@ class DdsAgent(ExternalAgent):
             "op": "start", "node": self.spec.node_name,
             "publishers": [["/clock", CLOCK, ros2.type_hash(CLOCK, self.spec.ros_distro)]],
             "commands": [[t, ty, ros2.type_hash(ty, self.spec.ros_distro)]
-                         for t, ty in self.commands.items()]})
+                         for t, ty in self.commands.items()],
+            "observe": [self._full(w.topic) for w in self.spec.waits_for],
+            "settle_s": self.spec.graph_settle_s})
         return sock
 
     def _read(self) -> None:
@@ -117,9 +121,14 @@ class DdsAgent(ExternalAgent):
             head, body = frame
             if head["op"] == "cmd":
                 self.inbox.push(head["topic"], body)
+            elif head["op"] == "seen":
+                self.inbox.push(head["topic"], None)
             elif head["op"] == "missing":
                 self._missing_now = list(head["what"])
             elif head["op"] == "ready":
+                self._graph = [Endpoint(node, Kind(kind), topic, typename,
+                                        Qos(Reliability(rel), Durability(dur), depth))
+                               for node, kind, topic, typename, rel, dur, depth in head["graph"]]
                 self._relay_ready.set()
             elif head["op"] == "error":
                 self._relay_error = str(head["message"])
@@ -171,7 +180,8 @@ class DdsAgent(ExternalAgent):
                 "max_ms": at(1.0), "late_commands": self.late}
 
     def _wait_ready(self) -> None:
-        """Until the relay sees the stack's /clock subscription and command publishers."""
+        """Until the relay sees the stack's /clock subscription and command publishers, matched,
+        and the graph settled; then plan the ticks from the graph the relay saw."""
         deadline = time.perf_counter() + self.spec.startup_timeout_s
         while not self._relay_ready.wait(0.01):
             self._check_alive(0)
@@ -180,14 +190,22 @@ class DdsAgent(ExternalAgent):
                                f"{self.spec.startup_timeout_s:g} s the stack declared no "
                                f"{', no '.join(self._missing_now)} on {self.endpoint}; "
                                f"{self._output()}")
+        self._plan(self._graph)
         self._ready = True
 
-    def _publish(self, t_ns: int) -> None:
-        """The tick's messages and then /clock, one frame to the relay, published in order."""
-        distro = self.spec.ros_distro
+    def _publish_sensors(self, t_ns: int) -> None:
+        """The tick's sensor messages, one frame to the relay, published in order."""
+        self._send(t_ns)
+
+    def _publish_clock(self, t_ns: int) -> None:
+        """The tick's /clock, a frame of its own (after the sensors' answers came)."""
         sec, nanosec = divmod(t_ns, 1_000_000_000)
         self._pending.append(("/clock", msg(CLOCK, clock=msg(
             "builtin_interfaces/msg/Time", sec=sec, nanosec=nanosec))))
+        self._send(t_ns)
+
+    def _send(self, t_ns: int) -> None:
+        distro = self.spec.ros_distro
         heads, bodies = [], []
         for topic, m in self._pending:
             typename = type(m).__msgtype__

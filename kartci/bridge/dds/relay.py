@@ -81,24 +81,41 @@ def description(typename: str) -> Path:
                        f"{', '.join([*prefixes, sys.prefix])} (is {package} installed?)")
 
 
+INFRASTRUCTURE = ("/rosout", "/parameter_events")  # topics of every node, never awaited
+
+
+def _qos(info: Any) -> tuple[int, int, int]:
+    """(reliability, durability, depth) of an endpoint's QoS, as rmw's enum numbers."""
+    q = info.qos_profile
+    return int(q.reliability), int(q.durability), int(q.depth)
+
+
+def _text(info: Any) -> str:
+    """An endpoint's reliability and durability, as a person reads them."""
+    rel, dur, _ = _qos(info)
+    return (f"{ {1: 'reliable', 2: 'best-effort'}.get(rel, 'reliable')}, "
+            f"{ {1: 'transient-local', 2: 'volatile'}.get(dur, 'volatile')}")
+
+
 class Relay:
-    """One rclpy node: publishers for what kartci sends, raw subscriptions for the commands."""
+    """One rclpy node: publishers for what kartci sends, raw subscriptions for the commands and
+    for the stack's own topics (counted: the lockstep waits for them), QoS as the stack asks."""
 
     def __init__(self, sock: socket.socket, start: dict[str, Any]) -> None:
         import rclpy  # the ROS 2 Python only (this module is also imported by kartci)
-        from rclpy.qos import QoSProfile, ReliabilityPolicy  # the ROS 2 Python only
 
         self.sock, self.lock = sock, threading.Lock()
-        self.qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         rclpy.init(args=[])
         self.node = rclpy.create_node(start["node"])
+        self.me = (self.node.get_name(), self.node.get_namespace())
         self.pubs: dict[tuple[str, str], Any] = {}
         self.commands = [(str(t), str(ty), str(h)) for t, ty, h in start["commands"]]
+        self.watch = [str(t) for t in start.get("observe", [])]
+        self.settle_s = float(start.get("settle_s", 0.3))
         for topic, typename, hash_ in start["publishers"]:
             self.publisher(topic, typename, hash_, wait=False)
-        self.subs = [self.node.create_subscription(
-            self.cls(typename, hash_), topic, self._sender(topic), self.qos, raw=True)
-            for topic, typename, hash_ in self.commands]
+        self.subs: dict[str, Any] = {}  # commands, made once their publisher shows its QoS
+        self.observers: dict[str, Any] = {}  # the stack's own topics, counted
         self.spinner = threading.Thread(target=rclpy.spin, args=(self.node,), daemon=True)
         self.spinner.start()
 
@@ -108,9 +125,93 @@ class Relay:
                 send(self.sock, self.lock, {"op": "cmd", "topic": topic}, payload)
         return forward
 
-    def cls(self, typename: str, kartci_hash: str) -> Any:
-        """The message class of `pkg/msg/T`, after its installed hash is found equal."""
+    def _counter(self, topic: str) -> Any:
+        def seen(_: bytes) -> None:
+            with contextlib.suppress(OSError):
+                send(self.sock, self.lock, {"op": "seen", "topic": topic})
+        return seen
+
+    def _request(self, infos: list[Any]) -> Any:
+        """A subscription's QoS that matches every publisher in `infos`: reliable only if all
+        offer it, volatile, deep enough never to drop a tick's messages."""
+        from rclpy.qos import (  # the ROS 2 Python only
+            DurabilityPolicy,
+            QoSProfile,
+            ReliabilityPolicy,
+        )
+
+        reliable = bool(infos) and all(
+            i.qos_profile.reliability == ReliabilityPolicy.RELIABLE for i in infos)
+        return QoSProfile(depth=100, durability=DurabilityPolicy.VOLATILE,
+                          reliability=ReliabilityPolicy.RELIABLE if reliable
+                          else ReliabilityPolicy.BEST_EFFORT)
+
+    def _offer(self, topic: str) -> Any:
+        """A publisher's QoS that matches every subscription to `topic`: reliable, and
+        transient-local (latched: a track, /tf_static) where one asks for it."""
+        from rclpy.qos import (  # the ROS 2 Python only
+            DurabilityPolicy,
+            QoSProfile,
+            ReliabilityPolicy,
+        )
+
+        infos = [i for i in self.node.get_subscriptions_info_by_topic(topic) if not self._mine(i)]
+        latched = any(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos)
+        depth = max([int(i.qos_profile.depth) for i in infos if i.qos_profile.depth], default=10)
+        return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
+                          else DurabilityPolicy.VOLATILE)
+
+    def _mine(self, info: Any) -> bool:
+        return (info.node_name, info.node_namespace) == self.me
+
+    def graph(self) -> list[list[Any]]:
+        """Every publisher and subscription of the others: [node, kind, topic, type,
+        reliability, durability, depth], sorted (a change means the graph moved)."""
+        out = []
+        for topic, _ in self.node.get_topic_names_and_types():
+            for kind, infos in (("publisher", self.node.get_publishers_info_by_topic(topic)),
+                                ("subscription",
+                                 self.node.get_subscriptions_info_by_topic(topic))):
+                for i in infos:
+                    if not self._mine(i):
+                        node = f"{i.node_namespace.rstrip('/')}/{i.node_name}"
+                        out.append([node, kind, topic, i.topic_type, *_qos(i)])
+        return sorted(out)
+
+    def follow(self, graph: list[list[Any]]) -> None:
+        """Subscribe to each command once its publisher shows, and to each of the stack's own
+        topics (published and subscribed by the stack, or named by kartci) to count it."""
+        commands = {t for t, _, _ in self.commands}
+        for topic, typename, hash_ in self.commands:
+            infos = self.node.get_publishers_info_by_topic(topic)
+            if topic not in self.subs and any(i.topic_type == typename for i in infos):
+                self.subs[topic] = self.node.create_subscription(
+                    self.cls(typename, hash_), topic, self._sender(topic),
+                    self._request(infos), raw=True)
+        pubs = {(e[2], e[3]) for e in graph if e[1] == "publisher"}
+        subs = {e[2] for e in graph if e[1] == "subscription"}
+        for topic, typename in sorted(pubs):
+            if topic in self.observers or topic in commands or topic in INFRASTRUCTURE or (
+                    topic not in subs and topic not in self.watch):
+                continue
+            infos = self.node.get_publishers_info_by_topic(topic)
+            self.observers[topic] = self.node.create_subscription(
+                self.cls(typename, None), topic, self._counter(topic), self._request(infos),
+                raw=True)
+
+    def cls(self, typename: str, kartci_hash: str | None) -> Any:
+        """The message class of `pkg/msg/T`, after its installed hash is found equal to
+        kartci's (None: a type of the stack's own, only counted)."""
         package, kind, name = typename.split("/")
+        if kartci_hash is None:
+            try:
+                return getattr(importlib.import_module(f"{package}.{kind}"), name)
+            except (ImportError, AttributeError) as err:
+                raise RuntimeError(f"the stack's topic type {typename} is not installed in "
+                                   f"{sys.prefix}, so kartci cannot wait for it; set "
+                                   "KARTCI_ROS2_PYTHON to the stack's own ROS 2 Python"
+                                   ) from err
         path = description(typename)
         installed = json.loads(path.read_text())["type_hashes"][0]["hash_string"]
         if installed != kartci_hash:
@@ -125,7 +226,7 @@ class Relay:
         pub = self.pubs.get((topic, typename))
         if pub is None:
             pub = self.pubs[(topic, typename)] = self.node.create_publisher(
-                self.cls(typename, hash_), topic, self.qos)
+                self.cls(typename, hash_), topic, self._offer(topic))
             deadline = time.monotonic() + MATCH_TIMEOUT_S
             while wait and pub.get_subscription_count() < self.node.count_subscribers(topic):
                 if time.monotonic() > deadline:
@@ -146,23 +247,39 @@ class Relay:
         for (topic, _), pub in self.pubs.items():
             if pub.get_subscription_count() < self.node.count_subscribers(topic):
                 out.append(f"match of the stack's subscription to {topic}")
-        for (topic, typename, hash_), sub in zip(self.commands, self.subs, strict=True):
+        for topic, typename, hash_ in self.commands:
             infos = self.node.get_publishers_info_by_topic(topic)
             kinds = {(i.topic_type, str(i.topic_type_hash)) for i in infos}
-            if (typename, hash_) not in kinds or sub.get_publisher_count() < 1:
+            sub = self.subs.get(topic)
+            if (typename, hash_) not in kinds:
                 seen = ", ".join(sorted(f"{t} {h}" for t, h in kinds))
                 out.append(f"publisher of {topic} ({typename}"
                            + (f"; it has {seen}" if seen else "") + ")")
+            elif sub is None or sub.get_publisher_count() < len(infos):
+                offers = ", ".join(sorted({_text(i) for i in infos}))
+                out.append(f"match of kartci's subscription to {topic} with the stack's "
+                           f"publisher (it offers {offers})")
+        for topic, sub in self.observers.items():
+            stack = [i for i in self.node.get_publishers_info_by_topic(topic) if not self._mine(i)]
+            if sub.get_publisher_count() < len(stack):
+                out.append(f"match of kartci's watch on {topic} with the stack's publishers")
         return out
 
     def wait_ready(self) -> bool:
-        """Tell kartci what is missing whenever that changes, then `ready` (True); False when
-        kartci has closed the socket meanwhile (it sends nothing before `ready`)."""
+        """Tell kartci what is missing whenever that changes, then `ready` with the graph
+        (True) once nothing is and the graph has not changed for settle_s; False when kartci
+        has closed the socket meanwhile (it sends nothing before `ready`)."""
         last: list[str] | None = None
+        graph: list[list[Any]] | None = None
+        changed = time.monotonic()
         while True:
+            now_graph = self.graph()
+            if now_graph != graph:
+                graph, changed = now_graph, time.monotonic()
+                self.follow(graph)
             now = self.missing()
-            if not now:
-                send(self.sock, self.lock, {"op": "ready"})
+            if not now and time.monotonic() - changed >= self.settle_s:
+                send(self.sock, self.lock, {"op": "ready", "graph": graph})
                 return True
             if now != last:
                 send(self.sock, self.lock, {"op": "missing", "what": now})
