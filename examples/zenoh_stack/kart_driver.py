@@ -90,9 +90,11 @@ class Ros2Node:
     def raw_subscribe(self, topic: str, typename: str, take: Callable[[bytes], None]) -> None:
         """`take(payload)` for each CDR payload of `topic`, on the network thread; an `MS`
         token (declared after the subscriber, as rmw_zenoh does)."""
+        def on_sample(sample: zenoh.Sample) -> None:
+            take(sample.payload.to_bytes())
+
         self.keep.append(self.session.declare_subscriber(
-            self.key(topic, typename),
-            zenoh.handlers.Callback(lambda s: take(s.payload.to_bytes()), indirect=False)))
+            self.key(topic, typename), zenoh.handlers.Callback(on_sample, indirect=False)))
         self._token("MS", topic, typename)
 
     def raw_publisher(self, topic: str, typename: str) -> Callable[[bytes], None]:
@@ -209,8 +211,7 @@ def main() -> int:
     node.subscribe("/kartci/track", "std_msgs/msg/String", inbox)
     publish = node.publisher(f"{ns}/ackermann_cmd", "ackermann_msgs/msg/AckermannDriveStamped")
     node.subscribe("/clock", "rosgraph_msgs/msg/Clock", inbox)  # last: kartci starts on it
-    mode = json.loads(session.config().get_json("mode")) if hasattr(session, "config") else "?"
-    print(f"pure_pursuit: connected to {args.connect} as a {mode}, namespace {ns}", flush=True)
+    print(f"pure_pursuit: connected to {args.connect}, namespace {ns}", flush=True)
     driver, pose = PurePursuit(args), None
     header_t = store.types["std_msgs/msg/Header"]
     drive_t = store.types["ackermann_msgs/msg/AckermannDrive"]

@@ -70,7 +70,7 @@ def check(tmp_path: Path, duration_s: float, runs: int) -> None:
     assert first["progress_m"]["value"] > 0.2 * duration_s  # it drives, from the relay's data
     spread = {n: sorted(k for k in first if f["metrics"][k] != first[k])
               for n, f in found.items()}
-    assert spread == dict.fromkeys(names, [])
+    assert spread == {n: [] for n in names}
 
 
 def test_a_two_process_stack_gives_the_same_metrics_every_run(tmp_path: Path) -> None:
