@@ -366,8 +366,12 @@ class ExternalAgent:
         publishers, and its graph has not changed for graph_settle_s; then what every tick
         waits for is planned, the stack's own topics are watched, and QoS checked."""
         deadline = time.perf_counter() + self.spec.startup_timeout_s
+        declared = False
         while (missing := self._missing()) or (
                 time.perf_counter() - self._tokens_changed < self.spec.graph_settle_s):
+            if not missing and not declared:  # kartci's publishers inside the settling time
+                self._declare()
+                declared = True
             self._check_alive(0)
             if time.perf_counter() > deadline:
                 raise RunError(f"external controller of {self.name}: within "

@@ -106,14 +106,19 @@ class DdsAgent(ExternalAgent):
                                        f"{CONNECT_TIMEOUT_S:g} s; {self._relay_output()}"
                                        ) from None
         sock.settimeout(None)
-        wire.send(sock, self._lock, {
+        return sock
+
+    def _send_start(self) -> None:
+        """Tell the relay the node, its publishers (/clock and the first tick's topics, made
+        now so that the graph settles with them matched) and the commands."""
+        distro = self.spec.ros_distro
+        publishers = {("/clock", CLOCK)} | {(t, type(m).__msgtype__) for t, m in self._pending}
+        wire.send(self.sock, self._lock, {
             "op": "start", "node": self.spec.node_name,
-            "publishers": [["/clock", CLOCK, ros2.type_hash(CLOCK, self.spec.ros_distro)]],
-            "commands": [[t, ty, ros2.type_hash(ty, self.spec.ros_distro)]
-                         for t, ty in self.commands.items()],
+            "publishers": [[t, ty, ros2.type_hash(ty, distro)] for t, ty in sorted(publishers)],
+            "commands": [[t, ty, ros2.type_hash(ty, distro)] for t, ty in self.commands.items()],
             "observe": [self._full(w.topic) for w in self.spec.waits_for],
             "settle_s": self.spec.graph_settle_s})
-        return sock
 
     def _read(self) -> None:
         """The relay's frames, on a thread of their own: commands into the inbox."""
@@ -182,6 +187,7 @@ class DdsAgent(ExternalAgent):
     def _wait_ready(self) -> None:
         """Until the relay sees the stack's /clock subscription and command publishers, matched,
         and the graph settled; then plan the ticks from the graph the relay saw."""
+        self._send_start()
         deadline = time.perf_counter() + self.spec.startup_timeout_s
         while not self._relay_ready.wait(0.01):
             self._check_alive(0)

@@ -109,6 +109,7 @@ class Relay:
         self.node = rclpy.create_node(start["node"])
         self.me = (self.node.get_name(), self.node.get_namespace())
         self.pubs: dict[tuple[str, str], Any] = {}
+        self.hashes: dict[tuple[str, str], str] = {}
         self.commands = [(str(t), str(ty), str(h)) for t, ty, h in start["commands"]]
         self.watch = [str(t) for t in start.get("observe", [])]
         self.settle_s = float(start.get("settle_s", 0.3))
@@ -183,6 +184,13 @@ class Relay:
         """Subscribe to each command once its publisher shows, and to each of the stack's own
         topics (published and subscribed by the stack, or named by kartci) to count it."""
         commands = {t for t, _, _ in self.commands}
+        for (topic, typename), pub in list(self.pubs.items()):  # a latched or deeper request
+            want = self._offer(topic)
+            if (want.durability, want.depth) != (pub.qos_profile.durability,
+                                                 pub.qos_profile.depth):
+                self.node.destroy_publisher(pub)
+                del self.pubs[(topic, typename)]
+                self.publisher(topic, typename, self.hashes[(topic, typename)], wait=False)
         for topic, typename, hash_ in self.commands:
             infos = self.node.get_publishers_info_by_topic(topic)
             if topic not in self.subs and any(i.topic_type == typename for i in infos):
@@ -225,6 +233,7 @@ class Relay:
         go nowhere)."""
         pub = self.pubs.get((topic, typename))
         if pub is None:
+            self.hashes[(topic, typename)] = hash_
             pub = self.pubs[(topic, typename)] = self.node.create_publisher(
                 self.cls(typename, hash_), topic, self._offer(topic))
             deadline = time.monotonic() + MATCH_TIMEOUT_S
