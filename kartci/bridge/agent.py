@@ -29,7 +29,7 @@ from typing import Any
 from kartci import project
 from kartci.bridge import ros2
 from kartci.bridge.child import Child
-from kartci.bridge.link import Inbox, Node, Publisher, open_listening
+from kartci.bridge.link import Inbox, Node, Publisher, open_listening, routed
 from kartci.bridge.lockstep import (
     LEARN_QUIET_S,
     Endpoint,
@@ -121,6 +121,7 @@ class ExternalAgent:
         self._wall0 = None
         self._latest = {}
         self._got: dict[str, Any] = {}
+        self._routers: set[int] = set()
         self.child = None
         self.ledger = None
         self.inbox = Inbox()
@@ -171,7 +172,7 @@ class ExternalAgent:
         self._publish_sensors(t_ns)
         on_time = self._phase(Phase.SENSORS, t_ns, deadline, learning)
         if self.ledger.awaits(Phase.SENSORS):
-            time.sleep(self.spec.fence_s)  # the hand-off of what kartci saw to the other nodes
+            self._hand_off()
         self._publish_clock(t_ns)
         on_time = on_time and self._phase(Phase.CLOCK, t_ns, deadline, learning)
         if learning:
@@ -388,10 +389,19 @@ class ExternalAgent:
                 self.node.observe(topic, self._observer(topic))
         self._ready = True
 
-    def _observer(self, topic: str) -> Callable[[], None]:
-        def seen() -> None:
+    def _observer(self, topic: str) -> Callable[[int], None]:
+        def seen(thread: int) -> None:
+            self._routers.add(thread)
             self.inbox.push(topic, None)
         return seen
+
+    def _hand_off(self) -> None:
+        """Before /clock: the stack's messages kartci saw for this tick are on their way to
+        the nodes they are for (Zenoh: the thread that routed each has finished its pass;
+        beyond that, and where that cannot be told, `fence_s` of wall clock)."""
+        threads, self._routers = self._routers, set()
+        if not routed(threads, 1.0) or self.spec.fence_s:
+            time.sleep(self.spec.fence_s)
 
     def _plan(self, stack: list[Endpoint]) -> None:
         """The ledger of what each tick waits for, from the stack's graph and waits_for; a

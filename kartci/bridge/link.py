@@ -20,6 +20,7 @@ import socket
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import zenoh
@@ -199,16 +200,16 @@ class Node:
             self.name, self._entity_id(), ros2.EntityKind.SUBSCRIPTION, topic, typename))
         self._entities += [sub, token]
 
-    def observe(self, topic: str, on_sample: Callable[[], None]) -> None:
-        """Call `on_sample()` for every message on `topic`, whatever its type, on the network
-        thread (so in order with the other subscriptions). No token: the stack's graph does
-        not show it (a node that counts its subscribers sees none more)."""
+    def observe(self, topic: str, on_sample: Callable[[int], None]) -> None:
+        """Call `on_sample(thread)` for every message on `topic`, whatever its type, on the
+        network thread that routes it (`thread`: its native id, see `routed`). No token: the
+        stack's graph does not show it (a node that counts its subscribers sees none more)."""
         key = f"{self.name.domain_id}/{ros2.fully_qualified(topic)[1:]}/*/*"
         def seen(_: zenoh.Sample) -> None:
-            on_sample()
+            on_sample(threading.get_native_id())
 
         self._entities.append(self.session.declare_subscriber(
-            key, zenoh.handlers.Callback(seen, indirect=True)))
+            key, zenoh.handlers.Callback(seen, indirect=False)))
 
     def watch_tokens(self, on_token: Callable[[str], None]) -> None:
         """Call `on_token(key)` for every liveliness token of the domain, present or new."""
@@ -221,6 +222,30 @@ class Node:
     def close(self) -> None:
         """Close the session (its tokens vanish with it)."""
         self.session.close()  # type: ignore[no-untyped-call]
+
+
+def routed(threads: set[int], timeout_s: float) -> bool:
+    """Whether each of this process's network `threads` has finished what it was doing when
+    it delivered a message here: Zenoh routes a message from one node to the others and to
+    this session's subscribers in one pass on one thread, in an order of its own, so a message
+    seen here may not yet be on its way to the node it is for. A thread that is no longer
+    running (Linux: not `R` in /proc/self/task/<id>/stat) has finished that pass. False when
+    `timeout_s` passed first, or where /proc cannot tell."""
+    deadline = time.perf_counter() + timeout_s
+    for tid in threads:
+        while True:
+            try:
+                stat = Path(f"/proc/self/task/{tid}/stat").read_text()
+            except OSError:
+                if not Path("/proc/self/task").is_dir():
+                    return False  # no /proc: cannot tell
+                break  # the thread is gone: it has finished
+            if stat.rsplit(")", 1)[1].split()[0] != "R":
+                break
+            if time.perf_counter() > deadline:
+                return False
+            time.sleep(0)  # let it run
+    return True
 
 
 class Inbox:

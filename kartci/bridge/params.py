@@ -124,10 +124,11 @@ class ExternalController(ControllerParams):
         description="lockstep: wall-clock time, s, the stack's graph must stay unchanged "
         "before t = 0 (its nodes' links to each other are not visible to kartci)")
     fence_s: float = Field(
-        0.002, ge=0.0, le=1.0, exclude_if=lambda v: v == 0.002,
+        0.0, ge=0.0, le=1.0, exclude_if=lambda v: v == 0.0,
         description="lockstep: wall-clock pause, s, between the stack's answers to a tick's "
-        "sensors and the tick's /clock: kartci sees a message between the stack's nodes when "
-        "its session has it, not when the receiving node's link does (docs/explain/lockstep.md)")
+        "sensors and the tick's /clock, for links kartci does not route (DDS, Zenoh peers "
+        "meshed with each other): there it sees a message between two nodes when it has it, "
+        "not when the receiving node has (docs/explain/lockstep.md)")
     command: tuple[str, ...] = Field((), description="program kartci starts for the run "
                                      "(empty: start the stack yourself, connecting to "
                                      "`port`); `{python}` is kartci's Python, "
