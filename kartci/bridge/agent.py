@@ -27,10 +27,12 @@ from pathlib import Path
 from typing import Any
 
 from kartci import project
+from kartci.atomic import write_text_atomic
 from kartci.bridge import ros2
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening, routed
 from kartci.bridge.lockstep import (
+    ARRIVALS,
     LEARN_QUIET_S,
     Endpoint,
     Expect,
@@ -122,6 +124,9 @@ class ExternalAgent:
         self._latest = {}
         self._got: dict[str, Any] = {}
         self._routers: set[int] = set()
+        self._arrived: list[str] = []  # this tick's stack messages, in arrival order
+        self._arrivals: list[str] = []  # one line per tick: t_ns and its messages' topics
+        self.run_dir = ctx.run_dir
         self.child = None
         self.ledger = None
         self.inbox = Inbox()
@@ -177,6 +182,8 @@ class ExternalAgent:
         on_time = on_time and self._phase(Phase.CLOCK, t_ns, deadline, learning)
         if learning:
             self._learnt()
+        self._arrivals.append(" ".join([str(t_ns), *self._arrived]))
+        self._arrived = []
         self.ledger.next_tick(stamped=self._stamped())
         if not on_time:
             self._count_late(t_ns)
@@ -230,6 +237,7 @@ class ExternalAgent:
         stamped = set(self._stamped()) if t_ns is not None else set()
         got: dict[str, Any] = {}
         for topic, payload in items:
+            self._arrived.append(topic)
             if payload is None or topic not in self.commands:  # the stack's own topic, counted
                 self._count(topic, t_ns)
                 continue
@@ -424,8 +432,17 @@ class ExternalAgent:
                 out.append(self.joystick(m, self.frame))
         return out
 
+    def _write_arrivals(self) -> None:
+        """The arrival order of each tick's stack messages, beside the log (what `kartci run
+        --conditioning K` compares between repeats that differ)."""
+        if self.run_dir is not None and self._arrivals:
+            write_text_atomic(self.run_dir / f"{self.name}.{ARRIVALS}",
+                              "\n".join(self._arrivals) + "\n")
+            self._arrivals = []
+
     def close(self) -> None:
         """Stop the stack's program and close the Zenoh session (idempotent)."""
+        self._write_arrivals()
         if self.child is not None:
             self.child.stop(self.spec.stop_timeout_s)
         if not self.node.session.is_closed():

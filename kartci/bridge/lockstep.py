@@ -27,6 +27,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 
+ARRIVALS = "arrivals.log"  # <agent>.<this> in the run folder: each tick's stack messages in order
 LEARN_QUIET_S = 0.5  # s of wall clock without a message that ends tick 0's learning wait
 # topics every ROS 2 node has, which answer neither data nor time
 INFRASTRUCTURE = ("/rosout", "/parameter_events")

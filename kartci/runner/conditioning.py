@@ -13,11 +13,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from kartci.bridge.lockstep import ARRIVALS
 from kartci.core import RunFolder
 from kartci.errors import BaselineError
 from kartci.runner.jobs import REPEAT_PREFIX, START_STEP_M, Job, Vary, replica
 from kartci.verdict import (
     SPREAD_MULTIPLE,
+    Conditioning,
     MetricVerdict,
     compare,
     ill_conditioned,
@@ -80,6 +82,60 @@ def record(folder: Path) -> dict[str, Any]:
             "step_m": START_STEP_M, "tolerance_at_least": f"{SPREAD_MULTIPLE:g} x spread"}
 
 
+def stack_repeats(folder: Path) -> bool:
+    """Whether the replicas of `folder` repeat it unchanged (an external stack's scenario)."""
+    return any(_variation(rep).get("step") == 0.0 for rep in replica_folders(folder))
+
+
+def divergence(folder: Path, varied: list[str]) -> str:
+    """Why repeats of an external stack's run differ: the first differing message between the
+    run and the first repeat whose metrics differ, and the first tick at which the stack's
+    messages arrived in another order."""
+    from kartci.logs.diff import DiffOptions, diff_logs  # the log reader, only when needed
+
+    run = RunFolder(folder)
+    mine = run.read_metrics()
+    other = next((r for r in replica_folders(folder)
+                  if any(RunFolder(r).read_metrics().get(n) != mine.get(n) for n in varied)),
+                 None)
+    if other is None:
+        return ""
+    where = []
+    first = diff_logs(run.log, RunFolder(other).log, DiffOptions()).first
+    if first is not None:
+        where.append(f"first difference against {other.name}: {first.topic} message "
+                     f"{first.index} at t = {first.t_ns * 1e-9:.3f} s")
+    for mine_log in sorted(folder.glob(f"*.{ARRIVALS}")):
+        theirs = other / mine_log.name
+        if not theirs.is_file():
+            continue
+        for a, b in zip(mine_log.read_text().splitlines(), theirs.read_text().splitlines(),
+                        strict=False):
+            if a != b:
+                t, *order_a = a.split()
+                order_b = b.split()[1:]
+                at = next((i for i, (x, y) in enumerate(zip(order_a, order_b, strict=False))
+                           if x != y), min(len(order_a), len(order_b)))
+                topic = (order_a + order_b)[min(at, len(order_a + order_b) - 1)] if (
+                    order_a or order_b) else "?"
+                where.append(f"the stack's messages first arrived in another order at t = "
+                             f"{int(t) * 1e-9:.3f} s ({topic}: {' '.join(order_a)} | "
+                             f"{' '.join(order_b)})")
+                break
+    return "; ".join(where)
+
+
+def stack_warnings(verdicts: list[MetricVerdict], folder: Path) -> list[str]:
+    """One line for the metrics that differ between repeats of an external stack's run."""
+    varied = [v.name for v in verdicts if v.conditioning is Conditioning.ILL]
+    if not varied:
+        return []
+    why = divergence(folder, varied)
+    return [f"{', '.join(varied)} differ between repeats of the same run: the external stack "
+            f"does not answer deterministically{'; ' + why if why else ''} "
+            "(docs/explain/lockstep.md says what the lockstep cannot order)"]
+
+
 def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioResult:
     """A result judged again with the spreads its own replicas measured (a --conditioning run);
     unchanged without replicas or with an error."""
@@ -92,11 +148,17 @@ def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioRes
     verdicts = compare(RunFolder(folder).read_metrics(), entries)
     verdicts = [v if v.baseline is not None or v.name not in measured else
                 _unjudged(v, measured[v.name]) for v in verdicts]
+    exact = stack_repeats(folder)
+    if exact:  # the same run repeated: any spread is the stack's nondeterminism
+        verdicts = [replace(v, conditioning=Conditioning.ILL if v.spread is None or v.spread > 0
+                            else Conditioning.WELL) if v.name in measured else v
+                    for v in verdicts]
     policed = {v.name: v for v in result.verdicts}  # the policy is the stored file's
     verdicts = [replace(v, policy=policed[v.name].policy, policy_bound=policed[v.name]
                         .policy_bound) if v.name in policed else v for v in verdicts]
     old = [w for w in result.warnings if " is ill-conditioned " not in w]
-    return replace(result, verdicts=verdicts, warnings=(*old, *ill_conditioned(verdicts)))
+    found = stack_warnings(verdicts, folder) if exact else ill_conditioned(verdicts)
+    return replace(result, verdicts=verdicts, warnings=(*old, *found))
 
 
 def _unjudged(v: MetricVerdict, sp: float | None) -> MetricVerdict:

@@ -60,9 +60,16 @@ class Vary(StrEnum):
     START = "start"  # every robot's start k x START_STEP_M to the left: a last-bit nudge
 
 
+def drives_a_stack(spec: Scenario) -> bool:
+    """Whether an agent of the scenario is an external stack (its nodes' timing is its noise)."""
+    return any(a.controller.type == "external" for a in spec.agents.values())
+
+
 def replica(spec: Scenario, vary: Vary, k: int) -> Scenario:
-    """Replica k of a scenario (k = 0 is the scenario itself)."""
-    if k == 0:
+    """Replica k of a scenario (k = 0 is the scenario itself). A start replica of a scenario
+    that drives an external stack is the scenario itself: the stack's timing varies between
+    repeats, and a lockstep that is deterministic gives the same numbers every time."""
+    if k == 0 or (vary is Vary.START and drives_a_stack(spec)):
         return spec
     if vary is Vary.SEED:
         return spec.model_copy(update={"seed": spec.seed + k})
@@ -83,7 +90,8 @@ class Job:
     @property
     def variation(self) -> dict[str, Any]:
         """What this run changed, for run.json (baseline update reads it)."""
-        step = START_STEP_M if self.vary is Vary.START else 1
+        step = (0.0 if drives_a_stack(self.spec) else START_STEP_M) if (
+            self.vary is Vary.START) else 1
         return {"vary": self.vary.value, "k": self.repeat, "step": step}
 
     @property

@@ -81,3 +81,37 @@ def test_a_two_process_stack_gives_the_same_metrics_every_run(tmp_path: Path) ->
 def test_a_two_process_stack_gives_the_same_metrics_ten_runs_in_each_mode(
         tmp_path: Path) -> None:
     check(tmp_path, 10.0, 10)
+
+
+def test_repeats_of_a_stack_run_it_unchanged_and_name_what_differs(tmp_path: Path) -> None:
+    """`--conditioning K` on an external stack repeats the run as it is (no nudge: the stack's
+    timing is the noise); a stack whose answers follow the wall clock is flagged, with the
+    first difference between two repeats."""
+    def short(command: list[str]) -> dict[str, Any]:
+        spec: dict[str, Any] = yaml.safe_load(SCENARIO.read_text())
+        spec.update(duration_s=0.3, criteria={})
+        spec["agents"]["kart0"]["controller"]["command"] = command
+        return spec
+
+    proj = tmp_path / "proj"
+    (proj / "scenarios").mkdir(parents=True)
+    (proj / "kartci.toml").write_text('scenarios = ["scenarios"]\n')
+    specs = {"steady": short(["{python}", str(EXAMPLE / "kart_driver.py")]),
+             "coin": short(["{python}", str(Path(__file__).with_name("zenoh_coin.py")),
+                            "{namespace}"])}
+    for name, spec in specs.items():
+        (proj / "scenarios" / f"{name}.yaml").write_text(yaml.safe_dump(spec))
+    out = tmp_path / "out"
+    p = kartci("run", "--conditioning", "3", "-j", "2", "--out", out, "--no-strict", cwd=proj)
+    assert p.returncode == 0, p.stdout + p.stderr
+    for name in specs:
+        for k in (1, 2):
+            run = json.loads((out / name / f"repeat_{k}" / "run.json").read_text())
+            assert run["variation"] == {"vary": "start", "k": k, "step": 0.0}
+    summary = json.loads((out / "summary.json").read_text())["scenarios"]
+    assert not [w for w in summary["steady"]["warnings"] if "repeats" in w]
+    assert {m["conditioning"] for m in summary["steady"]["metrics"].values()} == {"well"}
+    [warning] = [w for w in summary["coin"]["warnings"] if "repeats" in w]
+    assert "mean_speed_mps" in warning and "differ between repeats of the same run" in warning
+    assert "first difference against repeat_" in warning and "/kart0/ackermann_cmd" in warning
+    assert summary["coin"]["metrics"]["mean_speed_mps"]["conditioning"] == "ill"

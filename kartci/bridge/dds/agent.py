@@ -64,7 +64,6 @@ class DdsAgent(ExternalAgent):
         self._graph: list[Endpoint] = []
         self._relay_error: str | None = None
         self._lock = threading.Lock()
-        self._run_dir = ctx.run_dir
         self.round_trips_s: list[float] = []
         self.python = ros_env.require_python()
         self._folder = Path(tempfile.mkdtemp(prefix="kartci-dds-"))  # the relay's socket
@@ -230,6 +229,7 @@ class DdsAgent(ExternalAgent):
     def close(self) -> None:
         """Stop the stack, end the relay (its socket closed: rclpy shuts down), release the
         domain and remove the shared memory the run's processes left (idempotent)."""
+        self._write_arrivals()
         if self.child is not None:
             self.child.stop(self.spec.stop_timeout_s)
         sock: socket.socket | None = getattr(self, "sock", None)
@@ -244,8 +244,8 @@ class DdsAgent(ExternalAgent):
             self.relay.stop(self.spec.stop_timeout_s)
         if self.domain is not None:
             self.domain.release()
-        if self._run_dir is not None and self.round_trips_s:
-            write_text_atomic(self._run_dir / f"{self.name}.{ROUND_TRIP}",
+        if self.run_dir is not None and self.round_trips_s:
+            write_text_atomic(self.run_dir / f"{self.name}.{ROUND_TRIP}",
                               json.dumps(self.timing(), sort_keys=True) + "\n")
         clean_zombies()
         (self._folder / "relay.sock").unlink(missing_ok=True)
