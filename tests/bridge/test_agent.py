@@ -77,3 +77,35 @@ def test_placeholders_are_replaced_and_other_braces_kept() -> None:
     values = {"endpoint": "tcp/127.0.0.1:7447", "namespace": "kart0"}
     assert substitute("--connect={endpoint}", values) == "--connect=tcp/127.0.0.1:7447"
     assert substitute('{"ns": "{namespace}", "x": {}}', values) == '{"ns": "kart0", "x": {}}'
+
+
+def test_kartci_offers_a_latched_track_in_its_token_and_reads_the_stacks_qos() -> None:
+    """The stack's token asks for a transient-local track: kartci's track publisher says
+    reliable + transient-local in its own token (rmw_zenoh's QoS field), so rmw_zenoh's graph
+    shows the pair as compatible; a best-effort publisher's token is read as best effort (on
+    Zenoh its data reaches kartci's subscription whatever the QoS says)."""
+    from kartci.bridge import ros2
+    from kartci.bridge.lockstep import Durability, Qos, Reliability
+
+    a = agent([{"topic": "/kart0/cmd_vel", "type": "geometry_msgs/msg/Twist"}])
+    try:
+        stack = ros2.NodeName(0, "f" * 32, 0, "driver")
+        latched = ros2.qos_text(Qos(Reliability.RELIABLE, Durability.TRANSIENT_LOCAL, 1))
+        a._token(ros2.entity_token(stack, 11, ros2.EntityKind.SUBSCRIPTION, "/kartci/track",
+                                   "std_msgs/msg/String", latched))
+        a._pending.append(("/kartci/track", msg("std_msgs/msg/String", data="x_m,y_m")))
+        a.spec = a.spec.model_copy(update={"startup_timeout_s": 0.2})
+        with pytest.raises(RunError, match="subscription to /kartci/track never matched"):
+            a._declare()  # no real subscriber behind the token: it never matches
+        own = str(a.node.session.zid())
+        mine = [t for t in a._tokens if "/MP/" in t and "%kartci%track" in t and own in t]
+        assert len(mine) == 1
+        assert ros2.parse_qos(mine[0].rsplit("/", 1)[1]) == Qos(
+            Reliability.RELIABLE, Durability.TRANSIENT_LOCAL, 1)
+        best_effort = ros2.qos_text(Qos(Reliability.BEST_EFFORT, Durability.VOLATILE, 5))
+        a._token(ros2.entity_token(stack, 12, ros2.EntityKind.PUBLISHER, "/kart0/cmd_vel",
+                                   "geometry_msgs/msg/Twist", best_effort))
+        [driver_pub] = [e for e in a._stack_endpoints() if e.topic == "/kart0/cmd_vel"]
+        assert driver_pub.node == "/driver" and not driver_pub.qos.reliable
+    finally:
+        a.close()
