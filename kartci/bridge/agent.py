@@ -42,6 +42,7 @@ from kartci.bridge.lockstep import (
     mismatches,
     offer_for,
     plan,
+    unpublished,
 )
 from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
 from kartci.core import ROBOTS, AgentContext, JoyCommand, Outbox, RobotParams
@@ -368,12 +369,23 @@ class ExternalAgent:
         return [f"{'subscription to' if kind == 'MS' else 'publisher of'} {topic} ({typename})"
                 for kind, topic, typename in want
                 if (kind, ros2.mangle(topic), ros2.dds_type_name(typename),
-                    ros2.type_hash(typename, self.spec.ros_distro)) not in have]
+                    ros2.type_hash(typename, self.spec.ros_distro)) not in have
+                ] + unpublished(self._stack_endpoints(), self._published(), self._optional())
+
+    def _published(self) -> set[str]:
+        """The topics kartci publishes to the stack."""
+        return {"/clock", *(self._full(t) for t in self.inputs)}
+
+    def _optional(self) -> set[str]:
+        """Topics the scenario says not to wait for (waits_for count 0): a subscription to one
+        of them needs no publisher before t = 0."""
+        return {self._full(w.topic) for w in self.spec.waits_for if w.count == 0}
 
     def _wait_ready(self) -> None:
         """The start barrier: the stack has declared its /clock subscription and command
-        publishers, and its graph has not changed for graph_settle_s; then what every tick
-        waits for is planned, the stack's own topics are watched, and QoS checked."""
+        publishers, a publisher of everything it subscribes to (else a node is not up yet),
+        and its graph has not changed for graph_settle_s; then what every tick waits for is
+        planned, the stack's own topics are watched, and QoS checked."""
         deadline = time.perf_counter() + self.spec.startup_timeout_s
         declared = False
         while (missing := self._missing()) or (

@@ -136,6 +136,19 @@ def mismatches(endpoints: Iterable[Endpoint]) -> list[str]:
     return out
 
 
+def unpublished(endpoints: Iterable[Endpoint], published: Iterable[str],
+                optional: Iterable[str]) -> list[str]:
+    """What the stack subscribes to that nothing publishes yet (kartci's `published` topics,
+    `/rosout`, `/parameter_events` and the `optional` ones aside): a node of the stack that
+    is not up yet, so t = 0 waits for it."""
+    eps = list(endpoints)
+    have = {e.topic for e in eps if e.kind is Kind.PUBLISHER} | set(published) | set(
+        INFRASTRUCTURE) | set(optional)
+    return [f"publisher of {e.topic} (which {e.node} subscribes to)"
+            for e in sorted(eps, key=lambda e: (e.topic, e.node))
+            if e.kind is Kind.SUBSCRIPTION and e.topic not in have]
+
+
 @dataclass(frozen=True)
 class Expect:
     """One topic a tick waits for: `count` messages every `every` ticks, in `phase` (None:

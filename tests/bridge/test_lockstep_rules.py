@@ -20,6 +20,7 @@ from kartci.bridge.lockstep import (
     offer_for,
     plan,
     request_for,
+    unpublished,
 )
 
 BEST_EFFORT = Qos(Reliability.BEST_EFFORT, Durability.VOLATILE, 5)
@@ -147,3 +148,14 @@ def test_rmw_zenohs_default_qos_is_reliable_volatile_depth_ten() -> None:
     assert ros2.qos_text(Qos()) == ros2.DEFAULT_QOS == "::,10:,:,:,,"
     assert ros2.parse_qos("2:1:,5:,:,:,,") == Qos(Reliability.BEST_EFFORT,
                                                   Durability.TRANSIENT_LOCAL, 5)
+
+
+def test_t0_waits_for_a_publisher_of_everything_the_stack_subscribes_to() -> None:
+    """The driver is up before the relay: /k/odom_relay has no publisher yet, so the stack is
+    not all there; kartci's own topics, /rosout and topics waits_for says not to wait for
+    (count 0) need none."""
+    eps = [e for e in relay_and_driver() if e.node != "/k/a"]
+    assert unpublished(eps, {"/k/odom", "/clock"}, ()) == [
+        "publisher of /k/odom_relay (which /k/b subscribes to)"]
+    assert unpublished(eps, {"/k/odom", "/clock"}, {"/k/odom_relay"}) == []
+    assert unpublished(relay_and_driver(), {"/k/odom", "/clock"}, ()) == []

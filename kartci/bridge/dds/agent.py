@@ -61,6 +61,7 @@ class DdsAgent(ExternalAgent):
         self.relay: Child | None = None
         self._missing_now = ["an answer from the DDS relay"]
         self._relay_ready = threading.Event()
+        self._publishing = threading.Event()
         self._graph: list[Endpoint] = []
         self._relay_error: str | None = None
         self._lock = threading.Lock()
@@ -75,8 +76,6 @@ class DdsAgent(ExternalAgent):
             self.sock = self._start_relay(ctx.run_dir)
             self._reader = threading.Thread(target=self._read, daemon=True)
             self._reader.start()
-            if spec.command:
-                self.child = self._start(ctx.run_dir)
         except BaseException:
             self.close()
             raise
@@ -116,7 +115,8 @@ class DdsAgent(ExternalAgent):
             "op": "start", "node": self.spec.node_name,
             "publishers": [[t, ty, ros2.type_hash(ty, distro)] for t, ty in sorted(publishers)],
             "commands": [[t, ty, ros2.type_hash(ty, distro)] for t, ty in self.commands.items()],
-            "observe": [self._full(w.topic) for w in self.spec.waits_for],
+            "observe": [self._full(w.topic) for w in self.spec.waits_for if w.count],
+            "optional": sorted(self._optional()),
             "settle_s": self.spec.graph_settle_s})
 
     def _read(self) -> None:
@@ -127,6 +127,8 @@ class DdsAgent(ExternalAgent):
                 self.inbox.push(head["topic"], body)
             elif head["op"] == "seen":
                 self.inbox.push(head["topic"], None)
+            elif head["op"] == "publishing":
+                self._publishing.set()
             elif head["op"] == "missing":
                 self._missing_now = list(head["what"])
             elif head["op"] == "ready":
@@ -184,10 +186,21 @@ class DdsAgent(ExternalAgent):
                 "max_ms": at(1.0), "late_commands": self.late}
 
     def _wait_ready(self) -> None:
-        """Until the relay sees the stack's /clock subscription and command publishers, matched,
-        and the graph settled; then plan the ticks from the graph the relay saw."""
+        """The relay's publishers first, then the stack (its nodes find kartci's publishers in
+        their first discovery: a publisher made after a best-effort subscription was seen to
+        miss tick 0 when the subscription's side matched it late), then until the relay sees
+        the stack's /clock subscription and command publishers, matched, and the graph settled;
+        then plan the ticks from the graph the relay saw."""
         self._send_start()
         deadline = time.perf_counter() + self.spec.startup_timeout_s
+        while not self._publishing.wait(0.01):
+            self._check_alive(0)
+            if time.perf_counter() > deadline:
+                raise RunError(f"external controller of {self.name}: the DDS relay made no "
+                               f"publishers within {self.spec.startup_timeout_s:g} s; "
+                               f"{self._relay_output()}")
+        if self.spec.command:
+            self.child = self._start(self.run_dir)
         while not self._relay_ready.wait(0.01):
             self._check_alive(0)
             if time.perf_counter() > deadline:

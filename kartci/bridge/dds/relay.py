@@ -109,9 +109,9 @@ class Relay:
         self.node = rclpy.create_node(start["node"])
         self.me = (self.node.get_name(), self.node.get_namespace())
         self.pubs: dict[tuple[str, str], Any] = {}
-        self.hashes: dict[tuple[str, str], str] = {}
         self.commands = [(str(t), str(ty), str(h)) for t, ty, h in start["commands"]]
         self.watch = [str(t) for t in start.get("observe", [])]
+        self.optional = [str(t) for t in start.get("optional", [])]
         self.settle_s = float(start.get("settle_s", 0.3))
         for topic, typename, hash_ in start["publishers"]:
             self.publisher(topic, typename, hash_, wait=False)
@@ -147,21 +147,18 @@ class Relay:
                           reliability=ReliabilityPolicy.RELIABLE if reliable
                           else ReliabilityPolicy.BEST_EFFORT)
 
-    def _offer(self, topic: str) -> Any:
-        """A publisher's QoS that matches every subscription to `topic`: reliable, and
-        transient-local (latched: a track, /tf_static) where one asks for it."""
+    def _offer(self) -> Any:
+        """A publisher's QoS that matches every subscription: reliable and transient-local
+        (latched subscriptions: a track, /tf_static), keeping rmw's default 10. The same for
+        every topic, so a publisher is made once, before the stack starts."""
         from rclpy.qos import (  # the ROS 2 Python only
             DurabilityPolicy,
             QoSProfile,
             ReliabilityPolicy,
         )
 
-        infos = [i for i in self.node.get_subscriptions_info_by_topic(topic) if not self._mine(i)]
-        latched = any(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos)
-        depth = max([int(i.qos_profile.depth) for i in infos if i.qos_profile.depth], default=10)
-        return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
-                          else DurabilityPolicy.VOLATILE)
+        return QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
     def _mine(self, info: Any) -> bool:
         return (info.node_name, info.node_namespace) == self.me
@@ -184,13 +181,6 @@ class Relay:
         """Subscribe to each command once its publisher shows, and to each of the stack's own
         topics (published and subscribed by the stack, or named by kartci) to count it."""
         commands = {t for t, _, _ in self.commands}
-        for (topic, typename), pub in list(self.pubs.items()):  # a latched or deeper request
-            want = self._offer(topic)
-            if (want.durability, want.depth) != (pub.qos_profile.durability,
-                                                 pub.qos_profile.depth):
-                self.node.destroy_publisher(pub)
-                del self.pubs[(topic, typename)]
-                self.publisher(topic, typename, self.hashes[(topic, typename)], wait=False)
         for topic, typename, hash_ in self.commands:
             infos = self.node.get_publishers_info_by_topic(topic)
             if topic not in self.subs and any(i.topic_type == typename for i in infos):
@@ -233,9 +223,8 @@ class Relay:
         go nowhere)."""
         pub = self.pubs.get((topic, typename))
         if pub is None:
-            self.hashes[(topic, typename)] = hash_
             pub = self.pubs[(topic, typename)] = self.node.create_publisher(
-                self.cls(typename, hash_), topic, self._offer(topic))
+                self.cls(typename, hash_), topic, self._offer())
             deadline = time.monotonic() + MATCH_TIMEOUT_S
             while wait and pub.get_subscription_count() < self.node.count_subscribers(topic):
                 if time.monotonic() > deadline:
@@ -268,6 +257,12 @@ class Relay:
                 offers = ", ".join(sorted({_text(i) for i in infos}))
                 out.append(f"match of kartci's subscription to {topic} with the stack's "
                            f"publisher (it offers {offers})")
+        # a subscription of the stack that nothing publishes: a node that is not up yet
+        graph = self.graph()
+        have = {e[2] for e in graph if e[1] == "publisher"} | {t for t, _ in self.pubs} | set(
+            INFRASTRUCTURE) | set(self.optional)
+        out += [f"publisher of {e[2]} (which {e[0]} subscribes to)" for e in graph
+                if e[1] == "subscription" and e[2] not in have]
         for topic, sub in self.observers.items():
             stack = [i for i in self.node.get_publishers_info_by_topic(topic) if not self._mine(i)]
             if sub.get_publisher_count() < len(stack):
@@ -324,6 +319,7 @@ def main() -> int:
     relay: Relay | None = None
     try:
         relay = Relay(sock, first[0])
+        send(sock, relay.lock, {"op": "publishing"})  # kartci starts the stack now
         if not relay.wait_ready():
             return 0
         while (frame := receive(sock)) is not None and frame[0]["op"] == "tick":
