@@ -118,6 +118,7 @@ class ExternalAgent:
         self.joystick = joystick(ctx.name, ctx.model, spec.mapping) if any(
             c.type == "sensor_msgs/msg/Joy" for c in spec.commands) else None
         self.commands = {self._full(c.topic): c.type for c in spec.commands}
+        self.stamped = self._stamped()
         self.late = self._late_in_row = 0
         self._pending = []
         self._ready = False
@@ -185,18 +186,18 @@ class ExternalAgent:
             self._learnt()
         self._arrivals.append(" ".join([str(t_ns), *self._arrived]))
         self._arrived = []
-        self.ledger.next_tick(stamped=self._stamped())
+        self.ledger.next_tick(stamped=self.stamped)
         if not on_time:
             self._count_late(t_ns)
             return [(LATE_TOPIC, msg("std_msgs/msg/UInt32", data=self.late))]
         self._late_in_row = 0
         return self._outbox(self._got)
 
-    def _stamped(self) -> list[str]:
+    def _stamped(self) -> frozenset[str]:
         """Command topics whose type has a header: matched to ticks by stamp."""
         fields = ros2.typestore(self.spec.ros_distro).fielddefs
-        return [t for t, ty in self.commands.items()
-                if any(name == "header" for name, _ in fields[ty][1])]
+        return frozenset(t for t, ty in self.commands.items()
+                         if any(name == "header" for name, _ in fields[ty][1]))
 
     def _learnt(self) -> None:
         """Tick 0 is over: say what every tick waits for (a team pins it with waits_for)."""
@@ -235,10 +236,10 @@ class ExternalAgent:
         """Count and decode what arrived; in lockstep (`t_ns` given) keep as this tick's
         answer only a command of this tick (its stamp, or its count), drop earlier ones, and
         stop at a topic that published more than it was due. The answers among `items`."""
-        stamped = set(self._stamped()) if t_ns is not None else set()
         got: dict[str, Any] = {}
         for topic, payload in items:
-            self._arrived.append(topic)
+            if t_ns is not None:
+                self._arrived.append(topic)
             if payload is None or topic not in self.commands:  # the stack's own topic, counted
                 self._count(topic, t_ns)
                 continue
@@ -251,7 +252,7 @@ class ExternalAgent:
             self._latest[topic] = m
             if t_ns is None:
                 continue
-            if topic in stamped:
+            if topic in self.stamped:
                 if stamp_ns(m.header) != t_ns:
                     continue  # stale: an earlier tick's answer
                 if topic not in self._got:
