@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci import project
-from kartci.bridge import ros2
+from kartci.bridge import attach, ros2
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening
 from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
@@ -80,6 +80,9 @@ class ExternalAgent:
             for topic, typename in self.commands.items():
                 self.node.subscription(topic, typename, self._pusher(topic))
             self.node.watch_tokens(self._tokens.add)
+            attach.announce(ctx.run_dir, self.name, attach.zenoh(  # run.json + terminal
+                child_env(self.endpoint, spec.domain_id, self.name), self.endpoint,
+                [*self.commands, "/clock"][0]))
             if spec.command:
                 self.child = self._start(ctx.run_dir)
         except BaseException:

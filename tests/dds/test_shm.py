@@ -1,20 +1,41 @@
-"""Fast DDS's shared memory and the run's domain, without ROS 2: zombie segments (nobody holds
-their lock file) are removed and live ones kept; each run holds its own ROS_DOMAIN_ID; the ROS 2
-Python is found or named as missing in one line."""
+"""Fast DDS's shared memory and the run's domain: zombie segments (no lock held, no live process
+mapping or holding them) are removed and live ones kept; each run holds its own ROS_DOMAIN_ID,
+host-wide, and skips one a live participant is on; the ROS 2 Python is found or named as missing
+in one line; the profile goes in the variable the installed Fast DDS reads. The tests with real
+Fast DDS processes skip, saying why, where no ROS 2 Python can be made."""
 
 from __future__ import annotations
 
 import fcntl
+import json
+import mmap
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
 from helpers import ROOT, kartci
+from ros2python import ros_python_or_skip
 
+from kartci.bridge import attach
+from kartci.bridge.child import Child
 from kartci.bridge.dds import env as ros_env
+from kartci.bridge.dds import shm
 from kartci.bridge.dds.env import dds_env, profile_path
-from kartci.bridge.dds.shm import FIRST_DOMAIN, Domain, clean_zombies
+from kartci.bridge.dds.relay import description
+from kartci.bridge.dds.shm import FIRST_DOMAIN, Domain, clean_zombies, discovery_port
+from kartci.core import RunFolder
 from kartci.errors import SpecError
+
+CHATTER = Path(__file__).with_name("chatter.py")
+SHM = Path("/dev/shm")
+FAST = ("/dev/shm/fastdds_", "/dev/shm/sem.fastdds_")
 
 
 def _segment(folder: Path, name: str, lock: str) -> Path:
@@ -40,14 +61,164 @@ def test_zombies_go_and_live_segments_stay(tmp_path: Path) -> None:
         "fastdds_fedcba9876543210", "fastdds_fedcba9876543210_el", "other.zenoh"]
 
 
+def test_a_crash_survivors_orphans_go_unless_a_live_process_maps_them(tmp_path: Path) -> None:
+    """A port segment and its mutex without a lock file (a survivor removed it, or it never
+    had one) go once no live process maps or holds them; one this process maps stays."""
+    for port in (7000, 9160, 9161):
+        (tmp_path / f"fastdds_port{port}").write_bytes(b"\0" * 4096)
+        (tmp_path / f"sem.fastdds_port{port}_mutex").write_bytes(b"\0" * 32)
+    with (tmp_path / "fastdds_port9161").open("r+b") as f, mmap.mmap(f.fileno(), 4096):
+        held = (tmp_path / "sem.fastdds_port9160_mutex").open("rb")  # an open descriptor
+        try:
+            removed = clean_zombies(tmp_path)
+        finally:
+            held.close()
+        assert sorted(removed) == ["fastdds_port7000", "sem.fastdds_port7000_mutex"]
+    assert sorted(clean_zombies(tmp_path)) == sorted([  # nobody uses them now
+        "fastdds_port9160", "fastdds_port9161", "sem.fastdds_port9160_mutex",
+        "sem.fastdds_port9161_mutex"])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_what_a_hidden_process_could_use_stays(tmp_path: Path,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    """While some process cannot be inspected (another user's), a family another user could
+    write is kept: nothing proves it unused."""
+    monkeypatch.setattr(shm, "in_use", lambda shm_dir: (set(), True))
+    for name, mode in (("fastdds_port7000", 0o644), ("fastdds_port7001", 0o666)):
+        (tmp_path / name).touch()
+        (tmp_path / name).chmod(mode)
+    assert clean_zombies(tmp_path) == ["fastdds_port7000"]
+
+
 def test_each_run_holds_its_own_domain(tmp_path: Path) -> None:
-    a, b = Domain(tmp_path), Domain(tmp_path)
+    a, b = Domain(tmp_path, tmp_path), Domain(tmp_path, tmp_path)
     assert (a.id, b.id) == (FIRST_DOMAIN, FIRST_DOMAIN + 1)
     a.release()
-    c = Domain(tmp_path)
+    c = Domain(tmp_path, tmp_path)
     assert c.id == FIRST_DOMAIN
     b.release()
     c.release()
+
+
+def test_a_domain_a_live_participant_is_on_is_not_claimed(tmp_path: Path) -> None:
+    """A participant kartci did not start (no kartci lock) holds its discovery port's shared
+    lock: its domain is skipped; once it is dead, the domain is free again."""
+    port = tmp_path / f"fastdds_port{discovery_port(FIRST_DOMAIN)}"
+    assert port.name == "fastdds_port32650"  # 7400 + 250 * 101
+    port.touch()
+    (tmp_path / f"{port.name}_sl").touch()
+    (tmp_path / "locks").mkdir()
+    with (tmp_path / f"{port.name}_sl").open("rb") as lock:
+        fcntl.flock(lock, fcntl.LOCK_SH)
+        d = Domain(tmp_path / "locks", tmp_path)
+        assert (d.id, d.skipped) == (FIRST_DOMAIN + 1, [FIRST_DOMAIN])
+        d.release()
+    d = Domain(tmp_path / "locks", tmp_path)
+    assert d.id == FIRST_DOMAIN
+    d.release()
+
+
+_HOLD = ("import sys; from kartci.bridge.dds.shm import Domain; d = Domain(); "
+         "print(d.id, flush=True); sys.stdin.read()")
+
+
+def test_two_runs_with_different_cache_folders_get_different_domains(tmp_path: Path) -> None:
+    """The lock is the host's (beside /dev/shm), not the user's cache folder: two runs started
+    at once with their own KARTCI_CACHE_DIR hold two ids (both took 101 before)."""
+    procs = [subprocess.Popen([sys.executable, "-c", _HOLD], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True,
+                              env={**os.environ, "KARTCI_CACHE_DIR": str(tmp_path / c)})
+             for c in ("cache_a", "cache_b")]
+    try:
+        ids = [int(p.stdout.readline()) for p in procs if p.stdout is not None]
+    finally:
+        for p in procs:
+            p.communicate("", timeout=30)
+    assert len(ids) == 2 and ids[0] != ids[1], ids
+    folder = SHM / shm.DOMAINS_FOLDER
+    assert (folder.stat().st_mode & 0o7777, sorted(
+        (folder / f"{i}.lock").stat().st_mode & 0o777 for i in ids)) == (0o1777, [0o444] * 2)
+
+
+def _fake_python(tmp_path: Path, library: str) -> Path:
+    """A 'Python' whose version probe finds `library` mapped."""
+    path = tmp_path / f"python-{library}"
+    path.write_text(f"#!/bin/sh\necho {library}\n")
+    path.chmod(0o755)
+    return path
+
+
+def test_the_profile_goes_in_the_variable_the_installed_fast_dds_reads(tmp_path: Path) -> None:
+    """Fast DDS 3 reads FASTDDS_ (and warns at every start while FASTRTPS_ is set: set empty),
+    2.x reads FASTRTPS_ only (else UDP multicast); unknown: both."""
+    profile = str(profile_path())
+    v3, v2, broken = (_fake_python(tmp_path, lib) for lib in (
+        "libfastdds.so.3.2", "libfastrtps.so.2.14.1", "nothing"))
+    assert ros_env.fastdds_version(v3) == (3, 2)
+    assert ros_env.fastdds_version(v2) == (2, 14)
+    assert ros_env.fastdds_version(broken) is None
+    pick = {p: {k: v for k, v in dds_env(5, "kart0", p).items() if "PROFILES" in k}
+            for p in (v3, v2, broken)}
+    assert pick == {
+        v3: {"FASTDDS_DEFAULT_PROFILES_FILE": profile, "FASTRTPS_DEFAULT_PROFILES_FILE": ""},
+        v2: {"FASTDDS_DEFAULT_PROFILES_FILE": "", "FASTRTPS_DEFAULT_PROFILES_FILE": profile},
+        broken: {"FASTDDS_DEFAULT_PROFILES_FILE": profile,
+                 "FASTRTPS_DEFAULT_PROFILES_FILE": profile}}
+
+
+def test_an_error_tail_leads_with_the_cause_not_fast_dds_deprecation(tmp_path: Path) -> None:
+    warning = ("[WARN] [1795928766.821294890] [rmw_fastrtps_shared_cpp]: "
+               "FASTRTPS_DEFAULT_PROFILES_FILE value is used for participant configuration, "
+               "but it is deprecated and will no longer be supported. Use "
+               "FASTDDS_DEFAULT_PROFILES_FILE instead.")
+    child = Child(["sh", "-c", f"echo 'RuntimeError: the real cause' >&2; echo '{warning}' >&2"],
+                  tmp_path, {}, tmp_path, "stack")
+    child.proc.wait(10)
+    assert child.tail() == "stack.stderr.log: RuntimeError: the real cause"
+
+
+def test_attaching_ros2_tools_is_one_ready_command(tmp_path: Path,
+                                                   monkeypatch: pytest.MonkeyPatch,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """run.json's facts (domain, profile) and the command printed on a terminal, not in CI."""
+    env = {**dds_env(117, "kart0"), "FASTRTPS_DEFAULT_PROFILES_FILE": ""}
+    facts = attach.dds(env, "/kart0/cmd_vel")
+    profile = profile_path()
+    assert facts.command == (f"ROS_DOMAIN_ID=117 FASTDDS_DEFAULT_PROFILES_FILE={profile} "
+                             "RMW_IMPLEMENTATION=rmw_fastrtps_cpp ros2 topic echo /kart0/cmd_vel")
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    monkeypatch.setenv("CI", "true")
+    attach.announce(tmp_path, "kart0", facts)
+    assert capsys.readouterr().err == ""
+    monkeypatch.delenv("CI")
+    attach.announce(tmp_path, "kart0", facts)
+    assert capsys.readouterr().err == (f"kartci: kart0 on dds; attach ROS 2 tools with: "
+                                       f"{facts.command}\n")
+    assert RunFolder(tmp_path).read_attach() == {"kart0": {
+        "middleware": "dds", "rmw": "rmw_fastrtps_cpp", "domain_id": 117,
+        "profile": str(profile), "profile_variables": ["FASTDDS_DEFAULT_PROFILES_FILE"],
+        "command": facts.command}}
+
+
+def test_a_humble_installation_is_named_as_such(tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    """Humble has the .msg but no REP 2011 type description (.json): the relay says it cannot
+    serve Humble over DDS, not 'is std_msgs installed?'."""
+    msg = tmp_path / "humble" / "share" / "rosgraph_msgs" / "msg"
+    msg.mkdir(parents=True)
+    (msg / "Clock.msg").write_text("builtin_interfaces/Time clock\n")
+    monkeypatch.setenv("AMENT_PREFIX_PATH", str(tmp_path / "humble"))
+    with pytest.raises(RuntimeError) as err:
+        description("rosgraph_msgs/msg/Clock")
+    assert str(err.value) == (
+        f"this ROS 2 has no type descriptions (rosgraph_msgs/msg/Clock: "
+        f"share/rosgraph_msgs/msg/Clock.msg but no Clock.json under {tmp_path / 'humble'}, "
+        f"{sys.prefix}); the DDS relay needs them and runtime type hashes (REP 2011: ROS 2 "
+        "Iron and later), so a Humble stack cannot use middleware dds: run it over "
+        "middleware zenoh (ros_distro: humble)")
+    with pytest.raises(RuntimeError, match=r"\(is std_msgs installed\?\)$"):
+        description("std_msgs/msg/String")
 
 
 def test_the_child_is_told_the_shm_profile_and_domain() -> None:
@@ -90,3 +261,124 @@ def test_zenoh_settings_with_dds_are_refused_in_one_line(tmp_path: Path) -> None
     assert p.returncode == 2, p.stdout + p.stderr
     assert ("agent kart0: middleware dds does not use the Zenoh settings port, connect (the "
             "stack meets kartci on its DDS domain, over shared memory)") in p.stdout + p.stderr
+
+
+# ---- with real Fast DDS processes (a ROS 2 Python) ----
+
+@pytest.fixture(scope="module")
+def ros_python() -> Path:
+    return ros_python_or_skip()
+
+
+def _chatter(python: Path, tag: str, domain_id: int) -> subprocess.Popen[str]:
+    """A chatter node on `domain_id` with kartci's SHM-only profile, once it is up."""
+    proc = subprocess.Popen([str(python), str(CHATTER), tag], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                            env={**os.environ, **dds_env(domain_id, "kart0", python)},
+                            start_new_session=True)
+    assert proc.stdout is not None and proc.stdout.readline() == "up\n"
+    return proc
+
+
+def _heard(proc: subprocess.Popen[str]) -> list[str]:
+    """What a chatter received, once told to end."""
+    out, _ = proc.communicate("", timeout=30)
+    return list(json.loads(out.split("got ", 1)[1]))
+
+
+@pytest.fixture
+def chatters() -> Iterator[list[subprocess.Popen[str]]]:
+    procs: list[subprocess.Popen[str]] = []
+    yield procs
+    for p in procs:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+
+
+def test_no_message_crosses_between_two_runs_domains(ros_python: Path, tmp_path: Path,
+                                                     chatters: list[Any]) -> None:
+    """A foreign participant on 101 (no kartci lock): two runs' domains skip it and differ;
+    three nodes on one topic, each on its own domain, hear only themselves."""
+    chatters.append(_chatter(ros_python, "foreign", FIRST_DOMAIN))
+    deadline = time.monotonic() + 10
+    while not shm.occupied(FIRST_DOMAIN) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    a, b = Domain(tmp_path), Domain(tmp_path)  # own lock folder: only the participant check
+    try:
+        assert FIRST_DOMAIN not in (a.id, b.id) and a.id != b.id
+        chatters += [_chatter(ros_python, "a", a.id), _chatter(ros_python, "b", b.id)]
+        time.sleep(2.0)  # discovery (shared memory) and some 40 messages each
+        assert [_heard(p) for p in chatters] == [["foreign"], ["a"], ["b"]]
+    finally:
+        a.release()
+        b.release()
+
+
+def _shm_files(pid: int) -> set[tuple[int, int]]:
+    """(device, inode) of every Fast DDS file in /dev/shm process `pid` maps or holds open."""
+    mine = set()
+    for line in Path(f"/proc/{pid}/maps").read_text().splitlines():
+        cols = line.split(maxsplit=5)
+        if len(cols) == 6 and cols[5].startswith(FAST):
+            mine.add((shm._maps_device(cols[3]), int(cols[4])))
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        if str(fd.readlink()).startswith(FAST):
+            st = fd.stat()
+            mine.add((st.st_dev, st.st_ino))
+    return mine
+
+
+def _kept(files: list[Path]) -> list[str]:
+    """Those of `files` no live process keeps: neither a flock on the file (/proc/locks) nor a
+    mapping or open descriptor of it (every /proc/<pid>/maps and fd this user can read)."""
+    locked = set()
+    for line in Path("/proc/locks").read_text().splitlines():
+        cols = line.split()
+        if len(cols) > 5 and cols[1] == "FLOCK":
+            major, minor, inode = cols[5].split(":")
+            locked.add((os.makedev(int(major, 16), int(minor, 16)), int(inode)))
+    used, _ = shm.in_use(SHM)
+    dead = []
+    for path in files:
+        try:
+            st = path.stat()
+        except FileNotFoundError:
+            continue
+        key = (st.st_dev, st.st_ino)
+        companions = [path.with_name(path.name + s) for s in ("_el", "_sl")]
+        held = any(c.exists() and (c.stat().st_dev, c.stat().st_ino) in locked
+                   for c in companions)
+        if key not in used and key not in locked and not held:
+            dead.append(path.name)
+    return dead
+
+
+@pytest.mark.skipif(not SHM.is_dir(), reason="no /dev/shm on this system")
+def test_a_killed_stack_leaves_nothing_in_shared_memory(ros_python: Path,
+                                                        chatters: list[Any]) -> None:
+    """kill -9 of one node of a two-node stack; the other talks on, then ends cleanly (it
+    leaves the dead node's port segments and mutexes, without lock files). After the
+    cleaning no Fast DDS file of this test's time is left that no live process keeps, and
+    none of the killed node's files is there at all."""
+    t0 = time.time() - 1.0
+    domain = Domain()
+    try:
+        victim = _chatter(ros_python, "victim", domain.id)
+        survivor = _chatter(ros_python, "survivor", domain.id)
+        chatters += [victim, survivor]
+        time.sleep(1.5)  # they discover each other and talk
+        victims = _shm_files(victim.pid)
+        assert len(victims) >= 4, "the node maps its segment and ports"
+        os.killpg(victim.pid, signal.SIGKILL)
+        victim.wait()
+        time.sleep(0.5)
+        assert _heard(survivor) == ["survivor", "victim"]
+    finally:
+        domain.release()
+    clean_zombies()
+    recent = [p for p in SHM.iterdir() if p.name.startswith(("fastdds_", "sem.fastdds_"))
+              and p.stat().st_mtime >= t0]
+    assert _kept(recent) == []
+    left = {(p.stat().st_dev, p.stat().st_ino) for p in SHM.iterdir()}
+    assert victims & left == set()
