@@ -111,6 +111,29 @@ def test_two_runs_at_once_do_not_hear_each_other(two_at_once: Any) -> None:
         {t.split("/")[2] for t in b["tokens"]})
 
 
+def test_run_json_says_how_to_attach_ros2_tools_to_each_run(two_at_once: Any) -> None:
+    """Each run's Zenoh endpoint (its own free port) and a ready `ros2 topic echo` command
+    connecting an rmw_zenoh tool to it, in run.json (no terminal here: nothing printed)."""
+    out, _, p = two_at_once
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "attach ROS 2 tools" not in p.stderr
+    seen = {}
+    for name in ("ext_a", "ext_b"):
+        facts = json.loads((out / name / "run.json").read_text())["attach"]["kart0"]
+        endpoint = facts["endpoint"]
+        assert endpoint.startswith("tcp/127.0.0.1:")
+        override = (f'mode="peer";connect/endpoints=["{endpoint}"];'
+                    'listen/endpoints=["tcp/127.0.0.1:0"];scouting/multicast/enabled=false')
+        assert facts == {
+            "middleware": "zenoh", "rmw": "rmw_zenoh_cpp", "domain_id": 0,
+            "endpoint": endpoint, "command": (
+                f"ROS_DOMAIN_ID=0 ZENOH_CONFIG_OVERRIDE='{override}' "
+                "ZENOH_ROUTER_CHECK_ATTEMPTS=-1 RMW_IMPLEMENTATION=rmw_zenoh_cpp "
+                "ros2 topic echo /kart0/ackermann_cmd")}
+        seen[name] = endpoint
+    assert seen["ext_a"] != seen["ext_b"]
+
+
 @pytest.mark.long(reason="a Zenoh stack driving full runs")
 def test_crash_hang_and_late_are_errors_for_their_scenario_only(tmp_path: Path) -> None:
     copy = tmp_path / "kart_driver.py"  # a path of this test's own, to look for leftovers by

@@ -225,7 +225,10 @@ class Domain:
     host-wide lock taken and no live participant on it."""
 
     def __init__(self, folder: Path | None = None, shm_dir: Path = SHM_DIR) -> None:
-        folder = folder or domains_folder(shm_dir)
+        if folder is None:
+            folder = domains_folder(shm_dir)
+        else:  # a private one (tests)
+            folder.mkdir(parents=True, exist_ok=True)
         self.skipped: list[int] = []  # ids with a live participant but no kartci lock
         for domain_id in range(FIRST_DOMAIN, LAST_DOMAIN + 1):
             try:
