@@ -10,6 +10,7 @@ import fcntl
 import json
 import mmap
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -31,7 +32,9 @@ from kartci.bridge.dds.env import dds_env, profile_path
 from kartci.bridge.dds.relay import description
 from kartci.bridge.dds.shm import FIRST_DOMAIN, Domain, clean_zombies, discovery_port
 from kartci.core import RunFolder
-from kartci.errors import SpecError
+from kartci.errors import RunError, SpecError
+from kartci.scenario import load_scenario
+from kartci.sim import Session
 
 CHATTER = Path(__file__).with_name("chatter.py")
 SHM = Path("/dev/shm")
@@ -382,3 +385,36 @@ def test_a_killed_stack_leaves_nothing_in_shared_memory(ros_python: Path,
     assert _kept(recent) == []
     left = {(p.stat().st_dev, p.stat().st_ino) for p in SHM.iterdir()}
     assert victims & left == set()
+
+
+@pytest.mark.skipif(not SHM.is_dir(), reason="no /dev/shm on this system")
+def test_a_run_whose_stack_is_killed_leaves_nothing_of_it(ros_python: Path, tmp_path: Path,
+                                                          monkeypatch: pytest.MonkeyPatch,
+                                                          dds_alone: None) -> None:
+    """kill -9 of the example stack mid-run (the relay lives on, as the issue's crash): the
+    run ends in an error and, once closed, no Fast DDS file of the test's time is left that
+    no live process keeps, and none of the stack's files is there at all."""
+    t0 = time.time() - 1.0
+    proj = tmp_path / "ros2_stack"
+    shutil.copytree(ROOT / "examples" / "ros2_stack", proj,
+                    ignore=shutil.ignore_patterns("reports"))
+    monkeypatch.chdir(proj)
+    monkeypatch.setenv("KARTCI_ROS2_PYTHON", str(ros_python))
+    spec = load_scenario("dds_pure_pursuit", ["duration_s=2.0"])
+    with Session(spec, proj / "run.mcap") as s:
+        s.reset()
+        for _ in range(5):
+            s.step()
+        agent: Any = s.world.robots[0].agent
+        stack = _shm_files(agent.child.proc.pid)
+        assert len(stack) >= 4, "the stack maps its segment and ports"
+        os.killpg(agent.child.proc.pid, signal.SIGKILL)
+        agent.child.proc.wait()
+        with pytest.raises(RunError, match="external controller of kart0: the program exited"):
+            for _ in range(50):
+                s.step()
+    recent = [p for p in SHM.iterdir() if p.name.startswith(("fastdds_", "sem.fastdds_"))
+              and p.stat().st_mtime >= t0]
+    assert _kept(recent) == []
+    left = {(p.stat().st_dev, p.stat().st_ino) for p in SHM.iterdir()}
+    assert stack & left == set()

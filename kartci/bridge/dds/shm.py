@@ -187,14 +187,18 @@ def domains_folder(shm_dir: Path = SHM_DIR) -> Path:
     """The host-wide folder of domain locks: made sticky and writable by every user (as /tmp),
     atomically (made aside, then renamed into place), so another user's run can lock in it."""
     path = shm_dir / DOMAINS_FOLDER
-    if not path.exists():
-        aside = Path(tempfile.mkdtemp(prefix=f".{DOMAINS_FOLDER}-", dir=shm_dir))
-        os.chmod(aside, 0o1777)
-        try:
-            aside.rename(path)
-        except OSError:  # made meanwhile by another run
-            aside.rmdir()
-    st = os.lstat(path)
+    try:
+        if not path.exists():
+            aside = Path(tempfile.mkdtemp(prefix=f".{DOMAINS_FOLDER}-", dir=shm_dir))
+            os.chmod(aside, 0o1777)
+            try:
+                aside.rename(path)
+            except OSError:  # made meanwhile by another run
+                aside.rmdir()
+        st = os.lstat(path)
+    except OSError as err:
+        raise RunError(f"cannot make the host's kartci DDS domain locks in {path}: "
+                       f"{err.strerror or err}") from err
     if not stat.S_ISDIR(st.st_mode) or stat.S_IMODE(st.st_mode) != 0o1777:
         raise RunError(f"{path}: the host's kartci DDS domain locks need a folder every user "
                        f"may write (sticky, mode 1777), not mode {stat.S_IMODE(st.st_mode):o} "
