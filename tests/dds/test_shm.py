@@ -290,7 +290,9 @@ def _heard(proc: subprocess.Popen[str]) -> list[str]:
 
 
 @pytest.fixture
-def chatters() -> Iterator[list[subprocess.Popen[str]]]:
+def chatters(dds_alone: None) -> Iterator[list[subprocess.Popen[str]]]:
+    """The test's nodes (killed if still there at its end); one DDS test at a time, as the
+    others compare /dev/shm before and after."""
     procs: list[subprocess.Popen[str]] = []
     yield procs
     for p in procs:
