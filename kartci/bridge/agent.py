@@ -77,12 +77,12 @@ class ExternalAgent:
         self.node = Node(session, spec.domain_id, spec.node_name, spec.ros_distro)
         try:
             self.clock = self.node.publisher("/clock", CLOCK)
-            for topic, typename in self.commands.items():
-                self.node.subscription(topic, typename, self._pusher(topic))
-            self.node.watch_tokens(self._tokens.add)
             attach.announce(ctx.run_dir, self.name, attach.zenoh(  # run.json + terminal
                 child_env(self.endpoint, spec.domain_id, self.name), self.endpoint,
                 [*self.commands, "/clock"][0]))
+            for topic, typename in self.commands.items():
+                self.node.subscription(topic, typename, self._pusher(topic))
+            self.node.watch_tokens(self._tokens.add)
             if spec.command:
                 self.child = self._start(ctx.run_dir)
         except BaseException:

@@ -420,3 +420,32 @@ def test_a_run_whose_stack_is_killed_leaves_nothing_of_it(ros_python: Path, tmp_
     assert _kept(recent) == []
     left = {(p.stat().st_dev, p.stat().st_ino) for p in SHM.iterdir()}
     assert stack & left == set()
+
+
+@pytest.mark.long(reason="two DDS runs of the example stack at once")
+def test_two_kartci_runs_at_once_with_own_cache_folders_stay_apart(
+        ros_python: Path, tmp_path: Path, dds_alone: None) -> None:
+    """Two `kartci run`s started together, each with its own KARTCI_CACHE_DIR: two domains in
+    their run.json, every tick answered in both, and equal metrics (a stack hearing the other
+    run's odometry as well drives otherwise: 944 odometry messages for 501 ticks before)."""
+    proj = tmp_path / "ros2_stack"
+    shutil.copytree(ROOT / "examples" / "ros2_stack", proj,
+                    ignore=shutil.ignore_patterns("reports"))
+    procs = [subprocess.Popen(
+        [sys.executable, "-m", "kartci.cli", "run", "dds_pure_pursuit", "--set",
+         "duration_s=4", "--out", str(tmp_path / f"out_{c}"), "--no-strict"], cwd=proj,
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, "KARTCI_CACHE_DIR": str(tmp_path / f"cache_{c}"),
+             "KARTCI_ROS2_PYTHON": str(ros_python)}) for c in "ab"]
+    for p in procs:
+        out, _ = p.communicate(timeout=240)
+        assert p.returncode == 1, out  # 4 s: no lap, the criterion fails; the run does not
+    folders = [tmp_path / f"out_{c}" / "dds_pure_pursuit" for c in "ab"]
+    domains = [json.loads((f / "run.json").read_text())["attach"]["kart0"]["domain_id"]
+               for f in folders]
+    assert domains[0] != domains[1]
+    for f in folders:
+        timing = json.loads((f / "kart0.dds_round_trip.log").read_text())
+        assert (timing["ticks"], timing["late_commands"]) == (200, 0)
+    a, b = (json.loads((f / "metrics.json").read_text())["metrics"] for f in folders)
+    assert a == b
