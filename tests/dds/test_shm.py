@@ -6,6 +6,7 @@ Fast DDS processes skip, saying why, where no ROS 2 Python can be made."""
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import json
 import mmap
@@ -326,7 +327,7 @@ def _shm_files(pid: int) -> set[tuple[int, int]]:
     for line in Path(f"/proc/{pid}/maps").read_text().splitlines():
         cols = line.split(maxsplit=5)
         if len(cols) == 6 and cols[5].startswith(FAST):
-            mine.add((shm._maps_device(cols[3]), int(cols[4])))
+            mine.add((_device(cols[3]), int(cols[4])))
     for fd in Path(f"/proc/{pid}/fd").iterdir():
         if str(fd.readlink()).startswith(FAST):
             st = fd.stat()
@@ -334,29 +335,52 @@ def _shm_files(pid: int) -> set[tuple[int, int]]:
     return mine
 
 
-def _kept(files: list[Path]) -> list[str]:
-    """Those of `files` no live process keeps: neither a flock on the file (/proc/locks) nor a
-    mapping or open descriptor of it (every /proc/<pid>/maps and fd this user can read)."""
-    locked = set()
+def _device(text: str) -> int:
+    major, minor = text.split(":")
+    return os.makedev(int(major, 16), int(minor, 16))
+
+
+def _kept_keys() -> set[tuple[int, int]]:
+    """(device, inode) of every Fast DDS file a live process keeps: an flock on it
+    (/proc/locks), a mapping or an open descriptor (every /proc/<pid> this user can read)."""
+    keys = set()
     for line in Path("/proc/locks").read_text().splitlines():
         cols = line.split()
         if len(cols) > 5 and cols[1] == "FLOCK":
-            major, minor, inode = cols[5].split(":")
-            locked.add((os.makedev(int(major, 16), int(minor, 16)), int(inode)))
-    used, _ = shm.in_use(SHM)
-    dead = []
-    for path in files:
+            device, _, inode = cols[5].rpartition(":")
+            keys.add((_device(device), int(inode)))
+    for proc in Path("/proc").glob("[0-9]*"):
         try:
-            st = path.stat()
-        except FileNotFoundError:
+            for line in (proc / "maps").read_text().splitlines():
+                cols = line.split(maxsplit=5)
+                if len(cols) == 6 and cols[5].startswith(FAST):
+                    keys.add((_device(cols[3]), int(cols[4])))
+            for fd in (proc / "fd").iterdir():
+                if str(fd.readlink()).startswith(FAST):
+                    keys.add((fd.stat().st_dev, fd.stat().st_ino))
+        except OSError:
             continue
-        key = (st.st_dev, st.st_ino)
-        companions = [path.with_name(path.name + s) for s in ("_el", "_sl")]
-        held = any(c.exists() and (c.stat().st_dev, c.stat().st_ino) in locked
-                   for c in companions)
-        if key not in used and key not in locked and not held:
-            dead.append(path.name)
-    return dead
+    return keys
+
+
+def _kept(files: list[Path]) -> list[str]:
+    """Those of `files` whose family (a segment, its `_el`/`_sl` lock file, its
+    `sem.<segment>_mutex`) no live process keeps (see `_kept_keys`)."""
+    keys = _kept_keys()
+
+    def family(name: str) -> str:
+        return name.removeprefix("sem.").removesuffix("_mutex").removesuffix(
+            "_el").removesuffix("_sl")
+
+    def kept(base: str) -> bool:
+        for name in (base, f"{base}_el", f"{base}_sl", f"sem.{base}_mutex"):
+            with contextlib.suppress(OSError):
+                st = (SHM / name).stat()
+                if (st.st_dev, st.st_ino) in keys:
+                    return True
+        return False
+
+    return [p.name for p in files if p.exists() and not kept(family(p.name))]
 
 
 @pytest.mark.skipif(not SHM.is_dir(), reason="no /dev/shm on this system")
