@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import Any
 
 from kartci import project
-from kartci.bridge import attach, ros2
+from kartci.bridge import ros2
+from kartci.bridge.attach import announce, for_zenoh
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening
 from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
@@ -77,7 +78,7 @@ class ExternalAgent:
         self.node = Node(session, spec.domain_id, spec.node_name, spec.ros_distro)
         try:
             self.clock = self.node.publisher("/clock", CLOCK)
-            attach.announce(ctx.run_dir, self.name, attach.zenoh(  # run.json + terminal
+            announce(ctx.run_dir, self.name, for_zenoh(  # run.json + terminal
                 child_env(self.endpoint, spec.domain_id, self.name), self.endpoint,
                 [*self.commands, "/clock"][0]))
             for topic, typename in self.commands.items():

@@ -47,7 +47,7 @@ class Attach:
                 "command": self.command}
 
 
-def dds(env: Mapping[str, str], topic: str) -> Attach:
+def for_dds(env: Mapping[str, str], topic: str) -> Attach:
     """Attach facts of a DDS run from the environment its processes get (`dds_env`)."""
     chosen = tuple((k, env[k]) for k in _DDS_KEYS if env.get(k))
     profile = next((v for k, v in chosen if k.endswith("_PROFILES_FILE")), "")
@@ -56,7 +56,7 @@ def dds(env: Mapping[str, str], topic: str) -> Attach:
                    ("profile_variables", [k for k, _ in chosen if k != "ROS_DOMAIN_ID"])))
 
 
-def zenoh(env: Mapping[str, str], endpoint: str, topic: str) -> Attach:
+def for_zenoh(env: Mapping[str, str], endpoint: str, topic: str) -> Attach:
     """Attach facts of a Zenoh run from the environment its stack gets (`child_env`)."""
     chosen = tuple((k, env[k]) for k in _ZENOH_KEYS if env.get(k))
     return Attach("zenoh", "rmw_zenoh_cpp", chosen, topic,

@@ -187,7 +187,7 @@ def test_attaching_ros2_tools_is_one_ready_command(tmp_path: Path,
                                                    capsys: pytest.CaptureFixture[str]) -> None:
     """run.json's facts (domain, profile) and the command printed on a terminal, not in CI."""
     env = {**dds_env(117, "kart0"), "FASTRTPS_DEFAULT_PROFILES_FILE": ""}
-    facts = attach.dds(env, "/kart0/cmd_vel")
+    facts = attach.for_dds(env, "/kart0/cmd_vel")
     profile = profile_path()
     assert facts.command == (f"ROS_DOMAIN_ID=117 FASTDDS_DEFAULT_PROFILES_FILE={profile} "
                              "RMW_IMPLEMENTATION=rmw_fastrtps_cpp ros2 topic echo /kart0/cmd_vel")

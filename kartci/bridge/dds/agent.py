@@ -27,8 +27,9 @@ from typing import Any
 
 from kartci import project
 from kartci.atomic import write_text_atomic
-from kartci.bridge import attach, ros2
+from kartci.bridge import ros2
 from kartci.bridge.agent import CLOCK, ExternalAgent, substitute
+from kartci.bridge.attach import announce, for_dds
 from kartci.bridge.child import Child
 from kartci.bridge.dds import env as ros_env
 from kartci.bridge.dds import relay as wire
@@ -71,7 +72,7 @@ class DdsAgent(ExternalAgent):
         self.domain_id = self.domain.id if self.domain else spec.domain_id
         self.endpoint = f"DDS domain {self.domain_id} (shared memory)"
         try:
-            attach.announce(ctx.run_dir, self.name, attach.dds(  # run.json + terminal
+            announce(ctx.run_dir, self.name, for_dds(  # run.json + terminal
                 dds_env(self.domain_id, self.name, self.python), [*self.commands, "/clock"][0]))
             self.sock = self._start_relay(ctx.run_dir)
             self._reader = threading.Thread(target=self._read, daemon=True)
