@@ -1,6 +1,7 @@
 """Run under a ROS 2 Python (never kartci's): one rclpy node that publishes its tag on
-`/kartci_chatter` every 50 ms and, once its stdin closes, prints `got <JSON list>` of every tag
-it received (its own included) and shuts down through rclpy. Imports no kartci code.
+`/kartci_chatter` every 50 ms, prints `heard <tag>` when it first hears another node's tag and,
+once its stdin closes, `got <JSON list>` of every tag it received (its own included), then
+shuts down through rclpy. Imports no kartci code.
 
     python chatter.py TAG
 """
@@ -23,7 +24,13 @@ def main() -> int:
     rclpy.init(args=[])
     node = rclpy.create_node(f"chatter_{tag}")
     got: set[str] = set()
-    node.create_subscription(String, TOPIC, lambda m: got.add(m.data), 10)
+
+    def hear(m: String) -> None:
+        if m.data not in got and m.data != tag:
+            print("heard", m.data, flush=True)
+        got.add(m.data)
+
+    node.create_subscription(String, TOPIC, hear, 10)
     pub = node.create_publisher(String, TOPIC, 10)
     node.create_timer(0.05, lambda: pub.publish(String(data=tag)))
     done = threading.Event()

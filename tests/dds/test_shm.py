@@ -15,6 +15,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -274,48 +275,68 @@ def ros_python() -> Path:
     return ros_python_or_skip()
 
 
-def _chatter(python: Path, tag: str, domain_id: int) -> subprocess.Popen[str]:
-    """A chatter node on `domain_id` with kartci's SHM-only profile, once it is up."""
-    proc = subprocess.Popen([str(python), str(CHATTER), tag], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
-                            env={**os.environ, **dds_env(domain_id, "kart0", python)},
-                            start_new_session=True)
-    assert proc.stdout is not None and proc.stdout.readline() == "up\n"
-    return proc
+class _Chatter:
+    """A chatter node on a domain with kartci's SHM-only profile, its output read as it comes."""
 
+    def __init__(self, python: Path, tag: str, domain_id: int) -> None:
+        self.proc = subprocess.Popen(
+            [str(python), str(CHATTER), tag], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL, text=True, start_new_session=True,
+            env={**os.environ, **dds_env(domain_id, "kart0", python)})
+        self.lines: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+        self.wait_for("up")
 
-def _heard(proc: subprocess.Popen[str]) -> list[str]:
-    """What a chatter received, once told to end."""
-    out, _ = proc.communicate("", timeout=30)
-    return list(json.loads(out.split("got ", 1)[1]))
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.append(line.strip())
+
+    def wait_for(self, line: str, timeout_s: float = 30.0) -> None:
+        """Until the node has printed `line` (it is up, it heard another node)."""
+        deadline = time.monotonic() + timeout_s
+        while line not in self.lines:
+            assert time.monotonic() < deadline, f"no {line!r} within {timeout_s:g} s"
+            assert self.proc.poll() is None or self._reader.is_alive(), self.lines
+            time.sleep(0.02)
+
+    def heard(self) -> list[str]:
+        """Every tag it received, once told to end."""
+        assert self.proc.stdin is not None
+        self.proc.stdin.close()
+        self.proc.wait(30)
+        self._reader.join(5)
+        got = [line for line in self.lines if line.startswith("got ")]
+        return list(json.loads(got[0].split(" ", 1)[1]))
 
 
 @pytest.fixture
-def chatters(dds_alone: None) -> Iterator[list[subprocess.Popen[str]]]:
+def chatters(dds_alone: None) -> Iterator[list[_Chatter]]:
     """The test's nodes (killed if still there at its end); one DDS test at a time, as the
     others compare /dev/shm before and after."""
-    procs: list[subprocess.Popen[str]] = []
-    yield procs
-    for p in procs:
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
+    nodes: list[_Chatter] = []
+    yield nodes
+    for n in nodes:
+        if n.proc.poll() is None:
+            os.killpg(n.proc.pid, signal.SIGKILL)
+            n.proc.wait()
 
 
 def test_no_message_crosses_between_two_runs_domains(ros_python: Path, tmp_path: Path,
-                                                     chatters: list[Any]) -> None:
+                                                     chatters: list[_Chatter]) -> None:
     """A foreign participant on 101 (no kartci lock): two runs' domains skip it and differ;
     three nodes on one topic, each on its own domain, hear only themselves."""
-    chatters.append(_chatter(ros_python, "foreign", FIRST_DOMAIN))
+    chatters.append(_Chatter(ros_python, "foreign", FIRST_DOMAIN))
     deadline = time.monotonic() + 10
     while not shm.occupied(FIRST_DOMAIN) and time.monotonic() < deadline:
         time.sleep(0.05)
     a, b = Domain(tmp_path), Domain(tmp_path)  # own lock folder: only the participant check
     try:
         assert FIRST_DOMAIN not in (a.id, b.id) and a.id != b.id
-        chatters += [_chatter(ros_python, "a", a.id), _chatter(ros_python, "b", b.id)]
+        chatters += [_Chatter(ros_python, "a", a.id), _Chatter(ros_python, "b", b.id)]
         time.sleep(2.0)  # discovery (shared memory) and some 40 messages each
-        assert [_heard(p) for p in chatters] == [["foreign"], ["a"], ["b"]]
+        assert [n.heard() for n in chatters] == [["foreign"], ["a"], ["b"]]
     finally:
         a.release()
         b.release()
@@ -385,7 +406,7 @@ def _kept(files: list[Path]) -> list[str]:
 
 @pytest.mark.skipif(not SHM.is_dir(), reason="no /dev/shm on this system")
 def test_a_killed_stack_leaves_nothing_in_shared_memory(ros_python: Path,
-                                                        chatters: list[Any]) -> None:
+                                                        chatters: list[_Chatter]) -> None:
     """kill -9 of one node of a two-node stack; the other talks on, then ends cleanly (it
     leaves the dead node's port segments and mutexes, without lock files). After the
     cleaning no Fast DDS file of this test's time is left that no live process keeps, and
@@ -393,16 +414,17 @@ def test_a_killed_stack_leaves_nothing_in_shared_memory(ros_python: Path,
     t0 = time.time() - 1.0
     domain = Domain()
     try:
-        victim = _chatter(ros_python, "victim", domain.id)
-        survivor = _chatter(ros_python, "survivor", domain.id)
+        victim = _Chatter(ros_python, "victim", domain.id)
+        survivor = _Chatter(ros_python, "survivor", domain.id)
         chatters += [victim, survivor]
-        time.sleep(1.5)  # they discover each other and talk
-        victims = _shm_files(victim.pid)
+        victim.wait_for("heard survivor")  # they discovered each other and talk
+        survivor.wait_for("heard victim")
+        victims = _shm_files(victim.proc.pid)
         assert len(victims) >= 4, "the node maps its segment and ports"
-        os.killpg(victim.pid, signal.SIGKILL)
-        victim.wait()
+        os.killpg(victim.proc.pid, signal.SIGKILL)
+        victim.proc.wait()
         time.sleep(0.5)
-        assert _heard(survivor) == ["survivor", "victim"]
+        assert survivor.heard() == ["survivor", "victim"]
     finally:
         domain.release()
     clean_zombies()
