@@ -8,8 +8,10 @@ names are relative, so a namespace or remapping places it, as in any launch file
     python pure_pursuit_node.py --ros-args -r __ns:=/kart0 -r track:=/kartci/track \\
         -p use_sim_time:=true -p speed_mps:=5.0
 
-With `use_sim_time` it follows `/clock`; its log lines carry sim time. It answers odometry (not a
-timer) so that each control tick gets exactly one command computed from that tick's pose.
+With `use_sim_time` its clock (`get_clock().now()`, timers) follows `/clock`; its log lines
+still carry wall-clock stamps (rclpy's logger stamps with the system clock whatever
+use_sim_time says). It answers odometry (not a timer) so that each control tick gets exactly one
+command computed from that tick's pose.
 """
 
 from __future__ import annotations

@@ -29,6 +29,7 @@ from typing import Any
 from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.bridge import ros2
+from kartci.bridge.attach import announce, for_zenoh
 from kartci.bridge.child import Child
 from kartci.bridge.link import Inbox, Node, Publisher, open_listening, routed
 from kartci.bridge.lockstep import (
@@ -101,6 +102,9 @@ class ExternalAgent:
         self.node = Node(session, spec.domain_id, spec.node_name, spec.ros_distro)
         try:
             self.clock = self.node.publisher("/clock", CLOCK)
+            announce(ctx.run_dir, self.name, for_zenoh(  # run.json + terminal
+                child_env(self.endpoint, spec.domain_id, self.name), self.endpoint,
+                [*self.commands, "/clock"][0]))
             for topic, typename in self.commands.items():
                 self.node.subscription(topic, typename, self._pusher(topic))
             self.node.watch_tokens(self._token)

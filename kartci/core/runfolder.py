@@ -33,6 +33,7 @@ class RunFolder:
     ERROR_NAME: ClassVar[str] = "error.json"  # the last run failed (older outputs are kept)
     TRACEBACK_NAME: ClassVar[str] = "traceback.txt"  # beside error.json after a crash
     STAGE_PREFIX: ClassVar[str] = ".new-"  # a run in progress; moved into place when complete
+    ATTACH_SUFFIX: ClassVar[str] = ".attach.json"  # <agent>.attach.json: into run.json's attach
     OUTPUTS: ClassVar[tuple[str, ...]] = (LOG_NAME, METRICS_NAME, RUN_RECORD_NAME)
 
     @property
@@ -64,6 +65,20 @@ class RunFolder:
     def traceback(self) -> Path:
         """A crashed run's full traceback, for debugging only."""
         return self.path / self.TRACEBACK_NAME
+
+    def attach(self, agent: str) -> Path:
+        """Where an external agent records how to attach ROS 2 tools to its run (staged)."""
+        return self.path / f"{agent}{self.ATTACH_SUFFIX}"
+
+    def read_attach(self) -> dict[str, Any]:
+        """Every agent's attach record, by agent ({} when none wrote one)."""
+        out = {}
+        for path in sorted(self.path.glob(f"*{self.ATTACH_SUFFIX}")):
+            try:
+                out[path.name[:-len(self.ATTACH_SUFFIX)]] = read_json(path)
+            except (OSError, ValueError) as err:
+                raise LogError(f"{path}: unreadable attach record ({err})") from None
+        return out
 
     def stages(self) -> list[Path]:
         """Staging folders left here by runs that were killed half-way."""

@@ -122,6 +122,9 @@ def _run_staged(scenario: Scenario, stage: Path, folder: Path,
         "real_time_factor": round(info.sim_time_s / wall, 2) if wall > 0 else None,
         "messages": info.messages, "finished_course": info.finished_course,
         "log": str(RunFolder(folder).log), "platform": portable.describe(), **(facts or {})}
+    attach = RunFolder(stage).read_attach()  # how to reach each external stack (its domain)
+    if attach:
+        run["attach"] = attach
     if agents:
         run["replaced_agents"] = {name: describe(a) for name, a in sorted(agents.items())}
     warnings = input_warnings(scenario)

@@ -19,6 +19,8 @@ import xxhash
 import yaml
 from helpers import ROOT, kartci
 
+from kartci.bridge.agent import child_env
+
 SCENARIOS = ROOT / "scenarios"
 LISTENER = Path(__file__).with_name("zenoh_listener.py")
 TWO_STAGE = Path(__file__).with_name("zenoh_two_stage.py")
@@ -109,6 +111,29 @@ def test_two_runs_at_once_do_not_hear_each_other(two_at_once: Any) -> None:
     a, b = (json.loads((seen / f"{n}.json").read_text()) for n in "ab")
     assert {t.split("/")[2] for t in a["tokens"]}.isdisjoint(
         {t.split("/")[2] for t in b["tokens"]})
+
+
+def test_run_json_says_how_to_attach_ros2_tools_to_each_run(two_at_once: Any) -> None:
+    """Each run's Zenoh endpoint (its own free port) and a ready `ros2 topic echo` command
+    connecting an rmw_zenoh tool to it, in run.json (no terminal here: nothing printed)."""
+    out, _, p = two_at_once
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "attach ROS 2 tools" not in p.stderr
+    seen = {}
+    for name in ("ext_a", "ext_b"):
+        facts = json.loads((out / name / "run.json").read_text())["attach"]["kart0"]
+        endpoint = facts["endpoint"]
+        assert endpoint.startswith("tcp/127.0.0.1:")
+        override = child_env(endpoint, 0, "kart0")["ZENOH_CONFIG_OVERRIDE"]
+        assert f'connect/endpoints=["{endpoint}"]' in override
+        assert facts == {
+            "middleware": "zenoh", "rmw": "rmw_zenoh_cpp", "domain_id": 0,
+            "endpoint": endpoint, "command": (
+                f"ROS_DOMAIN_ID=0 ZENOH_CONFIG_OVERRIDE='{override}' "
+                "ZENOH_ROUTER_CHECK_ATTEMPTS=-1 RMW_IMPLEMENTATION=rmw_zenoh_cpp "
+                "ros2 topic echo /kart0/ackermann_cmd")}
+        seen[name] = endpoint
+    assert seen["ext_a"] != seen["ext_b"]
 
 
 @pytest.mark.long(reason="a Zenoh stack driving full runs")

@@ -29,6 +29,7 @@ from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.bridge import ros2
 from kartci.bridge.agent import CLOCK, ExternalAgent, substitute
+from kartci.bridge.attach import announce, for_dds
 from kartci.bridge.child import Child
 from kartci.bridge.dds import env as ros_env
 from kartci.bridge.dds import relay as wire
@@ -73,6 +74,8 @@ class DdsAgent(ExternalAgent):
         self.domain_id = self.domain.id if self.domain else spec.domain_id
         self.endpoint = f"DDS domain {self.domain_id} (shared memory)"
         try:
+            announce(ctx.run_dir, self.name, for_dds(  # run.json + terminal
+                dds_env(self.domain_id, self.name, self.python), [*self.commands, "/clock"][0]))
             self.sock = self._start_relay(ctx.run_dir)
             self._reader = threading.Thread(target=self._read, daemon=True)
             self._reader.start()
@@ -89,7 +92,8 @@ class DdsAgent(ExternalAgent):
             server.settimeout(0.1)
             self.relay = Child(
                 [str(self.python), str(Path(wire.__file__)), "--socket", str(path)],
-                self._folder, dds_env(self.domain_id, self.name), run_dir or self._folder,
+                self._folder, dds_env(self.domain_id, self.name, self.python),
+                run_dir or self._folder,
                 f"{self.name}.dds_relay")
             deadline = time.perf_counter() + CONNECT_TIMEOUT_S
             while True:
@@ -147,7 +151,7 @@ class DdsAgent(ExternalAgent):
                   "domain_id": str(self.domain_id), "namespace": self.name}
         argv = [substitute(a, values) for a in self.spec.command]
         cwd = root / self.spec.cwd if self.spec.cwd else root
-        env = {**dds_env(self.domain_id, self.name),
+        env = {**dds_env(self.domain_id, self.name, self.python),
                **{k: substitute(v, values) for k, v in self.spec.env.items()}}
         return Child(argv, cwd, env, run_dir or self._folder, f"{self.name}.external")
 

@@ -3,15 +3,25 @@ kartci makes from the `ros-rclpy` wheels (ROS 2 Kilted, cp311 manylinux, a commu
 
 Never kartci's own environment: the wheels install a `.pth` file that re-executes every Python
 interpreter of their environment (to set LD_LIBRARY_PATH), so they live in a venv of their own.
+
+The profile's variable depends on Fast DDS's major version, probed once per Python: Fast DDS 3
+(Kilted and later) reads FASTDDS_DEFAULT_PROFILES_FILE, and its RMW warns on every start that
+FASTRTPS_DEFAULT_PROFILES_FILE is deprecated when that one is set (the warning then was the last
+line of every DDS error); Fast DDS 2.x (Humble, Jazzy) reads only FASTRTPS_DEFAULT_PROFILES_FILE
+and, without a profile, would use its default UDP transport with multicast discovery. So the
+variable the installed Fast DDS reads gets the profile and the other one is set empty (an
+inherited value would be read, or warned about); when the version cannot be told, both get it.
 """
 
 from __future__ import annotations
 
 import fcntl
 import os
+import re
 import shutil
 import subprocess
 import sys
+from functools import cache
 from importlib import resources
 from pathlib import Path
 
@@ -26,6 +36,14 @@ REQUIREMENTS = ("ros-rclpy[fastrtps]==9.1.2", "ros-std-msgs==5.5.1", "ros-sensor
                 "ros-nav-msgs==5.5.1", "ros-geometry-msgs==5.5.1", "ros-rosgraph-msgs==2.3.0")
 PROFILE = "fastdds_shm_only.xml"  # shipped beside this module
 PROBE = "import rclpy, rmw_fastrtps_cpp, nav_msgs.msg, geometry_msgs.msg, rosgraph_msgs.msg"
+PROFILE_VARIABLES = {3: "FASTDDS_DEFAULT_PROFILES_FILE", 2: "FASTRTPS_DEFAULT_PROFILES_FILE"}
+# loads Fast DDS's RMW (and so Fast DDS) without starting a participant, then names the
+# Fast DDS library the process mapped: libfastdds.so.<major>.<minor> (3.x), libfastrtps (2.x)
+VERSION_PROBE = ("import ctypes, os\nctypes.CDLL('librmw_fastrtps_cpp.so')\n"
+                 "print(*sorted({os.path.basename(os.path.realpath(line.split()[-1])) for line "
+                 "in open('/proc/self/maps') if '/libfastdds.so' in line or '/libfastrtps.so' "
+                 "in line}))")
+_LIBRARY = re.compile(r"lib(fastdds|fastrtps)\.so\.(\d+)(?:\.(\d+))?")
 
 
 def default_path() -> Path:
@@ -115,12 +133,39 @@ def profile_path() -> Path:
     return Path(str(resources.files("kartci.bridge.dds").joinpath(PROFILE)))
 
 
-def dds_env(domain_id: int, namespace: str) -> dict[str, str]:
-    """What every DDS process of the run is told, before rclpy starts: Fast DDS (3.x and 2.x
-    variable names) with kartci's SHM-only profile, the run's domain, the agent's namespace."""
+@cache
+def fastdds_version(python: Path, timeout_s: float = 60.0) -> tuple[int, int] | None:
+    """(major, minor) of the Fast DDS that `python`'s rmw_fastrtps_cpp loads, or None when it
+    cannot be told (probed once per Python and process: about 0.4 s)."""
+    try:
+        done = subprocess.run([str(python), "-c", VERSION_PROBE], capture_output=True,
+                              text=True, timeout=timeout_s, check=False,
+                              env={**os.environ, "_ROS_WHEELS_BOOTSTRAP_COMPLETE": ""})
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    m = _LIBRARY.search(done.stdout) if done.returncode == 0 else None
+    if m is None:
+        return None
+    major = int(m.group(2)) if m.group(1) == "fastdds" else min(int(m.group(2)), 2)
+    return major, int(m.group(3) or 0)
+
+
+def profile_env(python: Path | None) -> dict[str, str]:
+    """The profile variables for the Fast DDS of `python`: the one it reads set to kartci's
+    profile, the other empty; both set when the version is unknown (or `python` is None)."""
     profile = str(profile_path())
-    return {"RMW_IMPLEMENTATION": "rmw_fastrtps_cpp",
-            "FASTDDS_DEFAULT_PROFILES_FILE": profile, "FASTRTPS_DEFAULT_PROFILES_FILE": profile,
+    version = fastdds_version(python) if python is not None else None
+    if version is None:
+        return dict.fromkeys(PROFILE_VARIABLES.values(), profile)
+    reads = PROFILE_VARIABLES[3 if version[0] >= 3 else 2]
+    return {v: profile if v == reads else "" for v in PROFILE_VARIABLES.values()}
+
+
+def dds_env(domain_id: int, namespace: str, python: Path | None = None) -> dict[str, str]:
+    """What every DDS process of the run is told, before rclpy starts: Fast DDS with kartci's
+    SHM-only profile (in the variable `python`'s Fast DDS reads, see `profile_env`), the run's
+    domain, the agent's namespace."""
+    return {"RMW_IMPLEMENTATION": "rmw_fastrtps_cpp", **profile_env(python),
             "ROS_DOMAIN_ID": str(domain_id), "KARTCI_NAMESPACE": namespace,
             # the wheels' .pth re-executes Python once to set LD_LIBRARY_PATH; a marker
             # inherited from a ROS 2 process that started kartci would skip that

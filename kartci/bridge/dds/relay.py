@@ -77,8 +77,16 @@ def description(typename: str) -> Path:
         path = Path(prefix) / "share" / package / kind / f"{name}.json"
         if path.exists():
             return path
-    raise RuntimeError(f"{typename}: no share/{package}/{kind}/{name}.json under "
-                       f"{', '.join([*prefixes, sys.prefix])} (is {package} installed?)")
+    where = ", ".join([*prefixes, sys.prefix])
+    if any((Path(p) / "share" / package / kind / f"{name}.msg").exists()
+           for p in [*prefixes, sys.prefix]):  # installed, without REP 2011's files: Humble
+        raise RuntimeError(f"this ROS 2 has no type descriptions ({typename}: "
+                           f"share/{package}/{kind}/{name}.msg but no {name}.json under "
+                           f"{where}); the DDS relay needs them and runtime type hashes "
+                           "(REP 2011: ROS 2 Iron and later), so a Humble stack cannot use "
+                           "middleware dds: run it over middleware zenoh (ros_distro: humble)")
+    raise RuntimeError(f"{typename}: no share/{package}/{kind}/{name}.json under {where} "
+                       f"(is {package} installed?)")
 
 
 INFRASTRUCTURE = ("/rosout", "/parameter_events")  # topics of every node, never awaited
