@@ -1,6 +1,7 @@
 """The relay on its own (kartci's side played by the test over its Unix socket): a type whose
 installed definition differs from kartci's is an error naming both hashes, before anything is
-declared; a stack that never comes is reported as what is missing."""
+declared; a stack that never comes is reported as what is missing, after the relay says its
+publishers are made (kartci starts the stack then)."""
 
 from __future__ import annotations
 
@@ -72,6 +73,6 @@ def test_a_differing_definition_is_an_error_naming_both_hashes(relay: Any) -> No
 def test_an_absent_stack_is_named_as_missing(relay: Any) -> None:
     twist = "geometry_msgs/msg/Twist"
     frames = relay([["/kart0/cmd_vel", twist, ros2.type_hash(twist)]])
-    assert frames == [{"op": "missing", "what": [
+    assert frames == [{"op": "publishing"}, {"op": "missing", "what": [
         "subscription to /clock (rosgraph_msgs/msg/Clock)",
         "publisher of /kart0/cmd_vel (geometry_msgs/msg/Twist)"]}]

@@ -118,6 +118,8 @@ class Relay:
         self.me = (self.node.get_name(), self.node.get_namespace())
         self.pubs: dict[tuple[str, str], Any] = {}
         self.commands = [(str(t), str(ty), str(h)) for t, ty, h in start["commands"]]
+        for _, typename, hash_ in self.commands:  # a differing definition fails at once
+            self.cls(typename, hash_)
         self.watch = [str(t) for t in start.get("observe", [])]
         self.optional = [str(t) for t in start.get("optional", [])]
         self.settle_s = float(start.get("settle_s", 0.3))
