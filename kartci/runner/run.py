@@ -91,7 +91,7 @@ def run_one(scenario: Scenario, out: Path,
         _commit(stage, folder)
     except BaseException as err:
         keep_outputs(stage, folder)
-        if isinstance(err, Exception):  # an interrupt (Ctrl-C) keeps the unfinished mark
+        if isinstance(err, Exception | SystemExit):  # Ctrl-C keeps the unfinished mark
             mark_failed(folder, scenario.name, failure_text(err), err)
         raise
     finally:
