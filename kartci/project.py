@@ -333,8 +333,8 @@ def _untrusted(path: Path) -> str | None:
     st = path.stat()
     me = os.geteuid()
     if st.st_uid not in (me, 0):
-        return (f"is owned by {_name(st.st_uid)}, not by {_name(me)} who runs kartci (or "
-                "root)")
+        return (f"is owned by {_name(st.st_uid)}, not by {_name(me)}, who runs kartci"
+                f"{'' if me == 0 else ', nor by root'}")
     if st.st_mode & stat.S_IWOTH or (st.st_mode & stat.S_IWGRP
                                      and not _private_group(st.st_gid, st.st_uid)):
         who = "others" if st.st_mode & stat.S_IWOTH else "its group"

@@ -46,8 +46,8 @@ def test_a_configuration_owned_by_another_user_is_refused_and_its_plugins_never_
     p = kartci("list", cwd=work, env=isolated(tmp_path))
     assert p.returncode == 2
     assert p.stderr == (
-        f"kartci: error: {parent}/kartci.toml is owned by nobody, not by root who runs kartci "
-        "(or root): its plugins and paths would act as you, so it is not used; if you trust "
+        f"kartci: error: {parent}/kartci.toml is owned by nobody, not by root, who runs "
+        "kartci: its plugins and paths would act as you, so it is not used; if you trust "
         f"it, run with KARTCI_SAFE_DIRECTORIES={parent} or add it to safe_directories in "
         f"{tmp_path}/config/kartci/config.toml\n")
     assert not (parent / "IMPORTED").exists()
