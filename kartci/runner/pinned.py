@@ -103,6 +103,8 @@ def main() -> None:
             out.write(_reply(Reply.VALUE, fn(*args)))
         except (Exception, SystemExit) as err:
             out.write(_reply(Reply.ERROR, err))
+        except KeyboardInterrupt:  # Ctrl-C reached the caller too, which reports it: no trace
+            sys.exit(130)
 
 
 if __name__ == "__main__":
