@@ -26,6 +26,7 @@ from kartci.portable import Pin
 from kartci.runner.events import Event, EventKind, Listener, lost
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 from kartci.runner.kinds import ExecutorKind
+from kartci.runner.pinned import call_pinned
 from kartci.runner.ray_executor import ray_tasks
 
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
@@ -205,8 +206,6 @@ def in_pinned_child(jobs: Sequence[Job], ctx: Context, emit: Listener,
     a pinned `kartci run` would, its own workers included): this process was not started
     pinned, and a multiprocessing child would import its `__main__` again. Progress is not
     relayed; each outcome is announced when the child is done."""
-    from kartci.runner.pinned import call_pinned
-
     for outcome in call_pinned(outcomes, list(jobs), ctx, workers):
         emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
         yield outcome

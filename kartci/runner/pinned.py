@@ -87,7 +87,7 @@ def _reply(kind: Reply, value: object) -> bytes:
 
 def main() -> None:
     """The child: read the request from stdin, do the work, write the reply to FD."""
-    from kartci.runner.executors import die_with_parent  # the child only
+    from kartci.runner.executors import die_with_parent  # executors imports this module
 
     die_with_parent(os.getppid())
     with os.fdopen(int(sys.argv[1]), "wb") as out:

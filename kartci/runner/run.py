@@ -29,6 +29,7 @@ from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.logs.recorded import COMMANDS, JOY, Recorded
 from kartci.project import did_you_mean
 from kartci.runner.outdir import check_inside, manifest_labels
+from kartci.runner.pinned import NotPortable, call_pinned
 from kartci.scenario import Scenario
 from kartci.scenario.models import LogSource
 from kartci.sim import simulate
@@ -106,8 +107,6 @@ def run_pinned(scenario: Scenario, out: Path, folder: Path,
     those runs stay here (run.json says so)."""
     if agents or portable.state() is not portable.Pin.UNPINNED:
         return run_one(scenario, out, None, folder, agents)
-    from kartci.runner.pinned import NotPortable, call_pinned  # unpinned callers only
-
     try:
         return call_pinned(run_one, scenario, out, None, folder)
     except NotPortable:
