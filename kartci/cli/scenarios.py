@@ -21,6 +21,7 @@ from kartci.cli.common import (
     out_console,
 )
 from kartci.core import broken, catalogue
+from kartci.core.registry import stdout_to_stderr
 from kartci.errors import SpecError
 from kartci.scenario import load_scenario, scenario_catalogue
 from kartci.scenario.schema import scenario_schema, write_schema
@@ -55,7 +56,8 @@ def show(name: Annotated[str, typer.Argument(help="A scenario name or YAML path.
                                              autocompletion=complete_scenario)],
          set_: SetOpt = None, allow_outside_paths: AllowOutsideOpt = False) -> None:
     """Print a scenario fully resolved (world and model files included, overrides applied)."""
-    spec = load_scenario(name, set_ or [], allow_outside_paths=allow_outside_paths)
+    with stdout_to_stderr():  # a plugin printing while it loads or validates: not into JSON
+        spec = load_scenario(name, set_ or [], allow_outside_paths=allow_outside_paths)
     typer.echo(json.dumps(spec.model_dump(mode="json"), indent=2))
 
 
@@ -65,7 +67,9 @@ def schema(out: Annotated[Path | None, typer.Option(help="Write to this file.")]
     registered plugin, the project's own included. Point a scenario at it with a first line
     `# yaml-language-server: $schema=<path relative to the scenario file>`."""
     if out is None:
-        typer.echo(json.dumps(scenario_schema(), indent=2))
+        with stdout_to_stderr():  # a plugin printing while it loads: not into the JSON
+            schema_doc = scenario_schema()
+        typer.echo(json.dumps(schema_doc, indent=2))
     else:
         write_schema(out)
 

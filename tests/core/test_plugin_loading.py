@@ -184,3 +184,7 @@ def test_what_a_plugin_prints_while_it_loads_goes_to_stderr_and_schema_stays_jso
     assert p.returncode == 0, p.stderr
     assert json.loads(p.stdout)["title"]
     assert "loading team plugin" in p.stderr and "raw fd write" in p.stderr
+    p = kartci("show", "line_straight", cwd=proj)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["name"] == "line_straight"
+    assert "loading team plugin" in p.stderr
