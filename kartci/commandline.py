@@ -30,5 +30,6 @@ AllowOutsideOpt = Annotated[bool, typer.Option(
 
 
 def out_dir(out: Path | None, name: str) -> Path:
-    """`--out`, or `<the project's reports folder>/<name>`."""
-    return out if out is not None else project.current().reports / name
+    """`--out`, or `<the project's reports folder>/<name>` (a SpecError when no project was
+    found: see `Project.default_output`)."""
+    return out if out is not None else project.current().default_output(name)

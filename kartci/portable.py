@@ -16,7 +16,8 @@ environment: numpy's baseline loops (`NPY_ENABLE_CPU_FEATURES`), OpenBLAS's Neha
 `import kartci` sets the environment (for numpy, if not yet imported, and for every process
 started from here: `-j` workers, Ray's local workers, bridge children), the `kartci` command
 re-executes itself once when it was not started with it, and a run asked of a Python process
-that was not (the API, the pytest plugin) runs in a spawned child that is.
+that was not (the API, the pytest plugin) runs in a child process that is, started as its own
+command (kartci.runner.pinned: never a re-import of the caller's `__main__`).
 `KARTCI_SIMD=native` opts out (benchmarks); its runs are labelled so.
 """
 

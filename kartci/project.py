@@ -1,9 +1,16 @@
 """The user's project: where its scenarios, worlds, robot models and baselines live.
 
 kartci finds its project the way pytest finds its rootdir: the nearest folder, from the working
-directory up, holding a `kartci.toml` or a `pyproject.toml` with a `[tool.kartci]` table.
-`KARTCI_ROOT` names the folder directly. Without either, the working directory is the project
-(with the default folder names). Data files are looked up in the project's folders first, then
+directory up, holding a `kartci.toml` or a `pyproject.toml` with a `[tool.kartci]` table; the
+walk stops at a file-system boundary, as git's does. `KARTCI_ROOT` names the folder directly.
+A configuration names code to import (plugins) and folders to read and write, so it is used
+only when it and its folder are owned by the user running kartci (or root) and writable by no
+one else, unless its folder is trusted (`KARTCI_SAFE_DIRECTORIES`, or `safe_directories` in the
+user's own `~/.config/kartci/config.toml`; never the project's own file): git's answer to
+CVE-2022-24765, where a `.git/` planted in a shared parent folder ran its hooks for whoever
+worked below it. Without a configuration the working directory is the project (with the
+default folder names), but nothing is written there by default: a command that writes needs
+`--out` (`Project.found`). Data files are looked up in the project's folders first, then
 in kartci's built-in ones (`SHIPPED`: the `scenarios/`, `models/` and `sims/` of kartci's own
 repository, which is a kartci project like any team's, packaged into the wheel), so an empty
 project can still run the built-in line tracker and go-kart.
@@ -12,7 +19,10 @@ project can still run the built-in line tracker and go-kart.
 from __future__ import annotations
 
 import difflib
+import grp
 import os
+import pwd
+import stat
 import tomllib
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -41,6 +51,7 @@ BUILTIN_SCENARIOS = SHIPPED / "scenarios"  # the default suite
 BUILTIN_MODELS = SHIPPED / "models"
 BUILTIN_SIMS = SHIPPED / "sims"  # worlds
 CONFIG_NAMES = ("kartci.toml", "pyproject.toml")
+SAFE_ENV = "KARTCI_SAFE_DIRECTORIES"  # folders whose configuration is trusted (os.pathsep; "*")
 CONFIG_MAX_BYTES = 4 << 20  # a pyproject.toml; large real ones (with lock-like tables) are < 100 KB
 # A baseline tolerance may be this many times its metric's default before it counts as loosened:
 # the same margin as the spread rule (3 x spread), wide enough for a default computed at an older
@@ -102,6 +113,24 @@ class Project:
     builtin_scenarios: bool = False
     loosen_factor: float = LOOSEN_FACTOR
     allow_loose_tolerances: tuple[tuple[str, str], ...] = ()  # ("scenario:metric", reason)
+    # a configuration was found (or KARTCI_ROOT named the folder): False means the working
+    # directory stands in, and no default output folder is written there (`default_output`)
+    found: bool = True
+
+    def default_output(self, what: str) -> Path:
+        """`<reports>/<what>`, the default output folder of a command (see `writable`)."""
+        return self.writable(self.reports / what, "--out DIR")
+
+    def writable(self, folder: Path, option: str) -> Path:
+        """`folder`, one of the project's, as the default place to write; a SpecError naming
+        `option` (what to pass instead) when no project was found: `kartci run` started in `/`
+        or a home folder must not create `reports/` (or `baselines/`) there without a word."""
+        if not self.found:
+            raise SpecError(f"no kartci project found in {shown(self.root)} or a folder above "
+                            f"it (no kartci.toml, no pyproject.toml with [tool.kartci]): pass "
+                            f"{option} to say where to write, or make a project with "
+                            "`kartci init`")
+        return folder
 
     @property
     def scenario_path(self) -> tuple[Path, ...]:
@@ -251,8 +280,92 @@ def did_you_mean(name: str, known: object) -> str:
     return f" (known: {listed or 'none'})"
 
 
+def user_config_file() -> Path:
+    """The user's own kartci configuration: `$XDG_CONFIG_HOME/kartci/config.toml`, else
+    `~/.config/kartci/config.toml`. It holds what a project must not decide for itself
+    (`safe_directories`)."""
+    base = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
+    return Path(base) / "kartci" / "config.toml"
+
+
+def _safe_directories() -> list[str]:
+    """The trusted folders: KARTCI_SAFE_DIRECTORIES, then the user config's `safe_directories`
+    (which must itself pass the ownership check: it decides what else is trusted)."""
+    listed = [p for p in os.environ.get(SAFE_ENV, "").split(os.pathsep) if p]
+    path = user_config_file()
+    if not path.is_file():
+        return listed
+    why = _untrusted(path)
+    if why is not None:
+        raise SpecError(f"{shown(path)}: {why}; kartci ignores no part of it, so fix it first")
+    try:
+        data = tomllib.loads(read_bytes(path, CONFIG_MAX_BYTES).decode("utf-8"))
+    except (OSError, RefusedFileError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
+        raise SpecError(f"{shown(path)}: cannot read ({err})") from err
+    value = data.get("safe_directories", [])
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise SpecError(f"{shown(path)}: safe_directories: expected a list of folder paths")
+    return [*listed, *value]
+
+
+def _name(uid: int) -> str:
+    try:
+        return pwd.getpwuid(uid).pw_name
+    except KeyError:
+        return f"uid {uid}"
+
+
+def _private_group(gid: int, owner: int) -> bool:
+    """The owner's own group (a group named as the owner, no other members): Debian's and
+    Ubuntu's user private groups, where umask 002 makes every file group-writable."""
+    try:
+        group = grp.getgrgid(gid)
+    except KeyError:
+        return False
+    name = _name(owner)
+    return group.gr_name == name and set(group.gr_mem) <= {name}
+
+
+def _untrusted(path: Path) -> str | None:
+    """Why `path` (a file or folder) cannot be trusted, or None: it must be owned by the user
+    running kartci or by root, and writable by no one else (group-writable only for the
+    owner's private group)."""
+    st = path.stat()
+    me = os.geteuid()
+    if st.st_uid not in (me, 0):
+        return (f"is owned by {_name(st.st_uid)}, not by {_name(me)}, who runs kartci"
+                f"{'' if me == 0 else ', nor by root'}")
+    if st.st_mode & stat.S_IWOTH or (st.st_mode & stat.S_IWGRP
+                                     and not _private_group(st.st_gid, st.st_uid)):
+        who = "others" if st.st_mode & stat.S_IWOTH else "its group"
+        return f"is writable by {who} (mode {stat.S_IMODE(st.st_mode):04o})"
+    return None
+
+
+def check_trusted(config: Path) -> None:
+    """A SpecError, one line naming the file, its owner and how to trust it, unless the
+    configuration `config` and its folder pass `_untrusted` or the folder is listed as safe."""
+    folder = config.parent
+    try:
+        why, what = _untrusted(config), shown(config)
+        if why is None:
+            why, what = _untrusted(folder), f"{shown(folder)} (the folder of {config.name})"
+    except OSError as err:
+        raise SpecError(f"{shown(config)}: cannot check its owner ({err.strerror})") from err
+    if why is None:
+        return
+    safe = _safe_directories()
+    real = folder.resolve()
+    if "*" in safe or any(Path(p).expanduser().resolve() == real for p in safe):
+        return
+    raise SpecError(f"{what} {why}: its plugins and paths would act as you, so it is not used; "
+                    f"if you trust it, run with {SAFE_ENV}={shown(real)} or add it to "
+                    f"safe_directories in {shown(user_config_file())}")
+
+
 def _config_in(folder: Path) -> tuple[Path, dict[str, object]] | None:
-    """The kartci table of a folder's kartci.toml or pyproject.toml, if it has one."""
+    """The kartci table of a folder's kartci.toml or pyproject.toml, if it has one (and it is
+    trusted: `check_trusted`)."""
     for name in CONFIG_NAMES:
         path = folder / name
         if not path.exists():  # not is_file(): a FIFO or a folder here is named, not skipped
@@ -264,9 +377,11 @@ def _config_in(folder: Path) -> tuple[Path, dict[str, object]] | None:
         except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
             raise SpecError(f"{path}: cannot read ({err})") from err
         if name == "kartci.toml":
+            check_trusted(path)
             return path, data
         tool = data.get("tool")
         if isinstance(tool, dict) and isinstance(tool.get("kartci"), dict):
+            check_trusted(path)
             return path, tool["kartci"]
     return None
 
@@ -282,7 +397,10 @@ def find_project(start: Path | None = None) -> Project:
     else:
         here = (start or Path.cwd()).resolve()
         found, root = None, here
+        device = here.stat().st_dev
         for folder in (here, *here.parents):
+            if folder.stat().st_dev != device:  # another file system: not this project's
+                break
             found = _config_in(folder)
             if found is not None:
                 root = folder
@@ -297,7 +415,8 @@ def find_project(start: Path | None = None) -> Project:
     return Project(root, path, tuple(root / s for s in cfg.scenarios),
                    tuple(root / w for w in cfg.worlds), tuple(root / m for m in cfg.models),
                    root / cfg.baselines, root / cfg.reports, cfg.plugins, cfg.builtin_scenarios,
-                   cfg.loosen_factor, tuple(sorted(cfg.allow_loose_tolerances.items())))
+                   cfg.loosen_factor, tuple(sorted(cfg.allow_loose_tolerances.items())),
+                   found=found is not None or bool(env))
 
 
 _CURRENT: Project | None = None

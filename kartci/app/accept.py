@@ -103,7 +103,11 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
         raise SpecError(f"--jobs {jobs}: expected 1 or more")
     if not out.is_dir():
         raise SpecError(f"{out}: no such folder; run `kartci run` first")
-    target = baselines if baselines is not None else project.current().baselines
+    if baselines is None:
+        proj = project.current()
+        target = proj.writable(proj.baselines, "--baselines DIR (in Python: baselines=)")
+    else:
+        target = baselines
     with locked(out):
         labels = list(names) or read_manifest(out)
         _check_labels(out, labels)

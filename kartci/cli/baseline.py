@@ -11,7 +11,6 @@ import typer
 from kartci.cli.common import (
     BaselinesOpt,
     baseline_app,
-    baselines_dir,
     err_console,
     out_console,
 )
@@ -40,7 +39,7 @@ def baseline_update(
     def say(line: str) -> None:
         err_console.print(line, highlight=False, markup=False)
 
-    accepted = accept(out, names or (), baselines=baselines_dir(baselines, must_exist=False),
+    accepted = accept(out, names or (), baselines=baselines,
                       replicas=replicas, jobs=jobs, say=say)
     for one in accepted:
         for line in one.lines():

@@ -20,6 +20,7 @@ from kartci.commandline import SetOpt as SetOpt
 from kartci.commandline import err_console as err_console
 from kartci.commandline import out_console as out_console
 from kartci.commandline import out_dir as out_dir
+from kartci.core.registry import plugin_failure, stdout_to_stderr
 from kartci.errors import KartciError, RunError, SpecError
 from kartci.report import write_all
 from kartci.report.ci import (
@@ -61,13 +62,16 @@ def plugin_commands() -> dict[str, Any]:
     found: dict[str, Any] = {}
     for ep in sorted(entry_points(group=COMMANDS_GROUP), key=lambda e: e.name):
         try:
-            found.update(typer.main.get_group(ep.load()).commands)
-        except Exception as err:  # a broken plugin must not take kartci's own commands down
+            with stdout_to_stderr():
+                found.update(typer.main.get_group(ep.load()).commands)
+        except BaseException as err:  # a broken plugin must not take kartci's own commands down
+            if not plugin_failure(err):
+                raise
             found.setdefault(ep.name, _broken(ep.name, err))
     return found
 
 
-def _broken(name: str, err: Exception) -> TyperCommand:
+def _broken(name: str, err: BaseException) -> TyperCommand:
     """A stand-in for a plugin's commands that failed to import: running it says why."""
     def fail() -> None:
         raise KartciError(f"the commands of plugin '{name}' ({COMMANDS_GROUP}) failed to "

@@ -26,7 +26,8 @@ from kartci.cli.common import (
     strict_mode,
 )
 from kartci.core import broken
-from kartci.errors import SpecError
+from kartci.errors import PluginError, SpecError
+from kartci.runner.gate import judging_all
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
 
@@ -140,8 +141,9 @@ def run(
         raise SpecError(f"--conditioning {conditioning}: expected 0 (off) or 2 or more")
     live = err_console.is_terminal and not os.environ.get("CI")
     replicas, vary = (conditioning, Vary.START) if conditioning else (repeat, Vary.SEED)
+    strict_on = strict_mode(strict)
+    check_plugins(strict_on)
     selected, refused = runnable(selected, set_ or [], allow_outside_paths=allow_outside_paths)
-    warn_broken_plugins()
     with validating(live) as progress:
         todo = expand(selected, set_ or [], sweep, replicas, vary, progress,
                       allow_outside_paths=allow_outside_paths) if selected else []
@@ -157,17 +159,29 @@ def run(
         clear_reports(out)
         write_marker(out, index, total, labels)
         write_manifest(out, "run", labels)
-        with live_server(live_view, live_port, live_rate), \
-                ProgressView(todo, err_console, live) as view:
-            results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
-                               executor=executor, ray_address=ray_address, timeout_s=timeout_s,
-                               strict=strict_mode(strict), on_event=view, draw=scenario_svgs)
-        finish([*refused_results(refused, out), *results], out, ci=part is None)
+        with judging_all(labels, strict_on) as complete:
+            with live_server(live_view, live_port, live_rate), \
+                    ProgressView(todo, err_console, live) as view:
+                results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
+                                   executor=executor, ray_address=ray_address,
+                                   timeout_s=timeout_s, strict=strict_on, on_event=view,
+                                   draw=scenario_svgs)
+            results = complete([*refused_results(refused, out), *results])
+        finish(results, out, ci=part is None)
 
 
-def warn_broken_plugins() -> None:
-    """Each plugin that failed to load, once, before the scenarios that do not need it run."""
-    for plugin in broken():
+def check_plugins(strict: bool) -> None:
+    """Plugins that failed to load: in strict mode (CI) a PluginError naming them all (exit 2,
+    before anything runs or is written: a team's broken configuration must not pass because
+    its scenarios happen not to name the plugin); otherwise a warning for each, once, and
+    only the scenarios that name one fail."""
+    failed = broken()
+    if strict and failed:
+        raise PluginError(f"{'; '.join(p.message for p in failed)} (strict mode, as under CI: "
+                          "a plugin that fails to load fails the run; fix or uninstall it, or "
+                          "pass --no-strict to run the scenarios that do not need it)",
+                          failed[0].trace)
+    for plugin in failed:
         err_console.print(f"kartci: warning: {plugin.message}; the scenarios that name it fail "
                           "(its traceback: traceback.txt in their folders)", highlight=False,
                           markup=False, soft_wrap=True)

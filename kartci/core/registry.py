@@ -12,10 +12,12 @@ built-ins are named by module strings (`lazy`) or entry points, so nothing here 
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import os
 import sys
 import traceback
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cache
 from importlib.metadata import EntryPoints, entry_points
@@ -218,6 +220,38 @@ class BrokenPlugin:
         return PluginError(self.message, self.trace)
 
 
+@contextlib.contextmanager
+def stdout_to_stderr() -> Iterator[None]:
+    """While a plugin's code is imported, whatever it prints goes to stderr, at Python's level
+    (`print`) and the file descriptor's (a C extension, a child process): kartci's own stdout
+    carries machine-readable output (`kartci schema > schema.json`, `kartci show`) that one
+    chatty `import` must not corrupt."""
+    sys.stdout.flush()
+    try:
+        saved: int | None = os.dup(1)
+    except OSError:  # no stdout at all: nothing to protect
+        saved = None
+    try:
+        if saved is not None:
+            os.dup2(2, 1)
+        with contextlib.redirect_stdout(sys.stderr):
+            yield
+    finally:
+        sys.stderr.flush()
+        if saved is not None:
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
+def plugin_failure(err: BaseException) -> bool:
+    """Whether `err`, raised by a plugin's own code while it loads, is that plugin's failure:
+    every exception, `SystemExit` (a module calling `sys.exit(0)` at import must not end kartci
+    with a green exit and no output) and `GeneratorExit` included; only `KeyboardInterrupt` is
+    not, since a real Ctrl-C landing during an import cannot be told from one a plugin raises,
+    and Ctrl-C must always stop kartci (exit 130, never a green one)."""
+    return not isinstance(err, KeyboardInterrupt)
+
+
 def _broken(name: str, where: str, err: BaseException) -> BrokenPlugin:
     text = " ".join(str(err).split())
     return BrokenPlugin(name, where, f"{type(err).__name__}: {text}" if text else
@@ -390,8 +424,9 @@ def _load_named(reg: Registry[Any], name: str) -> bool:
 def load(project: Project | None = None) -> None:
     """Import every installed plugin (entry points) and the project's plugin modules, once.
     Worker processes call this with their parent's project before running anything. A plugin
-    that fails (any exception) is recorded in `broken()`, never raised here: only the
-    scenarios that name it fail (`Registry.get`)."""
+    that fails (any exception, SystemExit too) is recorded in `broken()`, never raised here:
+    only the scenarios that name it fail (`Registry.get`); `plugin_failure` says what counts.
+    What the plugins print while they load goes to stderr (`stdout_to_stderr`)."""
     if "entry points" not in _LOADED:
         _LOADED.add("entry points")
         for reg in REGISTRIES:
@@ -406,23 +441,29 @@ def load(project: Project | None = None) -> None:
     if str(proj.root) not in sys.path:  # plugin modules kept in the project folder
         sys.path.insert(0, str(proj.root))
     config = proj.config_file.name if proj.config_file is not None else "the project"
-    for module in proj.plugins:
-        try:
-            importlib.import_module(module)
-        except Exception as err:  # a team's module: its own error, named, not "internal"
-            _BROKEN_MODULES[module] = _broken(module, f"plugin module of {config}", err)
+    with stdout_to_stderr():
+        for module in proj.plugins:
+            try:
+                importlib.import_module(module)
+            except BaseException as err:  # a team's module: its own error, named, not "internal"
+                if not plugin_failure(err):
+                    raise
+                _BROKEN_MODULES[module] = _broken(module, f"plugin module of {config}", err)
 
 
 def _load_entry_point(reg: Registry[Any], ep: Any) -> None:
     """Register one entry point's object; a failure is recorded under its name."""
     where = f"entry point {ep.value}{_distribution(ep)}, group {reg.group}"
     try:
-        item = ep.load()
+        with stdout_to_stderr():
+            item = ep.load()
         if getattr(item, "name", None) != ep.name:
             raise SpecError(f"entry point '{ep.name}' must name an object whose name is "
                             f"'{ep.name}'")
         reg.register(item, source=_entry_point_source(ep))
-    except Exception as err:  # a broken plugin takes down only the scenarios that name it
+    except BaseException as err:  # a broken plugin takes down only the scenarios that name it
+        if not plugin_failure(err):
+            raise
         reg.broken[ep.name] = _broken(ep.name, where, err)
 
 

@@ -26,6 +26,7 @@ from kartci.portable import Pin
 from kartci.runner.events import Event, EventKind, Listener, lost
 from kartci.runner.jobs import Context, Job, Outcome, run_job
 from kartci.runner.kinds import ExecutorKind
+from kartci.runner.pinned import call_pinned
 from kartci.runner.ray_executor import ray_tasks
 
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
@@ -166,16 +167,14 @@ class _Workers:
         self.events.close()
 
 
-def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
-         here: bool = True) -> Iterator[Outcome]:
+def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Iterator[Outcome]:
     """`workers - 1` worker processes plus this one. This process has everything imported, so
     it starts the first (longest) run at once while the workers start up (2-3 s each), and it
     takes the next run whenever it is free. A hard crash (a segfault) in a run done here ends
-    the whole command, as with -j 1; in a worker it is an error for that run only. With
-    `here` False (this process is not pinned: kartci.portable) `workers` workers do all runs."""
+    the whole command, as with -j 1; in a worker it is an error for that run only."""
     todo = deque(jobs)
-    mine: Job | None = todo.popleft() if here else None  # before a worker can take it
-    others = _Workers(ctx, emit, workers - (1 if here else 0), todo)
+    mine: Job | None = todo.popleft()  # before a worker can take it
+    others = _Workers(ctx, emit, workers - 1, todo)
     try:
         while True:
             others.tick()
@@ -189,9 +188,7 @@ def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
                 with others.lock:
                     if not others.todo:
                         break
-                if not here:
-                    others.wait_any(0.05)  # not yet handed out by the dispatcher
-            mine = others.take() if here or others.slots == 0 else None  # 0: no workers
+            mine = others.take()
     finally:
         others.close()
 
@@ -203,6 +200,26 @@ def _outcome(fut: Future[Outcome], job: Job, ctx: Context) -> Outcome:
         return lost(job, ctx, f"worker process failed: {type(err).__name__}: {err}")
 
 
+def in_pinned_child(jobs: Sequence[Job], ctx: Context, emit: Listener,
+                    workers: int) -> Iterator[Outcome]:
+    """Every job in one pinned child process started as its own command (which runs them as
+    a pinned `kartci run` would, its own workers included): this process was not started
+    pinned, and a multiprocessing child would import its `__main__` again. Progress is not
+    relayed; each outcome is announced when the child is done."""
+    for outcome in call_pinned(outcomes, list(jobs), ctx, workers):
+        emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
+        yield outcome
+
+
+def outcomes(jobs: list[Job], ctx: Context, workers: int) -> list[Outcome]:
+    """Every job's outcome, executed here (the pinned child's work)."""
+    return list(execute(jobs, ctx, _ignore, workers))
+
+
+def _ignore(_: Event) -> None:
+    pass
+
+
 def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,
             kind: ExecutorKind = ExecutorKind.LOCAL,
             ray_address: str | None = None) -> Iterator[Outcome]:
@@ -210,7 +227,7 @@ def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,
     if kind is ExecutorKind.RAY:
         return ray_tasks(jobs, ctx, emit, workers, ray_address)
     if portable.state() is Pin.UNPINNED:  # this process's bits are not every CPU's
-        return pool(jobs, ctx, emit, max(1, min(workers, len(jobs))), here=False)
+        return in_pinned_child(jobs, ctx, emit, workers)
     if workers <= 1 or len(jobs) <= 1:
         return serial(jobs, ctx, emit)
     return pool(jobs, ctx, emit, min(workers, len(jobs)))

@@ -350,8 +350,8 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
         with wall_clock_limit(ctx.timeout_s, where):
             run = run_one(job.spec, ctx.out, progress, ctx.out / job.folder,
                           facts={"variation": job.variation})
-    except Exception as err:  # a crashing controller must not take the suite down
-        return Outcome.failed(job, one_line(failure_text(err)))
+    except (Exception, SystemExit) as err:  # a crashing controller (or one calling sys.exit)
+        return Outcome.failed(job, one_line(failure_text(err)))  # must not end the suite
     if job.repeat != 0:
         return Outcome(job, None, None, run, time.perf_counter() - start)
     result = evaluate(ctx.out / job.folder, ctx.baselines)

@@ -9,13 +9,11 @@ reports and, for a shard, `shard.json`. A sweep point's folder is `<scenario>@<k
 from __future__ import annotations
 
 import math
-import multiprocessing as mp
 import os
 import shutil
 import time
 import traceback
 from collections.abc import Callable, Mapping
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -31,6 +29,7 @@ from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.logs.recorded import COMMANDS, JOY, Recorded
 from kartci.project import did_you_mean
 from kartci.runner.outdir import check_inside, manifest_labels
+from kartci.runner.pinned import NotPortable, call_pinned
 from kartci.scenario import Scenario
 from kartci.scenario.models import LogSource
 from kartci.sim import simulate
@@ -91,7 +90,7 @@ def run_one(scenario: Scenario, out: Path,
         _commit(stage, folder)
     except BaseException as err:
         keep_outputs(stage, folder)
-        if isinstance(err, Exception):  # an interrupt (Ctrl-C) keeps the unfinished mark
+        if isinstance(err, Exception | SystemExit):  # Ctrl-C keeps the unfinished mark
             mark_failed(folder, scenario.name, failure_text(err), err)
         raise
     finally:
@@ -101,12 +100,17 @@ def run_one(scenario: Scenario, out: Path,
 
 def run_pinned(scenario: Scenario, out: Path, folder: Path,
                agents: Mapping[str, object] | None = None) -> dict[str, Any]:
-    """`run_one`, in a spawned pinned child when this process is not pinned (kartci.portable);
-    agent objects cannot leave this process, so their runs stay here (run.json says so)."""
+    """`run_one`, in a pinned child process started as its own command when this process is
+    not pinned (kartci.portable, kartci.runner.pinned: the caller's `__main__` is never
+    imported again, and an error arrives as the same exception). Agent objects cannot leave
+    this process, nor can a scenario naming a class only the caller's `__main__` defines:
+    those runs stay here (run.json says so)."""
     if agents or portable.state() is not portable.Pin.UNPINNED:
         return run_one(scenario, out, None, folder, agents)
-    with ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as pool:
-        return pool.submit(run_one, scenario, out, None, folder).result()
+    try:
+        return call_pinned(run_one, scenario, out, None, folder)
+    except NotPortable:
+        return run_one(scenario, out, None, folder)
 
 
 def _run_staged(scenario: Scenario, stage: Path, folder: Path,

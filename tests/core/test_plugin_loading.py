@@ -96,3 +96,95 @@ def test_broken_plugins_fail_only_the_scenarios_that_name_them(tmp_path: Path,
     assert 'team_broken.py", line 1' in trace and trace.endswith(
         "RuntimeError: stanley gains not tuned\n")
     assert 'team_plugin.py", line 1' in (out / "needs_team" / "traceback.txt").read_text()
+
+
+def test_a_plugin_that_calls_sys_exit_while_loading_is_recorded_as_broken_by_name(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`sys.exit(0)` at import is the plugin's failure, not kartci's end (which was a green
+    exit with nothing run): recorded under the entry point's name as `SystemExit: 0`."""
+    (tmp_path / "kartci_test_quitter.py").write_text("import sys\nsys.exit(0)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    reg: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
+    _load_entry_point(reg, EntryPoint("quitter", "kartci_test_quitter:QUITTER",
+                                      "kartci.controllers"))
+    assert reg.broken["quitter"].error == "SystemExit: 0"
+    with pytest.raises(PluginError, match=r"plugin 'quitter' .* failed to load: SystemExit: 0"):
+        reg.get("quitter")
+
+
+def test_a_keyboard_interrupt_while_a_plugin_loads_still_stops_kartci(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C during an import cannot be told from a plugin raising KeyboardInterrupt, and a
+    real Ctrl-C must stop kartci: it propagates (the command then exits 130)."""
+    (tmp_path / "kartci_test_interrupted.py").write_text("raise KeyboardInterrupt\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    reg: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
+    with pytest.raises(KeyboardInterrupt):
+        _load_entry_point(reg, EntryPoint("interrupted", "kartci_test_interrupted:X",
+                                          "kartci.controllers"))
+
+
+def project_with_plugin(root: Path, source: str) -> Path:
+    """A project whose one plugin module is `source`."""
+    (root / "scenarios").mkdir(parents=True)
+    (root / "kartci.toml").write_text('plugins = ["team_plugin"]\n')
+    (root / "team_plugin.py").write_text(source)
+    return root
+
+
+def test_a_ci_run_with_a_plugin_module_that_exits_0_fails_with_exit_2_and_writes_nothing(
+        tmp_path: Path) -> None:
+    proj = project_with_plugin(tmp_path / "proj", "import sys\nsys.exit(0)\n")
+    out = tmp_path / "out"
+    p = kartci("run", "line_straight", "--out", out, cwd=proj, env={"CI": "true"})
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.startswith(
+        "kartci: error: plugin 'team_plugin' (plugin module of kartci.toml) failed to load: "
+        "SystemExit: 0 (strict mode, as under CI: a plugin that fails to load fails the run;")
+    assert len(p.stderr.splitlines()) == 1
+    assert not out.exists()
+
+
+def test_a_strict_run_with_a_broken_installed_plugin_is_exit_2_even_if_no_scenario_names_it(
+        tmp_path: Path) -> None:
+    site = tmp_path / "site"
+    installed_broken_plugin(site)
+    path = os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")])
+    p = kartci("run", "line_straight", "--strict", "--out", tmp_path / "out", cwd=tmp_path,
+               env={"PYTHONPATH": path})
+    assert p.returncode == 2, p.stderr
+    assert ("plugin 'stanley' (entry point team_broken:STANLEY of team-broken 0.1, group "
+            "kartci.controllers) failed to load: RuntimeError: stanley gains not tuned") in p.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_plugins_and_list_exit_1_when_a_plugin_is_broken_and_still_list_everything(
+        tmp_path: Path) -> None:
+    """As `pip check` does: the listing is shown, the broken plugin named on stderr, exit 1."""
+    site = tmp_path / "site"
+    installed_broken_plugin(site)
+    env = {"PYTHONPATH": os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")])}
+    for command in ("plugins", "list"):
+        p = kartci(command, cwd=tmp_path, env=env)
+        assert p.returncode == 1, (command, p.stderr)
+        assert "line_pid" in p.stdout if command == "plugins" else "line_straight" in p.stdout
+        assert p.stderr == (
+            "kartci: error: plugin 'stanley' (entry point team_broken:STANLEY of team-broken "
+            "0.1, group kartci.controllers) failed to load: RuntimeError: stanley gains not "
+            "tuned\n")
+    assert kartci("plugins", cwd=tmp_path).returncode == 0
+
+
+def test_what_a_plugin_prints_while_it_loads_goes_to_stderr_and_schema_stays_json(
+        tmp_path: Path) -> None:
+    """Both Python's print and a write to file descriptor 1 (a C extension, a child process)."""
+    proj = project_with_plugin(tmp_path / "proj", (
+        "import os\nprint('loading team plugin')\nos.write(1, b'raw fd write\\n')\n"))
+    p = kartci("schema", cwd=proj)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["title"]
+    assert "loading team plugin" in p.stderr and "raw fd write" in p.stderr
+    p = kartci("show", "line_straight", cwd=proj)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["name"] == "line_straight"
+    assert "loading team plugin" in p.stderr

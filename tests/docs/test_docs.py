@@ -27,6 +27,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tomllib
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -382,3 +383,91 @@ def test_the_changelog_and_the_kept_pages_are_in_the_site(site: Path) -> None:
                  "getting-started.html"):
         assert (site / page).is_file(), page
     assert "Unreleased" in (site / "changelog.html").read_text(encoding="utf-8")
+
+
+# --- the [docs] extra -------------------------------------------------------------------------
+
+AUTO = re.compile(r"^\.\. (currentmodule|auto\w+):: (\S+)", re.MULTILINE)
+
+
+def _kartci_requires() -> list[str]:
+    """kartci's requirements as pyproject.toml has them now (installed metadata may be older)."""
+    table = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    return [*table["dependencies"], *(f'{r}; extra == "{extra}"' for extra, reqs in
+                                      table["optional-dependencies"].items() for r in reqs)]
+
+
+def _closure(names: set[str], extras: tuple[str, ...] = ()) -> set[str]:
+    """Distributions `names` need, themselves included (their extras' only for kartci's own
+    `extras`): kartci's from pyproject.toml, the others' from what is installed here."""
+    from importlib import metadata
+
+    from packaging.requirements import Requirement
+    from packaging.utils import canonicalize_name
+
+    seen: set[str] = set()
+    todo = [canonicalize_name(n) for n in names]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        try:
+            requires = _kartci_requires() if name == "kartci" else metadata.requires(name) or []
+        except metadata.PackageNotFoundError:
+            continue
+        for text in requires:
+            req = Requirement(text)
+            wanted = extras if name == "kartci" else ()
+            if req.marker is None or any(req.marker.evaluate({"extra": e}) for e in wanted) or (
+                    req.marker.evaluate({"extra": ""})):
+                todo.append(canonicalize_name(req.name))
+                if name == "kartci" and canonicalize_name(req.name) == "kartci":
+                    extras = (*extras, *req.extras)  # kartci[dev] names kartci[docs]
+    return seen
+
+
+def test_the_docs_extra_alone_imports_everything_the_site_documents() -> None:
+    """`pip install 'kartci[docs]'` must build the site on its own: autodoc and the site's own
+    directives import these modules, so with every distribution only [dev] brings made
+    unimportable, each must still import (kartci.pytest_plugin needs pytest: [docs] has it).
+    The cheap proof; the strict build itself runs in the full tier."""
+    from importlib import metadata
+
+    from packaging.utils import canonicalize_name
+
+    docs_side = _closure({"kartci"}, ("docs",))
+    dev_only = _closure({"kartci"}, ("dev",)) - docs_side
+    owners = metadata.packages_distributions()
+    blocked = sorted(top for top, dists in owners.items()
+                     if {canonicalize_name(d) for d in dists} <= dev_only)
+    assert "hypothesis" in blocked  # a dev-only distribution: the check can see a gap
+    modules = {"kartci_docs"}
+    for page in DOCS.rglob("*.md"):
+        current = "kartci"
+        for directive, target in AUTO.findall(page.read_text(encoding="utf-8")):
+            if directive == "currentmodule":
+                current = target
+            else:
+                modules.add(target if target.startswith("kartci") else current)
+    script = (
+        "import importlib, sys\n"
+        f"blocked = set({blocked!r})\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.partition('.')[0] in blocked:\n"
+        "            raise ImportError(f'{name} is not installed by kartci[docs]')\n"
+        "sys.meta_path.insert(0, Block())\n"
+        f"sys.path[:0] = [{str(DOCS / '_ext')!r}, {str(ROOT)!r}]\n"
+        f"for target in sorted({sorted(modules)!r}):\n"
+        "    parts = target.split('.')\n"
+        "    for n in range(len(parts), 0, -1):\n"
+        "        try:\n"
+        "            importlib.import_module('.'.join(parts[:n]))\n"
+        "            break\n"
+        "        except ModuleNotFoundError as err:\n"
+        "            if err.name != '.'.join(parts[:n]):\n"
+        "                raise\n")
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]

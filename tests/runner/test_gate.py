@@ -474,3 +474,65 @@ def test_a_sleeping_controller_step_is_stopped_by_the_time_limit(
     assert "time limit: over 1 s wall clock" in (result.error or "")
     assert time.monotonic() - start < 60  # well before the sleep would have ended
     assert (tmp_path / "line_straight" / "error.json").exists()
+
+
+def test_a_strict_run_ended_by_system_exit_0_is_an_error_not_a_green_exit() -> None:
+    """Whatever cuts a strict (CI) run short with a green code, a plugin's `sys.exit()` among
+    them, it never passes having judged fewer scenarios than it selected."""
+    from kartci.runner.gate import judging_all
+
+    with pytest.raises(RunError, match=r"SystemExit\(0\) inside it.* never passes"), \
+            judging_all(["line_straight", "line_circle"], strict=True):
+        sys.exit(0)
+    with pytest.raises(SystemExit), judging_all(["line_straight"], strict=False):
+        sys.exit(0)  # outside strict mode: unchanged
+
+
+def test_a_strict_run_that_judged_fewer_scenarios_than_selected_fails_each_missing_one() -> None:
+    from kartci.runner.gate import NOT_JUDGED, judging_all
+    from kartci.verdict.result import ScenarioResult, exit_code
+
+    judged = [ScenarioResult("line_straight", "")]
+    with judging_all(["line_straight", "line_circle"], strict=True) as complete:
+        results = complete(judged)
+    assert [(r.name, r.error) for r in results] == [("line_straight", None),
+                                                    ("line_circle", NOT_JUDGED)]
+    assert exit_code(results) == 2
+    with judging_all(["line_straight", "line_circle"], strict=False) as complete:
+        assert complete(judged) == judged
+
+
+QUITTER = """
+import sys
+from kartci.plugins import Controller, register
+from kartci.scenario.models import ControllerParams
+from typing import Literal
+
+
+class Params(ControllerParams):
+    type: Literal["quitter"] = "quitter"
+
+
+def build(params, ctx):
+    sys.exit(0)
+
+
+register(Controller("quitter", Params, build, ("line_tracker",)))
+"""
+
+
+def test_a_controller_that_calls_sys_exit_fails_its_own_run_not_the_whole_command(
+        tmp_path: Path) -> None:
+    proj = tmp_path / "proj"
+    (proj / "scenarios").mkdir(parents=True)
+    (proj / "kartci.toml").write_text('plugins = ["quitter"]\n')
+    (proj / "quitter.py").write_text(QUITTER)
+    spec = yaml.safe_load((BUILTIN_SCENARIOS / "line_straight.yaml").read_text())
+    spec["agents"]["lt0"]["controller"] = {"type": "quitter"}
+    (proj / "scenarios" / "quits.yaml").write_text(yaml.safe_dump(spec))
+    out = tmp_path / "out"
+    p = kartci("run", "quits", "--out", out, cwd=proj)
+    assert p.returncode == 2, p.stderr
+    summary = json.loads((out / "summary.json").read_text())["scenarios"]
+    assert summary["quits"] == {**summary["quits"], "status": "error",
+                                "error": "run crashed: SystemExit: 0"}
