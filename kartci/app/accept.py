@@ -17,7 +17,7 @@ from kartci.errors import SpecError
 from kartci.figures import Plots
 from kartci.runner import conditioning
 from kartci.runner.executors import execute
-from kartci.runner.jobs import Context, Job
+from kartci.runner.jobs import MAX_RUNS, Context, Job, check_count
 from kartci.runner.outdir import check_inside, locked, read_manifest, valid_label
 from kartci.runner.run import check_complete, check_finished, recorded_scenario, reference_plots
 from kartci.verdict import (
@@ -31,6 +31,7 @@ from kartci.verdict import (
     update,
 )
 from kartci.verdict.baseline import above, judge, policy_bound
+from kartci.verdict.judging import check_allowed
 from kartci.verdict.trace import trace_path, write_trace
 
 REPLICAS = 4  # the run itself and 3 with every robot's start moved 1-3 nm sideways
@@ -101,12 +102,19 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
         raise SpecError(f"--replicas {replicas}: expected 0 (none) or 2 or more")
     if jobs < 1:
         raise SpecError(f"--jobs {jobs}: expected 1 or more")
+    check_count("--replicas", replicas)
+    check_count("--jobs", jobs)
     if not out.is_dir():
         raise SpecError(f"{out}: no such folder; run `kartci run` first")
+    check_allowed()
     target = baselines if baselines is not None else project.current().baselines
     with locked(out):
         labels = list(names) or read_manifest(out)
         _check_labels(out, labels)
+        if len(labels) * replicas > MAX_RUNS:  # each replica is a run of its own
+            raise SpecError(f"{len(labels):,} scenarios x {replicas:,} replicas = "
+                            f"{len(labels) * replicas:,} runs, more than the {MAX_RUNS:,} "
+                            "allowed; split the command")
         checked = []
         for label in labels:  # check everything before writing anything
             _check_acceptable(out / label, replicas)
