@@ -14,7 +14,7 @@ from kartci.core import Metric, RunFolder, definitions
 from kartci.errors import SpecError
 from kartci.project import did_you_mean
 from kartci.scenario.models import Scenario
-from kartci.verdict import fingerprint
+from kartci.verdict import criteria, fingerprint
 from kartci.verdict.baseline import (
     Baseline,
     MetricVerdict,
@@ -63,10 +63,14 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
     warnings += [note] if note else []
     warnings += ill_conditioned(verdicts)
     warnings += [UNPINNED] if platform.get("simd") == portable.Pin.UNPINNED.value else []
+    moved = criteria.changes(None if baseline is None else baseline.doc, scenario.criteria)
+    warnings += [c.text() for c in moved]
+    strict += [c.text() for c in moved if c.kind is criteria.ChangeKind.REMOVED]
     return ScenarioResult(
         folder.name, scenario.description, verdicts, check_criteria(values, scenario.criteria),
         None, record, warnings=tuple(one_line(w) for w in [*warnings, *notes, *doubts]),
-        strict_warnings=tuple(one_line(w) for w in strict), scenario=scenario,
+        strict_warnings=tuple(one_line(w) for w in strict), criteria_changes=tuple(moved),
+        scenario=scenario,
         folder=folder.path, metrics=read_all_metrics(folder),
         baseline=None if baseline is None else baseline.path)
 
