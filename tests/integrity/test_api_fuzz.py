@@ -56,8 +56,9 @@ class NotAnAgent:
     period_s = -1.0
 
 
-AGENTS = st.one_of(st.none(), st.just({}), st.just({"lt0": NotAnAgent()}),
-                   st.just({"nobody": NotAnAgent()}), st.just({"lt0": 3}))
+AGENTS: st.SearchStrategy[dict[str, object] | None] = st.one_of(
+    st.none(), st.just({}), st.just({"lt0": NotAnAgent()}), st.just({"nobody": NotAnAgent()}),
+    st.just({"lt0": 3}))
 
 
 @pytest.fixture(scope="module")
