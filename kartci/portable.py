@@ -18,7 +18,8 @@ started from here: `-j` workers, Ray's local workers, bridge children), the `kar
 re-executes itself once when it was not started with it, and a run asked of a Python process
 that was not (the API, the pytest plugin) runs in a child process that is, started as its own
 command (kartci.runner.pinned: never a re-import of the caller's `__main__`).
-`KARTCI_SIMD=native` opts out (benchmarks); its runs are labelled so.
+`KARTCI_SIMD=native` opts out (benchmarks); its runs are labelled so. `KARTCI_SIMD=pinned` (or
+unset, or empty) is the default; any other value is an error, never silently the default.
 """
 
 from __future__ import annotations
@@ -34,7 +35,10 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+from kartci.errors import SpecError
+
 OPT_OUT = "KARTCI_SIMD"  # "native": the CPU's own kernels (verdicts then depend on the CPU)
+SIMD_VALUES = ("native", "pinned")  # what OPT_OUT may hold ("pinned", unset or empty: the pin)
 _REEXEC = "KARTCI_PIN_REEXEC"  # set on the one re-execution, so a failed pin cannot loop
 _TUNABLE = "glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX"  # libm's ifuncs: sse2 variants
 _X86 = {
@@ -55,6 +59,19 @@ class Pin(StrEnum):
     PINNED = "pinned"  # started with kartci's environment: the same bits on every CPU
     UNPINNED = "unpinned"  # started without it, or numpy was imported first
     NATIVE = "native"  # the CPU's own kernels, asked for with KARTCI_SIMD=native
+
+
+def opted_out(environ: Mapping[str, str]) -> bool:
+    """Whether `environ` asks for the CPU's own kernels (KARTCI_SIMD=native); SpecError for a
+    value that is neither of SIMD_VALUES: `Native` or a typo must not quietly mean the pin."""
+    value = environ.get(OPT_OUT) or "pinned"
+    if value not in SIMD_VALUES:
+        import difflib  # start-up: only on this error
+
+        close = difflib.get_close_matches(value.lower(), SIMD_VALUES, n=1)
+        hint = f"did you mean '{close[0]}'?" if close else "unset means pinned"
+        raise SpecError(f"{OPT_OUT}={value[:40]!r}: not native or pinned ({hint})")
+    return value == "native"
 
 
 def _arch() -> str:
@@ -80,7 +97,7 @@ def _tunables(current: str | None) -> str:
 def pinned_env(environ: Mapping[str, str]) -> dict[str, str]:
     """`environ` with kartci's pin applied (unchanged when it opts out)."""
     env = dict(environ)
-    if env.get(OPT_OUT) == "native":
+    if opted_out(env):
         return env
     for key in _DROP:
         env.pop(key, None)
@@ -92,15 +109,19 @@ def pinned_env(environ: Mapping[str, str]) -> dict[str, str]:
 def child_vars() -> dict[str, str]:
     """The variables a process started elsewhere needs (a Ray worker on a cluster)."""
     env = pinned_env(os.environ)
-    if env.get(OPT_OUT) == "native":
+    if opted_out(env):
         return {OPT_OUT: "native"}
     return {key: env[key] for key in pin_vars()}
 
 
 def prepare() -> None:
     """Pin os.environ (at `import kartci`): numpy, if imported later, and every child process
-    started from here compute as kartci's own processes do."""
-    pinned = pinned_env(os.environ)
+    started from here compute as kartci's own processes do. A bad KARTCI_SIMD is pinned here
+    (an import does not fail) and refused by `state`, before anything computes."""
+    try:
+        pinned = pinned_env(os.environ)
+    except SpecError:
+        pinned = pinned_env({k: v for k, v in os.environ.items() if k != OPT_OUT})
     for key in _DROP:
         if key not in pinned:
             os.environ.pop(key, None)
@@ -149,8 +170,9 @@ def _numpy_cpu() -> tuple[list[str], list[str], dict[str, bool]]:
 
 
 def state() -> Pin:
-    """Whether this process computes with kartci's pinned environment."""
-    if os.environ.get(OPT_OUT) == "native":
+    """Whether this process computes with kartci's pinned environment (SpecError: a bad
+    KARTCI_SIMD)."""
+    if opted_out(os.environ):
         return Pin.NATIVE
     started = _started_env()
     if not _holds(started if started is not None else os.environ):

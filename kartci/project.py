@@ -93,8 +93,15 @@ class ProjectConfig(BaseModel):
     @classmethod
     def _named_with_a_reason(cls, value: dict[str, str]) -> dict[str, str]:
         for key, reason in value.items():
-            if not key.partition(":")[2] or not reason.strip():
-                raise ValueError(f"{key[:80]!r}: expected \"SCENARIO:METRIC\" = \"reason\"")
+            scenario, _, metric = key.partition(":")
+            missing = ("no metric" if not metric.strip() else "no scenario"
+                       if not scenario.strip() else None)
+            if missing is not None:
+                raise ValueError(f"{key[:80]!r} names {missing}: expected \"SCENARIO:METRIC\" "
+                                 "= \"reason\"")
+            if not reason.strip():
+                raise ValueError(f"{key[:80]!r}: an empty reason; say why its tolerance may "
+                                 "stay loose")
         return value
 
 

@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import NoReturn
 
 from kartci import __version__
-from kartci.atomic import write_text_atomic
+from kartci.atomic import check_target, write_text_atomic
+from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, read_bytes
 from kartci.errors import SpecError
 from kartci.project import BUILTIN
 
@@ -193,6 +194,8 @@ def _refuse_paths_in_the_way(folder: Path, steps: list[Step]) -> None:
                 raise SpecError(f"{path}: not a folder; nothing written")
             if rel == step.path and path.is_dir():
                 raise SpecError(f"{path}: a folder, expected a file; nothing written")
+            if rel == step.path and not path.is_symlink():  # a link is replaced, not followed
+                check_target(path)
 
 
 def _refuse_conflicts(folder: Path, conflicts: list[Path]) -> NoReturn:
@@ -206,10 +209,11 @@ def _refuse_conflicts(folder: Path, conflicts: list[Path]) -> NoReturn:
 
 
 def _read(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
+    try:  # a FIFO would hang a plain read; a device never end
+        return read_bytes(path, JSON_MAX_BYTES).decode("utf-8")
     except (OSError, UnicodeDecodeError) as err:
-        why = "not a UTF-8 text file" if isinstance(err, UnicodeDecodeError) else err.strerror
+        why = ("not a UTF-8 text file" if isinstance(err, UnicodeDecodeError)
+               else str(err) if isinstance(err, RefusedFileError) else err.strerror)
         raise SpecError(f"{path}: cannot read ({why}); nothing written") from err
 
 

@@ -17,20 +17,23 @@ from kartci.errors import SpecError
 from kartci.figures import Plots
 from kartci.runner import conditioning
 from kartci.runner.executors import execute
-from kartci.runner.jobs import Context, Job
+from kartci.runner.jobs import MAX_RUNS, Context, Job, check_count
 from kartci.runner.outdir import check_inside, locked, read_manifest, valid_label
 from kartci.runner.run import check_complete, check_finished, recorded_scenario, reference_plots
+from kartci.scenario.models import Scenario
 from kartci.verdict import (
     Change,
     Conditioning,
     MetricVerdict,
+    criteria,
     fingerprint,
     ill_conditioned,
     load,
     read_json,
     update,
 )
-from kartci.verdict.baseline import above, judge, policy_bound
+from kartci.verdict.baseline import above, judge, policy_bound, read_baseline
+from kartci.verdict.judging import check_allowed
 from kartci.verdict.trace import trace_path, write_trace
 
 REPLICAS = 4  # the run itself and 3 with every robot's start moved 1-3 nm sideways
@@ -101,8 +104,11 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
         raise SpecError(f"--replicas {replicas}: expected 0 (none) or 2 or more")
     if jobs < 1:
         raise SpecError(f"--jobs {jobs}: expected 1 or more")
+    check_count("--replicas", replicas)
+    check_count("--jobs", jobs)
     if not out.is_dir():
         raise SpecError(f"{out}: no such folder; run `kartci run` first")
+    check_allowed()
     if baselines is None:
         proj = project.current()
         target = proj.writable(proj.baselines, "--baselines DIR (in Python: baselines=)")
@@ -111,6 +117,10 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
     with locked(out):
         labels = list(names) or read_manifest(out)
         _check_labels(out, labels)
+        if len(labels) * replicas > MAX_RUNS:  # each replica is a run of its own
+            raise SpecError(f"{len(labels):,} scenarios x {replicas:,} replicas = "
+                            f"{len(labels) * replicas:,} runs, more than the {MAX_RUNS:,} "
+                            "allowed; split the command")
         checked = []
         for label in labels:  # check everything before writing anything
             _check_acceptable(out / label, replicas)
@@ -119,10 +129,10 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
         if replicas:
             _replicate(out, target, labels, replicas, jobs, say)
         # the traces' plots read the logs: after the cheap checks, still before any write
-        traced = [(label, values, reference_plots(out / label), _fields(out / label))
+        traced = [(label, values, reference_plots(out / label), recorded_scenario(out / label))
                   for label, values in checked]
-        return [_write(out / label, target, values, drawn, fields, bool(replicas))
-                for label, values, drawn, fields in traced]
+        return [_write(out / label, target, values, drawn, scenario, bool(replicas))
+                for label, values, drawn, scenario in traced]
 
 
 def _check_labels(out: Path, labels: list[str]) -> None:
@@ -157,13 +167,18 @@ def _replaced(folder: Path) -> dict[str, str]:
 
 
 def _write(folder: Path, target: Path, values: dict[str, dict[str, Any]], drawn: Plots | None,
-           fields: dict[str, Any], replicated: bool) -> Accepted:
-    """One scenario's baseline written, and what that changed."""
+           scenario: Scenario, replicated: bool) -> Accepted:
+    """One scenario's baseline written, and what that changed (criteria included)."""
     label, path = folder.name, target / f"{folder.name}.json"
+    fields = fingerprint.fields(scenario, _replaced(folder))
     spreads, made = _conditioning(folder) if replicated else (None, _made(folder))
     note, moved = _scenario_diff(path, fields)
-    changes = update(path, label, values, spreads, made, fields)
-    notes, warnings = _conditioning_notes(path)
+    old = read_baseline(path)
+    accepted = criteria.changes(None if old is None else old.doc, scenario.criteria)
+    changes = update(path, label, values, spreads, made, fields, scenario.criteria)
+    notes = [f"  accepted: {c.text().partition(':')[0]}" for c in accepted]
+    more, warnings = _conditioning_notes(path)
+    notes += more
     notes += _kept_loose(path, label)
     if drawn is not None and drawn.tracks:
         size = write_trace(trace_path(target, label), drawn)
@@ -193,12 +208,6 @@ def _replicate(out: Path, target: Path, labels: list[str], replicas: int, worker
         for _ in execute(todo, Context(out, target), lambda _event: None, workers):
             pass
     conditioning.check_complete(out, labels, replicas)
-
-
-def _fields(folder: Path) -> dict[str, Any]:
-    """The resolved scenario a run folder's log recorded (and the agent objects that replaced
-    its controllers), as a baseline stores it."""
-    return fingerprint.fields(recorded_scenario(folder), _replaced(folder))
 
 
 def _scenario_diff(path: Path, fields: dict[str, Any]) -> tuple[str | None,

@@ -32,6 +32,7 @@ from kartci.report.ci import (
 from kartci.report.tables import RUN, Wording, conditioning, delta, marked, num, tolerance
 from kartci.runner.gate import strict_default
 from kartci.verdict import Status
+from kartci.verdict.criteria import ChangeKind
 from kartci.verdict.result import ScenarioResult, exit_code, one_line
 
 COMMANDS_GROUP = "kartci.commands"  # entry points: name -> "module:attr", a typer.Typer
@@ -150,9 +151,18 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
         for v in r.verdicts:
             table.add_row(Text(v.name), num(v.value, v.unit), num(v.baseline, v.unit), delta(v),
                           tolerance(v), conditioning(v), marked(v.status))
+        moved = {c.name: c for c in r.criteria_changes}
         for c in r.criteria:
-            table.add_row(Text(f"criterion {c.name}"), num(c.value), Text(c.bound), "", "", "",
+            change = moved.get(c.name)
+            bound = c.bound if change is None else (
+                f"{c.bound} (new)" if change.kind is ChangeKind.ADDED
+                else f"{c.bound} (was {change.before})")
+            table.add_row(Text(f"criterion {c.name}"), num(c.value), Text(bound), "", "", "",
                           marked(Status.PASS if c.ok else Status.FAILED))
+        for gone in r.criteria_changes:
+            if gone.kind is ChangeKind.REMOVED:
+                table.add_row(Text(f"criterion {gone.name}"), "", Text(f"was {gone.before}"),
+                              "", "", "", "REMOVED")
         out_console.print(table)
         for problem in r.problems:
             out_console.print(Text(f"{r.name}: FAILED: {problem}"), highlight=False)

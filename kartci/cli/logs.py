@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from kartci.atomic import check_target
 from kartci.cli.common import (
     AllowOutsideOpt,
     BaselinesOpt,
@@ -135,6 +136,7 @@ def extract(
     """Copy some topics of a log into a new MCAP file (ROS 2 types), e.g. a joystick stream."""
     from kartci.logs import extract as copy_topics  # CLI start-up: the log readers
 
+    check_target(out)
     n = copy_topics(log, topic, out)
     out_console.print(f"wrote {out}: {n} messages", highlight=False)
 
@@ -150,6 +152,7 @@ def recover(
     is said in a warning."""
     from kartci.logs import recover as salvage_log  # CLI start-up: the log readers
 
+    check_target(out)
     n = salvage_log(log, out)
     out_console.print(f"wrote {out}: {n} messages", highlight=False)
 

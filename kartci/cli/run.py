@@ -116,12 +116,15 @@ def run(
     from kartci.report.progress import ProgressView
     from kartci.report.static import scenario_svgs
     from kartci.runner import dealt, expand, parse_shard, refused_results, run_jobs, runnable
-    from kartci.runner.jobs import Vary, default_suite
+    from kartci.runner.jobs import Vary, check_count, default_suite
     from kartci.runner.merge import write_marker
 
     out = out_dir(out, "latest")
     if jobs is not None and jobs < 1:
         raise SpecError(f"--jobs {jobs}: expected 1 or more")
+    for option, count in (("--jobs", jobs or 1), ("--repeat", repeat),
+                          ("--conditioning", conditioning)):
+        check_count(option, count)
     if timeout_s is not None and not timeout_s > 0:
         raise SpecError(f"--timeout-s {timeout_s:g}: expected a positive number of seconds")
     if ray_address and executor is not ExecutorKind.RAY:

@@ -89,6 +89,34 @@ class _DamagedError(Exception):
     """A chunk or record does not hold together."""
 
 
+# Bounds of the linear scan, so that a file that cannot be a log fails in a second instead of
+# being walked to its end (a 20 GiB sparse file after the MCAP magic is 2e9 empty records):
+MAX_RECORD_BYTES = 1 << 30  # one record (a chunk, an attachment); real chunks are a few MiB
+MAX_UNKNOWN_RUN_BYTES = 16 << 20  # records of unknown type in a row; real logs have next to none
+MAX_DB3_SALVAGE_BYTES = 2 << 30  # a damaged sqlite3 file is read whole into memory to salvage it
+
+
+class _BoundedStreamReader(StreamReader):
+    """mcap's StreamReader, failing on what no log holds: opcode 0x00 (the MCAP spec reserves
+    it as invalid; zeros are what a sparse, preallocated or wiped file holds) and a long run of
+    records of unknown type, which the plain reader skips without end."""
+
+    def __init__(self, f: BinaryIO, size: int) -> None:
+        super().__init__(f, emit_chunks=True, record_size_limit=min(size, MAX_RECORD_BYTES))
+        self._unknown_run = 0
+
+    def _read_record(self, opcode: int, length: int) -> Any:
+        if opcode == 0:
+            raise _DamagedError("opcode 0x00, which no MCAP record has: not an MCAP log from "
+                                "here on")
+        record = super()._read_record(opcode, length)
+        self._unknown_run = self._unknown_run + 9 + length if record is None else 0
+        if self._unknown_run > MAX_UNKNOWN_RUN_BYTES:
+            raise _DamagedError(f"more than {MAX_UNKNOWN_RUN_BYTES >> 20} MiB of records of "
+                                "unknown type in a row: not an MCAP log from here on")
+        return record
+
+
 def _inflate(compression: str, data: bytes, size: int) -> bytes:
     """Decompress a chunk, never to more than its declared size (a damaged size or frame header
     must not make us allocate gigabytes)."""
@@ -171,7 +199,8 @@ def _cut_chunk(f: BinaryIO, at: int, size: int, state: _McapState) -> str | None
     f.seek(8, 1)  # the records' compressed length: the file ends before it
     before = len(state.into.found)
     try:
-        raw = _stream_inflate(compression, f.read(max(0, size - f.tell())), full)
+        raw = _stream_inflate(compression, f.read(max(0, min(size - f.tell(),
+                                                             MAX_RECORD_BYTES))), full)
         for rec in _records(raw, partial=True):
             state.take(rec)
     except Exception:  # a damaged frame raises anything: keep what came before it
@@ -226,7 +255,7 @@ def read_mcap(path: Path, part: int, into: Salvage) -> None:
             raise NotStreamableError("does not start with the MCAP magic bytes")
         f.seek(0)
         state = _McapState(part, into)
-        records = StreamReader(f, emit_chunks=True, record_size_limit=size).records
+        records = _BoundedStreamReader(f, size).records
         data_ended = False
         while True:
             at = f.tell()  # the stream reads exactly: here the next record starts
@@ -371,12 +400,22 @@ def read_ros1(path: Path, part: int, into: Salvage) -> None:
                 return
 
 
+def _db3_image(path: Path) -> bytes:
+    """The whole file, to salvage in memory; an OSError when it is larger than
+    MAX_DB3_SALVAGE_BYTES (a sparse 20 GiB file would be read, then walked page by page)."""
+    size = path.stat().st_size
+    if size > MAX_DB3_SALVAGE_BYTES:
+        raise OSError(f"{size:,} bytes, more than the {MAX_DB3_SALVAGE_BYTES >> 30} GiB a "
+                      "damaged sqlite3 file is read into memory to salvage")
+    return path.read_bytes()
+
+
 def _db3_connect(path: Path) -> sqlite3.Connection:
     """`path`'s whole pages, in memory (the file is not touched): a page cut short by a
     truncation would read as zeros past the cut, inside messages that look whole. With
     `writable_schema` sqlite opens an image shorter than its header says (nothing is
     written: it only skips that check) and reads the pages there are."""
-    data = path.read_bytes()
+    data = _db3_image(path)
     size = int.from_bytes(data[16:18], "big")
     size = 65536 if size == 1 else size
     if size < 512 or size & (size - 1):
@@ -511,7 +550,7 @@ def _db3_pages(path: Path, part: int, into: Salvage) -> tuple[int, str]:
     """The message rows of a rosbag2 sqlite3 file's intact leaf pages whose topic row was
     found too, in time then id order, as rosbags reads them; (how many rows were found, in
     all, what was lost beyond the metadata.yaml count, in words)."""
-    data = path.read_bytes()
+    data = _db3_image(path)
     found = _Db3Pages()
     for cell in table_rows(data[:len(data) // 512 * 512]):
         found.take(cell)

@@ -13,6 +13,7 @@ from mcap.records import MessageIndex
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys.store import Typestore
 
+from kartci.atomic import check_target
 from kartci.logs.cdr import Serialise, compile_fixed
 from kartci.logs.qos import offered_qos_profiles
 from kartci.logs.types import typestore
@@ -114,6 +115,7 @@ class McapLogWriter:
     def __init__(self, path: Path, store: Typestore | None = None) -> None:
         self.path = path
         self.store = store if store is not None else typestore()
+        check_target(path)  # a device, FIFO or symlink at `path` is refused, never replaced
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".partial")
         self._tmp = Path(tmp)
@@ -202,6 +204,7 @@ class McapLogWriter:
             self._writer.finish()  # type: ignore[no-untyped-call]
             self._file.close()
             os.chmod(self._tmp, 0o644)  # mkstemp makes 0600; a log is a shared artifact
+            check_target(self.path)  # again: the name may have changed during the run
             os.replace(self._tmp, self.path)
         except BaseException:
             self._discard()

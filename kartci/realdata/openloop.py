@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
 from kartci import core
 from kartci.core import AgentContext, RobotParams
@@ -54,7 +55,7 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
         raise SpecError(f"{log}: not a kartci run log (no {SCENARIO_TOPIC}); name the robot's "
                         f"namespace its {name} inputs are under (--ns); topics: {listed}")
     if params is None:
-        params = kind.params(type=name) if isinstance(kind, core.Controller) else kind.params()
+        params = _defaults(kind, name, log)
     ctx = AgentContext(namespace, model, ())
     if scenario is None and (kind.robots or kind.fits is not None):
         raise SpecError(f"{log}: {name} runs on {' or '.join(kind.kinds()) or 'no registered'} "
@@ -62,6 +63,22 @@ def build_agent(name: str, log: Path, namespace: str | None) -> tuple[Any, str]:
                         "`recorded`); `kartci localize` replays its lidar, IMU and odometry "
                         "through localization, `kartci score` judges its recorded streams")
     return kind.build(params, ctx), namespace
+
+
+def _defaults(kind: core.Node | core.Controller, name: str, log: Path) -> Any:
+    """The agent's parameters at their defaults: a log without kartci's scenario records none.
+    An agent with a required parameter (the `commands` controller's `source`) cannot be built
+    from such a log: a SpecError that says which, not pydantic's ValidationError."""
+    try:
+        return kind.params(type=name) if isinstance(kind, core.Controller) else kind.params()
+    except ValidationError as err:
+        fields = sorted({".".join(str(x) for x in e["loc"]) for e in err.errors()
+                         if e["type"] == "missing"})
+        what = (f"required parameters ({', '.join(fields)})" if fields
+                else "parameters whose defaults do not validate")
+        raise SpecError(f"{log}: --agent {name} has {what} that only a kartci run log of a "
+                        f"scenario using {name} records; replay such a log, or choose an "
+                        "agent whose parameters all have defaults") from err
 
 
 @dataclass

@@ -186,6 +186,7 @@ def check_profile(log: Path, profile: Profile, known: list[TopicInfo] | None = N
     """The log's topic for every role of the profile; a SpecError naming the first role whose
     topic is missing, empty or of a type that role cannot use. `known`: the log's topics when
     the caller has read them (the log is not opened again)."""
+    _check_distinct(log, profile)
     info = {i.topic: i for i in (topics(log) if known is None else known)}
     listed = ", ".join(f"{i.topic} ({i.msgtype}, {i.count})" for i in info.values()) or "none"
     out: dict[str, TopicInfo] = {}
@@ -204,6 +205,25 @@ def check_profile(log: Path, profile: Profile, known: list[TopicInfo] | None = N
                             "messages")
         out[name] = found
     return out
+
+
+def _check_distinct(log: Path, profile: Profile) -> None:
+    """Two roles on one source: an estimate on the reference's own topic (or TF chain) would be
+    judged against itself, and the importer keeps one role per topic (the other read as
+    empty, which said "holds no readable pose" of a topic that scores fine alone)."""
+    seen: dict[tuple[str, str | None, str | None], str] = {}
+    for name, (role, _) in profile.roles().items():
+        key = (role.topic, getattr(role, "parent", None), getattr(role, "child", None))
+        first = seen.setdefault(key, name)
+        if first == name:
+            continue
+        source = (f"TF chain {key[1]} -> {key[2]}" if key[1] is not None and key[2] is not None
+                  else f"topic {role.topic}")
+        why = ("an estimate judged against its own reference has no error to measure; name "
+               "the estimate's own topic, or drop `estimate`" if {first, name} ==
+               {"pose", "estimate"} else "each role needs a source of its own")
+        raise SpecError(f"{log}: profile {profile.name}: {name} and {first} name the same "
+                        f"{source}: {why}")
 
 
 def resolve_profile(log: Path, path: Path | None, allow_outside: bool = False,

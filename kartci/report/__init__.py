@@ -46,6 +46,8 @@ def summary_json(results: list[ScenarioResult]) -> dict[str, Any]:
                                      "status": v.status.value} for v in r.verdicts},
                 "criteria": {c.name: {"bound": c.bound, "value": c.value, "ok": c.ok}
                              for c in r.criteria},
+                "criteria_changes": [{"name": c.name, "change": c.kind.value, "before": c.before,
+                                      "after": c.after} for c in r.criteria_changes],
                 "problems": list(r.problems),
                 "warnings": list(r.warnings),
             } for r in results

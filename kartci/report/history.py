@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from kartci.atomic import write_text_atomic
+from kartci.atomic import check_target, write_text_atomic
 from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
 from kartci.errors import SpecError
 from kartci.report.figures import Axis, Figure, Series
@@ -94,8 +94,9 @@ def write_history(paths: list[Path], out: Path) -> Path:
     """Read the summaries and write OUT/history.html; returns its path."""
     if not paths:
         raise SpecError("kartci history: name at least one summary.json")
-    labels, history = read_summaries(paths)
     target = out / "history.html"
+    check_target(target)  # before the summaries are read
+    labels, history = read_summaries(paths)
     write_text_atomic(target, history_html(labels, history))
     return target
 

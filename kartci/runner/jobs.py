@@ -46,10 +46,11 @@ Progress = Callable[[int, int], None]  # (sweep points validated, points in all)
 # passed in by the command, which sits above both runner and report)
 Draw = Callable[[Plots], tuple[str, ...]]
 Grid = list[tuple[str, list[str]]]  # a sweep: (dotted key, its values) per axis
-# A sweep's points each validate in a few ms and each become a run, a folder in OUT and a
-# baseline of their own: 10,000 is already hours of CI and a minute of validation; a larger
-# grid is a mistake or belongs split over several commands (`--shard` splits the runs, not this).
-MAX_SWEEP_POINTS = 10_000
+# The one cap on every count a user gives (sweep points, --repeat, --conditioning, --replicas,
+# --jobs, and their products): each unit is a run, a folder in OUT, a process or a baseline of
+# its own, and 10,000 runs are already hours of CI and a minute of validation; a larger count is
+# a mistake or belongs split over several commands (`--shard` splits the runs, not this).
+MAX_RUNS = 10_000
 REPORT_EVERY_S = 1.0  # sim time between a job's progress reports, s
 
 
@@ -191,7 +192,7 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     data files resolved once here, so workers never look a path up again.
 
     A sweep's points are validated one by one, each reported to `progress` (points validated,
-    points in all); a grid of more than MAX_SWEEP_POINTS fails before any is expanded."""
+    points in all); a grid of more than MAX_RUNS fails before any is expanded."""
     if repeat < 1:
         raise SpecError(f"--repeat {repeat}: expected 1 or more")
     axes = [parse_sweep(s) for s in sweeps or []]
@@ -201,9 +202,9 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
                                                allow_outside_paths).sweep.items()])
                  for name in names]
         total = sum(_checked_size(name, grid) for name, grid in grids)
-        if total * repeat > MAX_SWEEP_POINTS:  # each replica is a run of its own
+        if total * repeat > MAX_RUNS:  # each replica is a run of its own
             raise SpecError(f"{total:,} runs x {repeat:,} replicas = {total * repeat:,} runs, "
-                            f"more than the {MAX_SWEEP_POINTS:,} allowed; split the command")
+                            f"more than the {MAX_RUNS:,} allowed; split the command")
         jobs = _points(grids, overrides, repeat, vary, (total, progress), allow_outside_paths)
     check_criteria_names([j.spec for j in jobs if j.repeat == 0])
     return jobs
@@ -232,14 +233,21 @@ def _points(grids: list[tuple[str, Grid]], overrides: list[str],
     return jobs
 
 
+def check_count(option: str, value: int) -> None:
+    """SpecError (one line) when a count a user gave exceeds MAX_RUNS: called before any work,
+    so `--replicas 1000000000` fails at once instead of building a billion jobs."""
+    if value > MAX_RUNS:
+        raise SpecError(f"{option} {value:,}: more than the {MAX_RUNS:,} allowed")
+
+
 def _checked_size(name: str, grid: Grid) -> int:
     """The number of points of a scenario's grid, from the axis lengths alone; more than
-    MAX_SWEEP_POINTS is an error."""
+    MAX_RUNS is an error."""
     count = math.prod(len(values) for _, values in grid)
-    if count > MAX_SWEEP_POINTS:
+    if count > MAX_RUNS:
         shown = f"{count:,}" if count < 10**15 else f"about 10^{int(math.log10(count))}"
         raise SpecError(f"scenario {clip(name)}: sweep: {shown} points, more than the "
-                        f"{MAX_SWEEP_POINTS:,} allowed; split the sweep")
+                        f"{MAX_RUNS:,} allowed; split the sweep")
     return count
 
 

@@ -17,6 +17,7 @@ from kartci.runner.gate import require_baselines
 from kartci.runner.outdir import check_inside, valid_label
 from kartci.runner.run import evaluate, mark_failed, scenario_folders
 from kartci.verdict import read_json, write_json_atomic
+from kartci.verdict.judging import check_allowed
 from kartci.verdict.result import ScenarioResult
 
 SHARD_NAME = "shard.json"
@@ -112,6 +113,7 @@ def merge(dirs: list[Path], out: Path, baselines: Path,
     and folders are checked first (shard artifacts are untrusted); nothing is written outside
     OUT, and a folder is replaced only by a complete copy. Until then, OUT's older folder of
     each label is marked unfinished: an interrupted merge leaves none passing as merged."""
+    check_allowed()
     sources = _sources(dirs)
     for src in sources.values():
         if src is not None:

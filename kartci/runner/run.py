@@ -35,7 +35,7 @@ from kartci.scenario.models import LogSource
 from kartci.sim import simulate
 from kartci.sim.session import describe
 from kartci.verdict import Baseline, read_baseline, write_json_atomic
-from kartci.verdict.judging import judge_folder
+from kartci.verdict.judging import check_allowed, judge_folder
 from kartci.verdict.result import ScenarioResult, one_line
 from kartci.verdict.trace import load_trace, trace_path
 
@@ -289,7 +289,9 @@ def _recorded(folder: Path) -> tuple[Scenario, dict[str, pd.DataFrame]]:
 
 
 def check_criteria_names(specs: list[Scenario]) -> None:
-    """Criteria must name known metrics: a typo is bad input, found before anything runs."""
+    """Criteria must name known metrics, and so must the project's allowed loose tolerances
+    (check_allowed): a typo is bad input, found before anything runs."""
+    check_allowed()
     defs = metrics.definitions()
     for spec in specs:
         unknown = sorted(
@@ -322,6 +324,7 @@ def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:
     if not names:
         raise LogError(f"{out}: no <scenario>/{RunFolder.LOG_NAME} logs found")
     check_inside(out, names)
+    check_allowed()
     return [_rescore_one(out / name, baselines) for name in sorted(names)]
 
 

@@ -12,10 +12,8 @@ The schema is a superset of what loading accepts where loading reads files: `wor
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import json
-import os
 import re
 from pathlib import Path
 from typing import Any
@@ -25,6 +23,7 @@ from pydantic.json_schema import models_json_schema
 
 import kartci
 from kartci import core
+from kartci.atomic import check_target, write_text_atomic
 from kartci.errors import SpecError
 from kartci.scenario.models import Scenario
 
@@ -83,15 +82,11 @@ def scenario_schema(registries: core.Registries = core.DEFAULT_REGISTRIES) -> di
 def write_schema(path: Path) -> None:
     """Write the schema to `path` (folders made as needed; atomic: a temporary file, then
     rename)."""
+    check_target(path)
     text = json.dumps(scenario_schema(), indent=2) + "\n"
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
+        write_text_atomic(path, text)
     except OSError as err:
-        with contextlib.suppress(OSError):
-            tmp.unlink(missing_ok=True)
         raise SpecError(f"{path}: cannot write the schema ({err.strerror or err})") from err
 
 

@@ -20,6 +20,7 @@ from kartci.core import Direction, MetricDef
 from kartci.core import definition as registered
 from kartci.errors import BaselineError
 from kartci.scenario.models import Criterion
+from kartci.verdict import criteria
 from kartci.verdict.fingerprint import digest
 
 
@@ -237,6 +238,7 @@ def read_baseline(path: Path) -> Baseline | None:
             if entry.get("spread") is not None and not (_is_number(entry["spread"])
                                                         and entry["spread"] >= 0):
                 raise ValueError(f"{name}: spread must be a number >= 0 or null")
+        criteria.check_recorded(data)
     except (OSError, ValueError, UnicodeDecodeError) as err:
         why = err if isinstance(err, RefusedFileError) else f"malformed baseline ({err})"
         raise BaselineError(f"{path}: {why}") from None
@@ -336,11 +338,14 @@ class Change:
 def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
            spreads: dict[str, float | None] | None = None,
            made: dict[str, Any] | None = None,
-           fields: Mapping[str, Any] | None = None) -> list[Change]:
+           fields: Mapping[str, Any] | None = None,
+           accepted: Mapping[str, Criterion] | None = None) -> list[Change]:
     """Write a scenario's baseline from a run's metrics, keeping hand-set tolerances; with each
     metric's spread over replicas (`spreads`), where it was made (`made`: the platform and
     how the replicas were perturbed) and the resolved scenario it was made from (`fields`,
-    kartci.verdict.fingerprint, with their hash: a later run of a changed scenario is stale)."""
+    kartci.verdict.fingerprint, with their hash: a later run of a changed scenario is stale)
+    and its pass criteria (`accepted`, kartci.verdict.criteria: a later run tells which were
+    added, removed or changed)."""
     old = load(path) or {}
     new: dict[str, dict[str, Any]] = {}
     changes = []
@@ -365,5 +370,7 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
                 if n not in new]
     record = {} if fields is None else {"scenario_hash": digest(fields),
                                         "scenario_fields": dict(fields)}
+    if accepted is not None:
+        record[criteria.KEY] = criteria.recorded(accepted)
     write_json_atomic(path, {"scenario": scenario, **(made or {}), **record, "metrics": new})
     return changes

@@ -10,9 +10,11 @@ from enum import StrEnum
 from typing import Any
 
 from kartci import portable, project
-from kartci.core import Metric, RunFolder
+from kartci.core import Metric, RunFolder, definitions
+from kartci.errors import SpecError
+from kartci.project import did_you_mean
 from kartci.scenario.models import Scenario
-from kartci.verdict import fingerprint
+from kartci.verdict import criteria, fingerprint
 from kartci.verdict.baseline import (
     Baseline,
     MetricVerdict,
@@ -21,6 +23,7 @@ from kartci.verdict.baseline import (
     ill_conditioned,
     loosened,
     police,
+    read_baseline,
     read_json,
 )
 from kartci.verdict.result import ScenarioResult, one_line
@@ -60,10 +63,14 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
     warnings += [note] if note else []
     warnings += ill_conditioned(verdicts)
     warnings += [UNPINNED] if platform.get("simd") == portable.Pin.UNPINNED.value else []
+    moved = criteria.changes(None if baseline is None else baseline.doc, scenario.criteria)
+    warnings += [c.text() for c in moved]
+    strict += [c.text() for c in moved if c.kind is criteria.ChangeKind.REMOVED]
     return ScenarioResult(
         folder.name, scenario.description, verdicts, check_criteria(values, scenario.criteria),
         None, record, warnings=tuple(one_line(w) for w in [*warnings, *notes, *doubts]),
-        strict_warnings=tuple(one_line(w) for w in strict), scenario=scenario,
+        strict_warnings=tuple(one_line(w) for w in strict), criteria_changes=tuple(moved),
+        scenario=scenario,
         folder=folder.path, metrics=read_all_metrics(folder),
         baseline=None if baseline is None else baseline.path)
 
@@ -122,3 +129,30 @@ def _metric(name: str, entry: Mapping[str, Any]) -> Metric:
     extra = {k: v for k, v in entry.items() if k not in ("value", "unit")}
     return Metric(name, math.nan if value is None else float(value), str(entry.get("unit", "")),
                   extra)
+
+
+def check_allowed() -> None:
+    """Every `[tool.kartci.allow_loose_tolerances]` entry names a scenario (or a sweep point
+    or another baseline file of the project) and a metric kartci knows: a misspelt entry
+    allows nothing, and a strict run then fails on the tolerance it meant to allow, for a
+    reason nobody sees. SpecError (one line, with the nearest name) on the first bad entry.
+    Called by each command that judges, before it runs or writes anything."""
+    proj = project.current()
+    if not proj.allow_loose_tolerances:
+        return
+    scenarios = set(proj.all_scenarios())
+    labels = {p.stem for p in proj.baselines.glob("*.json")} if proj.baselines.is_dir() else set()
+    defs = definitions()
+    where = (f"{proj.config_file}: " if proj.config_file else "") + \
+        "[tool.kartci.allow_loose_tolerances]"
+    for key, _reason in proj.allow_loose_tolerances:
+        label, _, name = key.partition(":")
+        shown = one_line(key)[:80]
+        if label not in labels and label.partition("@")[0] not in scenarios:
+            raise SpecError(f'{where} "{shown}": no scenario or baseline named '
+                            f'"{one_line(label)[:60]}"{did_you_mean(label, scenarios | labels)}')
+        baseline = read_baseline(proj.baselines / f"{label}.json") if label in labels else None
+        stored = set(baseline.metrics) if baseline is not None else set()
+        if name not in defs and name.rpartition(".")[2] not in defs and name not in stored:
+            raise SpecError(f'{where} "{shown}": no metric named "{one_line(name)[:60]}"'
+                            f"{did_you_mean(name, set(defs) | stored)}")

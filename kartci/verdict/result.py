@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from kartci.core import Metric, RunFolder
 from kartci.project import did_you_mean
 from kartci.verdict.baseline import CriterionResult, MetricVerdict, Status, worst
+from kartci.verdict.criteria import CriterionChange
 
 if TYPE_CHECKING:  # a result only carries its plots: judging needs neither pandas nor the figures
     from kartci.figures import Plots
@@ -60,6 +61,9 @@ class ScenarioResult:
     # those warnings a strict run fails on (a stale baseline, a loosened tolerance): see
     # runner.gate, which moves them to problems
     strict_warnings: tuple[str, ...] = ()
+    # criteria added, removed or changed since the baseline was accepted (also in warnings;
+    # a removed one in strict_warnings): the terminal table shows them as rows
+    criteria_changes: tuple[CriterionChange, ...] = ()
     scenario: Scenario | None = None
     folder: Path = Path()
     metrics: Mapping[str, Metric] = field(default_factory=dict)

@@ -4,11 +4,13 @@ its sensor characterisation, and `kartci study`, the seed's study figures from i
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from kartci.atomic import check_target, write_text_atomic
 from kartci.commandline import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
 from kartci.errors import SpecError
 from kartci.scenario import load_scenario
@@ -46,23 +48,27 @@ def characterise(
     if not 0 < step_m <= 0.005:
         raise SpecError(f"--step-m {step_m}: expected 0 < step <= 0.005")
     offsets = np.round(np.arange(-0.03, 0.03 + step_m / 2, step_m), 9)
+    for name in ("sweep.csv", "fov_sweep.csv", "characterisation.html"):
+        check_target(out / name)  # before the sweeps, not after them
     out.mkdir(parents=True, exist_ok=True)
     geo = sweep(spec, agent, offsets, mode="geometric")
     ren = sweep(spec, agent, offsets, mode="rendered")
-    with (out / "sweep.csv").open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["offset_m", "left", "right", "difference", "left_rendered",
-                    "right_rendered", "difference_rendered"])
-        for i, d in enumerate(offsets):
-            w.writerow([f"{d:.6f}", f"{geo.left[i]:.6f}", f"{geo.right[i]:.6f}",
-                        f"{geo.difference[i]:.6f}", f"{ren.left[i]:.6f}", f"{ren.right[i]:.6f}",
-                        f"{ren.difference[i]:.6f}"])
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(["offset_m", "left", "right", "difference", "left_rendered",
+                "right_rendered", "difference_rendered"])
+    for i, d in enumerate(offsets):
+        w.writerow([f"{d:.6f}", f"{geo.left[i]:.6f}", f"{geo.right[i]:.6f}",
+                    f"{geo.difference[i]:.6f}", f"{ren.left[i]:.6f}", f"{ren.right[i]:.6f}",
+                    f"{ren.difference[i]:.6f}"])
+    write_text_atomic(out / "sweep.csv", buf.getvalue())
     fov_curves = {f: sweep(spec, agent, offsets, fov_rad=f, mode="geometric") for f in fov_list}
-    with (out / "fov_sweep.csv").open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["offset_m", *[f"difference_fov_{x:g}" for x in fov_list]])
-        for i, d in enumerate(offsets):
-            w.writerow([f"{d:.6f}", *[f"{fov_curves[x].difference[i]:.6f}" for x in fov_list]])
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(["offset_m", *[f"difference_fov_{x:g}" for x in fov_list]])
+    for i, d in enumerate(offsets):
+        w.writerow([f"{d:.6f}", *[f"{fov_curves[x].difference[i]:.6f}" for x in fov_list]])
+    write_text_atomic(out / "fov_sweep.csv", buf.getvalue())
     slope, intercept, r2 = geo.fit()
     rslope, rintercept, rr2 = ren.fit()
     lines = [f"geometric: y = {slope:.2f} d + {intercept:.4f}  (R^2 {r2:.4f} over |d| <= 8 mm)",
@@ -81,7 +87,7 @@ def characterise(
     html_text = ("<!doctype html><html><head><meta charset='utf-8'><title>line sensor "
                  "characterisation</title></head><body><h1>Line-sensor characterisation</h1><pre>"
                  + "\n".join(lines) + "</pre>" + "".join(figs) + "</body></html>\n")
-    (out / "characterisation.html").write_text(html_text, encoding="utf-8")
+    write_text_atomic(out / "characterisation.html", html_text)
     for line in lines:
         out_console.print(line, highlight=False)
     out_console.print(f"wrote {out}/sweep.csv, fov_sweep.csv, characterisation.html",
@@ -119,6 +125,7 @@ def study(
     if not out.is_dir():
         raise SpecError(f"{out}: no such folder; run the grids first (`kartci run "
                         "line_straight_grid line_circle_grid --out OUT`)")
+    check_target(out / "study.html")
     svgs: list[str] = []
     names = [p.name.partition("@")[0] for p in out.iterdir() if "@" in p.name]
     if "line_straight_grid" in names:
@@ -137,5 +144,5 @@ def study(
     html_text = ("<!doctype html><html><head><meta charset='utf-8'><title>line tracker study"
                  "</title></head><body><h1>The seed's study, run by kartci</h1>"
                  + "".join(svgs) + "</body></html>\n")
-    (out / "study.html").write_text(html_text, encoding="utf-8")
+    write_text_atomic(out / "study.html", html_text)
     out_console.print(f"wrote {out}/study.html ({len(svgs)} figures)", highlight=False)
