@@ -221,7 +221,7 @@ def _points(grids: list[tuple[str, Grid]], overrides: list[str],
         load = scenario_loader(name, allow_outside_paths=allow_outside_paths)
         for point in itertools.product(*[[(k, v) for v in values] for k, values in grid]):
             spec = load([*overrides, *(f"{k}={v}" for k, v in point)])
-            label = _safe(spec.name + _variant(overrides, list(point)))
+            label = point_label(spec.name, overrides, list(point))
             if label in labels:
                 raise SpecError(f"scenario selected twice: {label}")
             labels.add(label)
@@ -230,6 +230,12 @@ def _points(grids: list[tuple[str, Grid]], overrides: list[str],
             if progress is not None:
                 progress(done, total)
     return jobs
+
+
+def point_label(name: str, overrides: list[str], point: list[tuple[str, str]]) -> str:
+    """The label (and folder) of a scenario run at a point of a sweep or a search:
+    `<scenario>@<key>=<value>,...`, folder-name safe."""
+    return _safe(name + _variant(overrides, point))
 
 
 def _checked_size(name: str, grid: Grid) -> int:

@@ -1,0 +1,125 @@
+"""Issue 44, `kartci search` around the search: axes checked against the scenario (bad input is
+one line and exit 2), found.yaml runnable as a scenario, the page, and resuming an interrupted
+search from its journal."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from helpers import kartci
+
+from kartci.app.search import Options, Request, make_axes, run_search
+from kartci.runner.search import AxisKind, Evaluation, Phase, Point, RunStatus
+from kartci.scenario import load_scenario
+from kartci.scenario.load import scenario_loader
+
+PERIOD = "agents.lt0.controller.period_s"
+KP = "agents.lt0.controller.kp"
+
+
+@pytest.mark.parametrize(("over", "budget", "expected"), [
+    (f"{PERIOD[:-2]}x=0.01..0.1", "10", r"unknown key \(did you mean 'period_s'\?\)"),
+    (f"{PERIOD}=-0.01..0.1", "10", r"-0.01 is refused: .*must be more than 0"),
+    (f"{PERIOD}=0.01..0.1", "20000", r"--budget 20,000: more than the 10,000 runs allowed"),
+    (f"{PERIOD}=0.1..0.01", "10", r"the low end must be below the high end"),
+    (f"{PERIOD}=fast", "10", r"expected LOW..HIGH"),
+])
+def test_bad_search_input_is_one_line_naming_it_and_exit_2(over: str, budget: str,
+                                                           expected: str, tmp_path: Path) -> None:
+    proc = kartci("search", "line_circle", "--over", over, "--budget", budget,
+                  "--out", tmp_path / "out")
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr
+    import re
+    assert re.search(expected, lines[0]), lines[0]
+    assert not list((tmp_path / "out").glob("line_circle@*"))  # nothing ran
+
+
+def test_a_period_range_gets_the_physics_step_as_its_grid() -> None:
+    # period_s must be a whole number of 2 ms physics steps: any other value is refused
+    request = Request("line_circle", (f"{PERIOD}=0.01..0.1", f"{KP}=20..80", "seed=1,2,3"))
+    period, kp, seed = make_axes(request, scenario_loader("line_circle"))
+    assert (period.kind, period.step, period.nominal) == (AxisKind.GRID, 0.002, "0.01")
+    assert (kp.kind, kp.integer, kp.nominal) == (AxisKind.GRID, True, "50")
+    assert (seed.kind, seed.nominal) == (AxisKind.CHOICE, "1")
+
+
+def _fake(points: list[Point], phase: Phase) -> list[Evaluation]:
+    """line_circle as the issue describes it, without simulating: fails from 0.045 s up."""
+    out = []
+    for p in points:
+        period = float(dict(p)[PERIOD])
+        margin = (0.045 - period) / 0.045
+        out.append(Evaluation(p, "", RunStatus.FAIL if margin < 0 else RunStatus.PASS, margin,
+                              None, ("cross_track_max_m 0.009 (must be <= 0.008)",)
+                              if margin < 0 else (), phase))
+    return out
+
+
+def test_the_found_scenario_file_holds_the_failing_values_and_loads_as_is(tmp_path: Path) -> None:
+    request = Request("line_circle", (f"{PERIOD}=0.01..0.1",), ("duration_s=20",), budget=40)
+    result = run_search(request, tmp_path, Options(tmp_path / "baselines"), evaluate=_fake)
+    assert result.exit_code == 1 and result.found_yaml == tmp_path / "found.yaml"
+    spec = load_scenario(result.found_yaml)
+    assert spec.agents["lt0"].controller.period_s == pytest.approx(0.046)
+    assert spec.duration_s == 20  # the fixed overrides are written in too
+    text = result.found_yaml.read_text(encoding="utf-8")
+    assert f"boundary of {PERIOD}: 0.044 passes, 0.046 fails" in text
+    page = result.page.read_text(encoding="utf-8")
+    assert "<svg" in page and "0.046" in page and "http" not in page.split("<svg", 1)[0]
+
+
+@pytest.mark.long(reason="six short simulations")
+def test_an_interrupted_search_resumes_from_its_journal_and_runs_only_the_rest(
+        tmp_path: Path) -> None:
+    quick = ("duration_s=1", "criteria={}", "metrics.line_tracking.transient_s=0.5")
+    opts = Options(tmp_path / "baselines")
+    first = run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), quick, budget=2),
+                       tmp_path, opts)
+    assert first.exit_code == 0 and len(first.found.counted) == 2
+    again = run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), quick, budget=4),
+                       tmp_path, opts)
+    assert again.resumed == 2 and len(again.found.counted) == 4
+    assert [e.point for e in again.found.runs[:2]] == [e.point for e in first.found.runs]
+    runs = json.loads((tmp_path / "search.json").read_text())["runs"]
+    assert len(runs) == 4 and all(math.isinf(float(r["margin"])) for r in runs)
+
+
+def test_a_search_interrupted_mid_way_resumes_to_the_same_result_running_only_the_rest(
+        tmp_path: Path) -> None:
+    request = Request("line_circle", (f"{PERIOD}=0.01..0.1",), budget=40, seed=5)
+    whole = run_search(request, tmp_path / "whole", Options(tmp_path), evaluate=_fake)
+    calls: list[list[Point]] = []
+
+    def interrupted(points: list[Point], phase: Phase) -> list[Evaluation]:
+        if len(calls) == 2:
+            raise KeyboardInterrupt  # Ctrl-C in the third batch
+        calls.append(points)
+        return _fake(points, phase)
+
+    with pytest.raises(KeyboardInterrupt):
+        run_search(request, tmp_path / "cut", Options(tmp_path), evaluate=interrupted)
+    ran: list[Point] = []
+
+    def rest(points: list[Point], phase: Phase) -> list[Evaluation]:
+        ran.extend(points)
+        return _fake(points, phase)
+
+    resumed = run_search(request, tmp_path / "cut", Options(tmp_path), evaluate=rest)
+    assert [e.point for e in resumed.found.runs] == [e.point for e in whole.found.runs]
+    assert resumed.found.failure == whole.found.failure
+    before = [p for batch in calls for p in batch]
+    assert resumed.resumed == len(before) and not set(ran) & set(before)
+    assert len(ran) + len(before) == len(whole.found.runs)
+
+
+def test_a_journal_of_other_settings_is_refused_not_overwritten(tmp_path: Path) -> None:
+    run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), budget=8), tmp_path,
+               Options(tmp_path), evaluate=_fake)
+    with pytest.raises(Exception, match=r"holds a search with other settings \(seed\)"):
+        run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), budget=8, seed=1),
+                   tmp_path, Options(tmp_path), evaluate=_fake)
