@@ -301,7 +301,10 @@ class _Search:
 
     def explore(self) -> None:
         """Ask, run and tell in batches until a run fails (criteria) or the budget is spent."""
-        import optuna  # late: the sampler (and SQLAlchemy under it) only for a search
+        try:  # late: the sampler (and SQLAlchemy under it) only for a search
+            import optuna
+        except ImportError:
+            raise SpecError('kartci search needs Optuna: pip install "kartci[search]"') from None
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         study = optuna.create_study(direction="minimize", sampler=optuna.samplers.TPESampler(

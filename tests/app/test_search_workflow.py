@@ -123,3 +123,24 @@ def test_a_journal_of_other_settings_is_refused_not_overwritten(tmp_path: Path) 
     with pytest.raises(Exception, match=r"holds a search with other settings \(seed\)"):
         run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), budget=8, seed=1),
                    tmp_path, Options(tmp_path), evaluate=_fake)
+
+
+# The true boundary, from a sweep of every period the key takes (whole 2 ms physics steps) from
+# 0.01 to 0.088 s (`kartci run line_circle --sweep ...`, 2026-11-29): 0.042 s passes
+# (cross_track_max_m 0.00797 m), 0.044 s and every longer period fails.
+SMALLEST_FAILING_S = 0.044
+
+
+@pytest.mark.long(reason="a real 40-run search of line_circle (about 10 runs of 26 s sim)")
+def test_the_line_tracker_search_finds_its_period_boundary_and_the_found_file_fails_again(
+        tmp_path: Path) -> None:
+    proc = kartci("search", "line_circle", "--over", f"{PERIOD}=0.01..0.1", "--budget", "40",
+                  "--out", tmp_path / "out")
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    found = tmp_path / "out" / "found.yaml"
+    period = load_scenario(found).agents["lt0"].controller.period_s
+    assert abs(period - SMALLEST_FAILING_S) <= 0.005, proc.stdout
+    assert "boundary of agents.lt0.controller.period_s: 0.042 passes, 0.044 fails" in proc.stdout
+    again = kartci("run", found, "--out", tmp_path / "again")
+    assert again.returncode == 1, again.stdout + again.stderr
+    assert "cross_track_max_m" in again.stdout
