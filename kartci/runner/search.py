@@ -237,13 +237,13 @@ class Found:
 
     @property
     def smallest(self) -> Evaluation | None:
-        """The run with the smallest margin (ties: the first)."""
+        """The run with the smallest margin, the first of equals."""
         runs = self.counted
         return min(runs, key=lambda e: e.margin) if runs else None
 
     @property
     def worst(self) -> Evaluation | None:
-        """With an objective: the run with its worst value."""
+        """The run where the objective is worst (None without an objective)."""
         return _worst(self.counted, self.plan)
 
 
