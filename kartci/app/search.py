@@ -194,7 +194,10 @@ def _axis(key: str, spec: str, nominal: Any, what: str, why: Callable[[str], str
     axis = Axis(key, AxisKind.GRID if step else AxisKind.FLOAT, "0", low, high, step, integer)
     check(axis.text(low))
     check(axis.at(axis.size - 1) if step else axis.text(high))
-    if not step:
+    if step:  # a step the key does not take would leave most points refused
+        for k in (k for k in _PROBES if k < axis.size):
+            check(axis.at(k))
+    else:
         step = _discover_step(axis, why, what)
         axis = Axis(key, AxisKind.GRID if step else AxisKind.FLOAT, "0", low, high, step,
                     integer)

@@ -6,37 +6,74 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import pytest
 from helpers import kartci
 
 from kartci.app.search import Options, Request, make_axes, run_search
+from kartci.errors import SpecError
 from kartci.runner.search import AxisKind, Evaluation, Phase, Point, RunStatus
 from kartci.scenario import load_scenario
 from kartci.scenario.load import scenario_loader
+from kartci.scenario.models import Criterion
+from kartci.verdict.baseline import check_criteria
 
 PERIOD = "agents.lt0.controller.period_s"
 KP = "agents.lt0.controller.kp"
 
 
-@pytest.mark.parametrize(("over", "budget", "expected"), [
-    (f"{PERIOD[:-2]}x=0.01..0.1", "10", r"unknown key \(did you mean 'period_s'\?\)"),
-    (f"{PERIOD}=-0.01..0.1", "10", r"-0.01 is refused: .*must be more than 0"),
-    (f"{PERIOD}=0.01..0.1", "20000", r"--budget 20,000: more than the 10,000 runs allowed"),
-    (f"{PERIOD}=0.1..0.01", "10", r"the low end must be below the high end"),
-    (f"{PERIOD}=fast", "10", r"expected LOW..HIGH"),
+@pytest.mark.parametrize(("args", "expected"), [
+    ([f"{PERIOD[:-2]}x=0.01..0.1"], r"unknown key \(did you mean 'period_s'\?\)"),
+    ([f"{PERIOD}=-0.01..0.1"], r"-0.01 is refused: .*must be more than 0"),
+    ([f"{PERIOD}=0.01..0.1", "--budget", "20000"],
+     r"--budget 20,000: more than the 10,000 runs allowed"),
 ])
-def test_bad_search_input_is_one_line_naming_it_and_exit_2(over: str, budget: str,
-                                                           expected: str, tmp_path: Path) -> None:
-    proc = kartci("search", "line_circle", "--over", over, "--budget", budget,
-                  "--out", tmp_path / "out")
+def test_bad_search_input_is_one_line_naming_it_and_exit_2(args: list[str], expected: str,
+                                                           tmp_path: Path) -> None:
+    proc = kartci("search", "line_circle", "--over", *args, "--out", tmp_path / "out")
     assert proc.returncode == 2, proc.stdout + proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr
-    import re
     assert re.search(expected, lines[0]), lines[0]
     assert not list((tmp_path / "out").glob("line_circle@*"))  # nothing ran
+
+
+@pytest.mark.parametrize(("over", "objective", "expected"), [
+    (f"{PERIOD}=0.1..0.01", "criteria", r"the low end must be below the high end"),
+    (f"{PERIOD}=fast", "criteria", r"expected LOW..HIGH"),
+    (f"{PERIOD}=0.01..0.1:0.003", "criteria",
+     r"0.013 is refused: .*whole multiple of physics.dt_s"),
+    (f"{PERIOD}=0.01..0.1", "cross_trak_max_m",
+     r"not 'criteria' nor a known metric \(did you mean 'cross_track_max_m'\?\)"),
+    (f"{PERIOD}=0.01..0.1", "line_lost", r"has no worse direction"),
+])
+def test_a_bad_axis_or_objective_is_refused_before_any_run(over: str, objective: str,
+                                                           expected: str, tmp_path: Path) -> None:
+    ran: list[Point] = []
+
+    def run(points: list[Point], phase: Phase) -> list[Evaluation]:
+        ran.extend(points)
+        return _fake(points, phase)
+
+    with pytest.raises(SpecError, match=expected):
+        run_search(Request("line_circle", (over,), objective=objective), tmp_path,
+                   Options(tmp_path), evaluate=run)
+    assert ran == []
+
+
+def test_a_criterion_margin_is_the_room_left_as_a_fraction_of_its_bound() -> None:
+    values = {"x": {"value": 0.006}, "n": {"value": 2.0}, "c": {"value": 0.9}}
+    got = {c.name: c for c in check_criteria(values, {
+        "x": Criterion(max=0.008), "n": Criterion(equal=0), "c": Criterion(min=0.95)})}
+    assert got["x"].ok and got["x"].margin == pytest.approx(0.25)  # 0.002 of 0.008
+    assert not got["n"].ok and got["n"].margin == pytest.approx(-2.0)  # 2 units off == 0
+    assert not got["c"].ok and got["c"].margin == pytest.approx(-0.05 / 0.95)
+    held = check_criteria({"n": {"value": 0.0}}, {"n": Criterion(equal=0)})[0]
+    assert held.ok and held.margin == math.inf  # an equality that holds grades nothing
+    missing = check_criteria({}, {"x": Criterion(max=1.0)})[0]
+    assert not missing.ok and missing.margin == -math.inf
 
 
 def test_a_period_range_gets_the_physics_step_as_its_grid() -> None:
