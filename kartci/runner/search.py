@@ -301,8 +301,8 @@ class _Search:
 
     def explore(self) -> None:
         """Ask, run and tell in batches until a run fails (criteria) or the budget is spent."""
-        try:  # late: the sampler (and SQLAlchemy under it) only for a search
-            import optuna
+        try:
+            import optuna  # optional dependency (kartci[search]), with SQLAlchemy under it
         except ImportError:
             raise SpecError('kartci search needs Optuna: pip install "kartci[search]"') from None
 
