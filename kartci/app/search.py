@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -102,7 +103,6 @@ class SearchResult:
     found_yaml: Path | None  # OUT/found.yaml: the failure (or worst run) as a scenario file
     page: Path  # OUT/search.html
     resumed: int = 0  # runs replayed from an earlier, interrupted search in OUT
-    notes: tuple[str, ...] = field(default=())
 
     @property
     def failed(self) -> bool:
@@ -409,7 +409,13 @@ def write_found(request: Request, found: Found, e: Evaluation, out: Path) -> Pat
     """OUT/found.yaml: the scenario's own file with the overrides and the found values
     written in, runnable as is (`kartci run OUT/found.yaml`); its name is the file's, so a
     copy into scenarios/ under a name of its own joins the suite with a baseline of its own."""
-    data = yaml.safe_load(scenario_path(request.scenario).read_text(encoding="utf-8"))
+    source = scenario_path(request.scenario)
+    data = yaml.safe_load(source.read_text(encoding="utf-8"))
+    for agent in (data.get("agents") or {}).values():  # a recorded input's log is found from
+        log = ((agent or {}).get("controller") or {}).get("source") or {}  # the file's folder
+        if isinstance(log, dict) and isinstance(log.get("log"), str) and not Path(
+                log["log"]).is_absolute():
+            log["log"] = os.path.relpath((source.parent / log["log"]).resolve(), out.resolve())
     for assignment in [*request.overrides, *(f"{k}={v}" for k, v in e.point)]:
         apply_override(data, assignment)
     data.pop("name", None)

@@ -181,3 +181,17 @@ def test_the_line_tracker_search_finds_its_period_boundary_and_the_found_file_fa
     again = kartci("run", found, "--out", tmp_path / "again")
     assert again.returncode == 1, again.stdout + again.stderr
     assert "cross_track_max_m" in again.stdout
+
+
+def test_a_found_file_keeps_a_recorded_inputs_log_found_from_its_new_folder(
+        tmp_path: Path) -> None:
+    # kart_manual drives from logs/kart_manual_ps4.mcap, relative to scenarios/
+    def run(points: list[Point], phase: Phase) -> list[Evaluation]:
+        return [Evaluation(p, "", RunStatus.FAIL, -1.0, None, ("laps",), phase) for p in points]
+
+    result = run_search(Request("kart_manual", ("duration_s=1..5",), budget=2), tmp_path / "o",
+                        Options(tmp_path), evaluate=run)
+    assert result.found_yaml is not None
+    spec = load_scenario(result.found_yaml)
+    log = Path(spec.agents["kart0"].controller.source.log)  # type: ignore[attr-defined]
+    assert log.is_file() and log.name == "kart_manual_ps4.mcap"
