@@ -117,8 +117,10 @@ def search(
                                "scenario's own values found"), highlight=False)
     elif e is not None and objective != "criteria":
         values = ", ".join(f"{k}={v}" for k, v in e.point)
+        failing = sum(1 for r in found.counted if r.status.failing)
         out_console.print(Text(f"{name}: worst {objective} {e.value:.4g} at {values} "
-                               f"({runs} of {budget} runs{replayed})"), highlight=False)
+                               f"({runs} of {budget} runs{replayed}; {failing} failed their "
+                               "criteria)"), highlight=False)
     else:
         small = found.smallest
         where = "" if small is None else f" at {', '.join(f'{k}={v}' for k, v in small.point)}"

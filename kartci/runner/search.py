@@ -13,7 +13,9 @@ Points are tuples of (dotted key, value text), the value written as `--set` take
 
 from __future__ import annotations
 
+import itertools
 import math
+import random
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -30,7 +32,8 @@ RESOLUTION = 64  # a continuous axis is shrunk until its boundary is bracketed t
 CELLS = 10  # per continuous axis, for the coverage figure
 PASSES = 3  # shrink passes over the axes (one axis moving can free another)
 CLIP = 10.0  # margins told to the sampler are clipped to +-CLIP (an error, a missing value: -)
-ASKS_PER_RUN = 20  # the sampler may repeat points (a finite space): asks stop at this x budget
+UNSEEN_LISTED = 100_000  # a finite space this small is listed to draw unseen points from
+ASKS_PER_RUN = 4  # asks stop at this x budget (a sampler stuck on points it has seen)
 Point = tuple[tuple[str, str], ...]
 
 
@@ -313,13 +316,19 @@ class _Search:
         asks = 0
         sizes = [a.size for a in self.plan.axes]
         space = math.prod(sizes) if all(sizes) else math.inf  # finite: stop when all are seen
+        fill = random.Random(self.plan.seed)  # unseen points for the sampler's repeats
         while (self.spent < self.plan.budget and asks < ASKS_PER_RUN * self.plan.budget
                and len(self.seen) < space):
             n = min(BATCH, self.plan.budget - self.spent)
             trials = [study.ask() for _ in range(n)]
             asks += n
             points = [tuple((a.key, a.suggest(t)) for a in self.plan.axes) for t in trials]
+            repeats = n - len({p for p in points if p not in self.seen})
             self.run(points, Phase.SEARCH)
+            if space < math.inf:  # TPE settles on a finite space's best and repeats it: the
+                for point in self._unseen(repeats, fill):  # next batch tries others as well
+                    study.enqueue_trial({a.key: a.sampler_value(v) for a, (_, v) in
+                                         zip(self.plan.axes, point, strict=True)})
             for trial, point in zip(trials, points, strict=True):
                 e = self.seen.get(point)  # None: over the budget, never run
                 value = None if e is None else score(e, self.plan)
@@ -330,6 +339,20 @@ class _Search:
             if self.plan.objective is None and any(
                     self.seen[p].status.failing for p in points if p in self.seen):
                 return
+
+    def _unseen(self, n: int, rng: random.Random) -> list[Point]:
+        """Up to n points of a finite space not run yet, drawn with the search's seed."""
+        if n <= 0:
+            return []
+        values = [[a.at(k) for k in range(a.size)] for a in self.plan.axes]
+        if math.prod(len(v) for v in values) <= UNSEEN_LISTED:
+            left = [p for p in (tuple(zip((a.key for a in self.plan.axes), vs, strict=True))
+                                for vs in itertools.product(*values)) if p not in self.seen]
+            return rng.sample(left, min(n, len(left)))
+        drawn = (tuple((a.key, rng.choice(v)) for a, v in zip(self.plan.axes, values,
+                                                                  strict=True))
+                 for _ in range(20 * n))
+        return list(dict.fromkeys(p for p in drawn if p not in self.seen))[:n]
 
     def one(self, point: Point) -> Evaluation | None:
         """One point's evaluation (run now unless seen); None when the budget is spent."""

@@ -122,3 +122,22 @@ def test_a_choice_axis_moves_to_the_scenarios_own_choice_when_that_still_fails()
     found = search(Plan(axes, budget=40, seed=2), run)
     assert found.failure is not None and found.failure.point[0] == ("a.mode", "geometric")
     assert X0 < float(found.failure.point[1][1]) <= X0 + TOL
+
+
+def test_a_finite_space_spends_the_whole_budget_though_the_sampler_repeats_its_best() -> None:
+    # 46 periods, the metric as line_circle's cross_track_max_m: rising, then a plateau where
+    # the line is lost (from 0.076 s), on which TPE keeps proposing points it has seen
+    axis = Axis("c.period_s", AxisKind.GRID, "0.01", 0.01, 0.1, step=0.002)
+
+    def run(points: list[Point], phase: Phase) -> list[Evaluation]:
+        out = []
+        for p in points:
+            t = float(p[0][1])
+            value = 0.0208 + 1e-5 * math.sin(1e3 * t) if t > 0.075 else 0.0076 + (
+                max(0.0, t - 0.036) ** 2)
+            out.append(Evaluation(p, "", RunStatus.PASS, 1.0, value, (), phase))
+        return out
+
+    found = search(Plan((axis,), budget=40, seed=0, objective="m"), run)
+    assert len(found.counted) == 40 == len({e.point for e in found.runs})
+    assert found.failure is not None and float(found.failure.point[0][1]) > 0.075
