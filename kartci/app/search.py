@@ -11,6 +11,7 @@ OUT/found.yaml (the failure as a scenario file, runnable as is) and OUT/search.h
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import os
@@ -28,6 +29,7 @@ from kartci.core import Direction
 from kartci.errors import SpecError
 from kartci.project import did_you_mean
 from kartci.runner.events import Listener
+from kartci.runner.executors import Warm
 from kartci.runner.jobs import MAX_SWEEP_POINTS, Job, point_label
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.outdir import check_inside, locked, write_manifest
@@ -325,9 +327,10 @@ class Journal:
                                       "runs": [_to_json(e) for e in runs]})
 
 
-def _runner(request: Request, plan: Plan, out: Path, opts: Options, load: Loader
-            ) -> Evaluate:
-    """Points run through the runner's executors, into OUT/<label> as a sweep's points."""
+def _runner(request: Request, plan: Plan, out: Path, opts: Options, load: Loader,
+            warm: Warm) -> Evaluate:
+    """Points run through the runner's executors, into OUT/<label> as a sweep's points; the
+    worker processes of -j N are kept from one batch to the next (`warm`)."""
     def evaluate(points: list[Point], phase: Phase) -> list[Evaluation]:
         got: dict[Point, Evaluation] = {}
         jobs: list[tuple[Point, Job]] = []
@@ -344,7 +347,8 @@ def _runner(request: Request, plan: Plan, out: Path, opts: Options, load: Loader
             check_inside(out, [j.label for _, j in jobs])
             results = run_jobs([j for _, j in jobs], out, opts.baselines, workers=opts.workers,
                                executor=opts.executor, ray_address=opts.ray_address,
-                               timeout_s=opts.timeout_s, strict=False, on_event=opts.on_event)
+                               timeout_s=opts.timeout_s, strict=False, on_event=opts.on_event,
+                               warm=warm)
             for (p, job), r in zip(jobs, results, strict=True):
                 got[p] = judged(p, job.label, r, phase, plan.objective)
         return [got[p] for p in points]
@@ -377,11 +381,13 @@ def run_search(request: Request, out: Path, opts: Options, progress: Progress | 
         load = scenario_loader(request.scenario, allow_outside_paths=request.allow_outside_paths)
         axes = make_axes(request, load)
         plan = make_plan(request, axes)
-    with locked(out):  # a busy --out fails here, before any run
+    warm = Warm()
+    with locked(out), contextlib.closing(warm):  # a busy --out fails here, before any run
         journal = Journal(out, request)
         replayed = [0]
-        inner = evaluate or _runner(request, plan, out, opts, load)
+        inner = evaluate or _runner(request, plan, out, opts, load, warm)
         found = search(plan, _journaled(inner, journal, replayed), progress)
+        warm.close()  # before drawing the page: the workers are done
         write_manifest(out, "search", [e.label for e in found.counted if e.label])
         target = found.failure if (found.failure is not None and (
             plan.objective is not None or found.failure.status.failing)) else None
