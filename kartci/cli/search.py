@@ -113,8 +113,10 @@ def search(
         for b in found.brackets:
             out_console.print(Text(f"  boundary of {b.key}: {b.passing} passes, {b.failing} "
                                    "fails"), highlight=False)
-        out_console.print(Text(f"  {runs} of {budget} runs{replayed}; the failure nearest the "
-                               "scenario's own values found"), highlight=False)
+        how = ("the failure nearest the scenario's own values found" if found.shrunk else
+               "the budget ran out while shrinking: a failure nearer the scenario's own values "
+               "may exist (a larger --budget resumes it)")
+        out_console.print(Text(f"  {runs} of {budget} runs{replayed}; {how}"), highlight=False)
     elif e is not None and objective != "criteria":
         values = ", ".join(f"{k}={v}" for k, v in e.point)
         failing = sum(1 for r in found.counted if r.status.failing)

@@ -138,6 +138,9 @@ def search_page(found: Found, scenario: str, command: str, found_yaml: str | Non
              f"<p><code>{html.escape(command)}</code>: {len(runs)} runs of {plan.budget}, "
              f"covering {found.covered} of {found.cells} cells of the space "
              f"({found.coverage:.0%}).</p>"]
+    if plan.objective is None and e is not None and e.status.failing and not found.shrunk:
+        parts.append("<p>The budget ran out while shrinking: a failure nearer the scenario's "
+                     "own values may exist (a larger <code>--budget</code> resumes it).</p>")
     if found_yaml:
         parts.append(f'<p>As a scenario: <a href="{html.escape(found_yaml)}">'
                      f"{html.escape(found_yaml)}</a> (<code>kartci run "

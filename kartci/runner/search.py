@@ -227,6 +227,7 @@ class Found:
     brackets: tuple[Bracket, ...]
     covered: int  # cells holding a run
     cells: int  # cells in all
+    shrunk: bool = False  # the shrink ended with every axis settled, not with the budget
 
     @property
     def coverage(self) -> float:
@@ -279,6 +280,7 @@ class _Search:
         self.plan, self.evaluate, self.progress = plan, evaluate, progress
         self.seen: dict[Point, Evaluation] = {}
         self.runs: list[Evaluation] = []
+        self.settled = False  # the shrink ended within the budget
 
     @property
     def spent(self) -> int:
@@ -374,6 +376,7 @@ class _Search:
                 current = new
             if not moved or self.spent >= self.plan.budget:
                 break
+        self.settled = self.spent < self.plan.budget
         return current, [brackets[a.key] for a in self.plan.axes if a.key in brackets]
 
     def _shrink_axis(self, current: Evaluation, i: int) -> tuple[Evaluation, Bracket | None]:
@@ -384,8 +387,8 @@ class _Search:
         if value == axis.nominal:
             return current, None
         target = self.one(_moved(current.point, i, axis.nominal))
-        if target is None:
-            return current, Bracket(axis.key, axis.nominal, value)  # budget spent: unproven
+        if target is None or target.status is RunStatus.INVALID:
+            return current, None  # the budget is spent, or no answer there: nothing proven
         if target.status.failing:
             return target, None
         if axis.kind is AxisKind.CHOICE:
@@ -466,4 +469,4 @@ def search(plan: Plan, evaluate: Evaluate, progress: Progress | None = None) -> 
     cells = {tuple(a.cell(v) for a, (_, v) in zip(plan.axes, e.point, strict=True))
              for e in s.runs if e.status is not RunStatus.INVALID}
     return Found(plan, tuple(s.runs), failure, tuple(brackets), len(cells),
-                 math.prod(a.cells for a in plan.axes))
+                 math.prod(a.cells for a in plan.axes), s.settled)

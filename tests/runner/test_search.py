@@ -52,7 +52,7 @@ def test_a_search_over_two_axes_finds_the_failure_region_and_shrinks_to_its_corn
     brackets = {b.key: b for b in found.brackets}
     assert float(brackets["a.x"].passing) <= X0 < float(brackets["a.x"].failing)
     assert float(brackets["a.y"].passing) <= Y0 < float(brackets["a.y"].failing)
-    assert len(found.counted) <= 60
+    assert len(found.counted) <= 60 and found.shrunk
     assert fake.batches[0][0] == (("a.x", "0.1"), ("a.y", "0.1"))  # the nominal first
 
 
@@ -109,6 +109,7 @@ def test_the_budget_bounds_the_shrinking_too() -> None:
     fake = Fake()
     found = search(Plan(AXES, budget=6, seed=3), fake)
     assert len(found.counted) <= 6
+    assert found.failure is not None and not found.shrunk  # and it says so
 
 
 def test_a_choice_axis_moves_to_the_scenarios_own_choice_when_that_still_fails() -> None:
