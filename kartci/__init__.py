@@ -6,6 +6,7 @@ The Python API, for a team's own scripts and tests:
   returns a `RunResult` (metrics with units, verdicts against the baseline, criteria, log).
 - `compare(base, head)`: one run judged against another (when no baseline is comparable).
 - `accept_baselines(result_or_out)`: store runs as baselines, as `kartci baseline update`.
+- `search(scenario, over)`: find a run that fails, shrunk toward the scenario's own values.
 - `load_scenario(name_or_path, overrides)`: a validated `Scenario`.
 - `Session(scenario, log_path, agents)`: a run you step yourself (`reset()`, `step()`).
 - `Agent`: the protocol a controller satisfies (messages in, messages out).
@@ -29,7 +30,7 @@ if TYPE_CHECKING:
     from typing import Any
 
     from kartci import plugins
-    from kartci.api import RunResult, accept_baselines, compare, load_scenario, run
+    from kartci.api import RunResult, accept_baselines, compare, load_scenario, run, search
     from kartci.core import Agent, Direction, Metric
     from kartci.scenario.models import Scenario
     from kartci.sim.session import RunInfo, Session, StepResult
@@ -52,6 +53,7 @@ _LAZY = {
     "compare": "kartci.api",
     "load_scenario": "kartci.api",
     "run": "kartci.api",
+    "search": "kartci.api",
 }
 
 __all__ = [
@@ -76,6 +78,7 @@ __all__ = [
     "load_scenario",
     "plugins",
     "run",
+    "search",
 ]
 __version__ = "0.1.0"
 

@@ -31,6 +31,7 @@ from kartci.verdict import RunResult
 
 if TYPE_CHECKING:
     from kartci.app.accept import Accepted
+    from kartci.app.search import SearchResult
 
 
 def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
@@ -169,4 +170,54 @@ def accept_baselines(run: RunResult | str | Path, names: Sequence[str] = (), *,
                   replicas=replicas, jobs=jobs)
 
 
-__all__ = ["RunResult", "accept_baselines", "compare", "load_scenario", "run"]
+def search(scenario: str | Path, over: Sequence[str], *, overrides: Sequence[str] = (),
+           budget: int = 100, objective: str = "criteria", seed: int = 0,
+           out: str | Path | None = None, jobs: int = 1, baselines: str | Path | None = None,
+           allow_outside_paths: bool = False) -> SearchResult:
+    """Search a scenario's space for a run that fails its criteria and shrink it toward the
+    scenario's own values: what `kartci search` does, from Python.
+
+    ```python
+    found = kartci.search("line_circle", ["agents.lt0.controller.period_s=0.01..0.1"],
+                          budget=40, out="reports/search")
+    if found.failed:
+        print(found.found.failure.point, found.found.brackets, found.found_yaml)
+    ```
+
+    Args:
+        scenario: A scenario name or YAML path (see `load_scenario`).
+        over: The axes: `KEY=LOW..HIGH`, `KEY=LOW..HIGH:STEP` or `KEY=a,b,c` each.
+        overrides: `dotted.key=value` assignments fixed for every run (`--set`).
+        budget: Runs at most, search and shrinking together (at most 10,000).
+        objective: `"criteria"` (find a failing run), or a metric name (find where it is
+            worst).
+        seed: The sampler's seed: the same seed gives the same search, at any `jobs`.
+        out: Output folder (default: the project's reports/search); a search interrupted
+            there resumes from its journal.
+        jobs: Runs at once.
+        baselines: Folder of baseline files (default: the project's).
+        allow_outside_paths: As for `load_scenario`.
+
+    Returns:
+        The search (`found.failure`, `found.brackets`, `found.runs`, `found.coverage`), the
+        files written (`found_yaml`, `page`) and `failed` / `exit_code` as the CLI's.
+
+    Raises:
+        SpecError: Bad input (an unknown key, a range the key refuses, a budget over the cap,
+            an unknown objective, an OUT holding a search of other settings).
+    """
+    # late: searching loads the runner and the sampler, which `import kartci.api` does not need
+    from kartci import project
+    from kartci.app.search import Options, Request, run_search
+
+    request = Request(str(scenario), tuple(over), tuple(overrides), budget, objective, seed,
+                      allow_outside_paths)
+    proj = project.current()
+    target = Path(out) if out is not None else proj.reports / "search"
+    base_dir = Path(baselines) if baselines is not None else proj.baselines
+    if jobs < 1:
+        raise SpecError(f"jobs {jobs}: expected 1 or more")
+    return run_search(request, target, Options(base_dir, jobs))
+
+
+__all__ = ["RunResult", "accept_baselines", "compare", "load_scenario", "run", "search"]

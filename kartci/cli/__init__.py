@@ -20,6 +20,7 @@ from kartci.cli import (  # noqa: F401  (importing a command module registers it
     ros2,
     run,
     scenarios,
+    search,
 )
 from kartci.cli.common import app
 from kartci.errors import KartciError

@@ -167,14 +167,45 @@ class _Workers:
         self.events.close()
 
 
-def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Iterator[Outcome]:
+class Warm:
+    """Worker processes kept from one call of `execute` to the next: a search runs many small
+    batches, and a worker's start (a fresh interpreter importing kartci, 2-3 s of CPU) would
+    otherwise be paid again for each. `close()` ends them; `execute` without a Warm starts
+    and ends its own."""
+
+    def __init__(self) -> None:
+        self.workers: _Workers | None = None
+
+    def take(self, ctx: Context, emit: Listener, n: int, todo: deque[Job]) -> _Workers:
+        """The kept workers given this call's runs (or new ones, when none fit)."""
+        kept = self.workers
+        if kept is not None and kept.slots == n and not kept.closed.is_set():
+            with kept.lock:
+                kept.ctx, kept.emit, kept.todo = ctx, emit, todo
+            return kept
+        self.close()
+        self.workers = _Workers(ctx, emit, n, todo)
+        return self.workers
+
+    def close(self) -> None:
+        """End the kept workers, if any."""
+        if self.workers is not None:
+            self.workers.close()
+            self.workers = None
+
+
+def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int,
+         warm: Warm | None = None) -> Iterator[Outcome]:
     """`workers - 1` worker processes plus this one. This process has everything imported, so
     it starts the first (longest) run at once while the workers start up (2-3 s each), and it
     takes the next run whenever it is free. A hard crash (a segfault) in a run done here ends
-    the whole command, as with -j 1; in a worker it is an error for that run only."""
+    the whole command, as with -j 1; in a worker it is an error for that run only. With
+    `warm`, the workers are kept for the next call."""
     todo = deque(jobs)
     mine: Job | None = todo.popleft()  # before a worker can take it
-    others = _Workers(ctx, emit, workers - 1, todo)
+    n = workers - 1
+    others = warm.take(ctx, emit, n, todo) if warm is not None else _Workers(ctx, emit, n, todo)
+    done = False
     try:
         while True:
             others.tick()
@@ -189,8 +220,12 @@ def pool(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int) -> Ite
                     if not others.todo:
                         break
             mine = others.take()
+        done = True
     finally:
-        others.close()
+        if warm is None:
+            others.close()
+        elif not done:  # interrupted: runs may still be out with them
+            warm.close()
 
 
 def _outcome(fut: Future[Outcome], job: Job, ctx: Context) -> Outcome:
@@ -222,12 +257,13 @@ def _ignore(_: Event) -> None:
 
 def execute(jobs: Sequence[Job], ctx: Context, emit: Listener, workers: int = 1,
             kind: ExecutorKind = ExecutorKind.LOCAL,
-            ray_address: str | None = None) -> Iterator[Outcome]:
-    """Outcomes in the order jobs finish, each also announced as a FINISHED event."""
+            ray_address: str | None = None, warm: Warm | None = None) -> Iterator[Outcome]:
+    """Outcomes in the order jobs finish, each also announced as a FINISHED event. `warm`:
+    local worker processes kept for the next call (see Warm)."""
     if kind is ExecutorKind.RAY:
         return ray_tasks(jobs, ctx, emit, workers, ray_address)
     if portable.state() is Pin.UNPINNED:  # this process's bits are not every CPU's
         return in_pinned_child(jobs, ctx, emit, workers)
     if workers <= 1 or len(jobs) <= 1:
         return serial(jobs, ctx, emit)
-    return pool(jobs, ctx, emit, min(workers, len(jobs)))
+    return pool(jobs, ctx, emit, min(workers, len(jobs)), warm=warm)

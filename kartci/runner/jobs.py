@@ -222,7 +222,7 @@ def _points(grids: list[tuple[str, Grid]], overrides: list[str],
         load = scenario_loader(name, allow_outside_paths=allow_outside_paths)
         for point in itertools.product(*[[(k, v) for v in values] for k, values in grid]):
             spec = load([*overrides, *(f"{k}={v}" for k, v in point)])
-            label = _safe(spec.name + _variant(overrides, list(point)))
+            label = point_label(spec.name, overrides, list(point))
             if label in labels:
                 raise SpecError(f"scenario selected twice: {label}")
             labels.add(label)
@@ -238,6 +238,12 @@ def check_count(option: str, value: int) -> None:
     so `--replicas 1000000000` fails at once instead of building a billion jobs."""
     if value > MAX_RUNS:
         raise SpecError(f"{option} {value:,}: more than the {MAX_RUNS:,} allowed")
+
+
+def point_label(name: str, overrides: list[str], point: list[tuple[str, str]]) -> str:
+    """The label (and folder) of a scenario run at a point of a sweep or a search:
+    `<scenario>@<key>=<value>,...`, folder-name safe."""
+    return _safe(name + _variant(overrides, point))
 
 
 def _checked_size(name: str, grid: Grid) -> int:

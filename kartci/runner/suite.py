@@ -9,7 +9,7 @@ from kartci.atomic import write_text_atomic
 from kartci.core import UNFINISHED, RunFolder
 from kartci.runner import conditioning, costs
 from kartci.runner.events import Event, Listener
-from kartci.runner.executors import execute
+from kartci.runner.executors import Warm, execute
 from kartci.runner.jobs import REPEAT_PREFIX, Context, Draw, Job, Outcome, Refused, Vary
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.run import mark_failed
@@ -23,11 +23,13 @@ def _ignore(_: Event) -> None:
 def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
              executor: ExecutorKind = ExecutorKind.LOCAL, ray_address: str | None = None,
              timeout_s: float | None = None, strict: bool = False,
-             on_event: Listener | None = None, draw: Draw | None = None) -> list[ScenarioResult]:
+             on_event: Listener | None = None, draw: Draw | None = None,
+             warm: Warm | None = None) -> list[ScenarioResult]:
     """A run that fails is an ERROR result for its label only (a failed repeat included);
     earlier outputs of a failed run stay in place, marked failed. `strict`: a scenario without
     a baseline, or with a metric its baseline lacks, fails (see runner.gate). `draw`: the
-    judged runs' static figures are drawn as each is judged (see jobs.Context).
+    judged runs' static figures are drawn as each is judged (see jobs.Context). `warm`: worker
+    processes kept for the next call (a search's batches; see executors.Warm).
 
     Every job's folder is marked unfinished before the first run starts, and only that job's
     completed run clears the mark: if this command is interrupted, no older result in OUT can
@@ -38,7 +40,7 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
             mark_failed(out / job.folder, job.spec.name, UNFINISHED)
     ctx = Context(out, baselines, timeout_s, strict, draw)
     outcomes: dict[str, Outcome] = {}
-    for outcome in execute(costs.order(jobs), ctx, emit, workers, executor, ray_address):
+    for outcome in execute(costs.order(jobs), ctx, emit, workers, executor, ray_address, warm):
         outcomes[outcome.job.folder] = outcome
     costs.remember(outcomes.values())
     results = []

@@ -187,6 +187,10 @@ class CriterionResult:
     value: float | None
     bound: str
     ok: bool
+    # how far inside its bounds the value is, as a fraction of the bound (of one unit of the
+    # metric for a bound of 0): >= 0 holds, < 0 fails; -inf when the value is missing;
+    # an `equal` criterion grades nothing while it holds (+inf). What `kartci search` steers by.
+    margin: float = math.inf
 
 
 def _num(x: Any) -> float | None:
@@ -312,17 +316,28 @@ def check_criteria(metrics: dict[str, dict[str, Any]],
 
 def _criterion(name: str, c: Criterion, metrics: dict[str, dict[str, Any]]) -> CriterionResult:
     value = _num(metrics.get(name, {}).get("value"))
-    parts, ok = [], value is not None
+    parts, ok, margins = [], value is not None, [math.inf]
     if c.max is not None:
         parts.append(f"<= {c.max:g}")
         ok = ok and value is not None and value <= c.max
+        margins.append(_margin(c.max - value, c.max) if value is not None else -math.inf)
     if c.min is not None:
         parts.append(f">= {c.min:g}")
         ok = ok and value is not None and value >= c.min
+        margins.append(_margin(value - c.min, c.min) if value is not None else -math.inf)
     if c.equal is not None:
         parts.append(f"== {c.equal:g}")
-        ok = ok and value is not None and math.isclose(value, c.equal, abs_tol=1e-12)
-    return CriterionResult(name, value, " and ".join(parts), bool(ok))
+        equal = value is not None and math.isclose(value, c.equal, abs_tol=1e-12)
+        ok = ok and equal
+        margins.append(math.inf if equal else -math.inf if value is None else
+                       _margin(-abs(value - c.equal), c.equal))
+    return CriterionResult(name, value, " and ".join(parts), bool(ok), min(margins))
+
+
+def _margin(room: float, bound: float) -> float:
+    """`room` (in the metric's unit) as a fraction of the bound, so that criteria in different
+    units compare; a bound of 0 (`line_lost == 0`) scales by one unit of the metric instead."""
+    return room / (abs(bound) or 1.0)
 
 
 @dataclass(frozen=True)

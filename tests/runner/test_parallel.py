@@ -108,3 +108,26 @@ def test_merge_refuses_a_missing_or_repeated_shard(tmp_path: Path, baselines: Pa
         merge([tmp_path / "s1", tmp_path / "s2"], tmp_path / "out", baselines)
     with pytest.raises(SpecError, match="given twice"):
         merge([tmp_path / "s1", tmp_path / "s1"], tmp_path / "out", baselines)
+
+
+@pytest.mark.long(reason="four short runs in worker processes")
+def test_warm_workers_serve_a_second_batch_with_the_same_processes_and_bits(
+        tmp_path: Path) -> None:
+    from kartci.runner.executors import Warm
+    from kartci.runner.suite import run_jobs
+
+    quick = ["duration_s=1", "criteria={}", "metrics.line_tracking.transient_s=0.5"]
+    jobs = expand(PAIR, quick)
+    (tmp_path / "b").mkdir()
+    warm = Warm()
+    try:
+        first = run_jobs(jobs, tmp_path / "one", tmp_path / "b", workers=2, warm=warm)
+        kept = warm.workers
+        assert kept is not None
+        pids = {p.pid for p in kept.ex._processes.values()}
+        second = run_jobs(jobs, tmp_path / "two", tmp_path / "b", workers=2, warm=warm)
+        assert warm.workers is kept and {p.pid for p in kept.ex._processes.values()} == pids
+    finally:
+        warm.close()
+    assert [r.error for r in first + second] == [None] * 4
+    assert _metrics(tmp_path / "one") == _metrics(tmp_path / "two")
