@@ -286,7 +286,12 @@ class _Chatter:
         self.lines: list[str] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
-        self.wait_for("up")
+        try:
+            self.wait_for("up")
+        except BaseException:  # not yet in the fixture's list: end it here, never leave it
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+            raise
 
     def _read(self) -> None:
         assert self.proc.stdout is not None

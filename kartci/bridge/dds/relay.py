@@ -113,13 +113,13 @@ class Relay:
         import rclpy  # the ROS 2 Python only (this module is also imported by kartci)
 
         self.sock, self.lock = sock, threading.Lock()
+        for _, typename, hash_ in start["commands"]:  # a differing definition fails at once,
+            self.cls(str(typename), str(hash_))  # before rclpy starts (nothing to shut down)
         rclpy.init(args=[])
         self.node = rclpy.create_node(start["node"])
         self.me = (self.node.get_name(), self.node.get_namespace())
         self.pubs: dict[tuple[str, str], Any] = {}
         self.commands = [(str(t), str(ty), str(h)) for t, ty, h in start["commands"]]
-        for _, typename, hash_ in self.commands:  # a differing definition fails at once
-            self.cls(typename, hash_)
         self.watch = [str(t) for t in start.get("observe", [])]
         self.optional = [str(t) for t in start.get("optional", [])]
         self.settle_s = float(start.get("settle_s", 0.3))
