@@ -97,14 +97,6 @@ def offer_for(requests: Iterable[Qos]) -> Qos:
                max([q.depth for q in requests if q.depth > 0], default=10))
 
 
-def request_for(offers: Iterable[Qos]) -> Qos:
-    """What kartci's subscription asks of a topic: reliable only when every publisher offers
-    it (a reliable subscription never matches a best-effort publisher), never transient-local."""
-    offers = list(offers)
-    return Qos(Reliability.RELIABLE if offers and all(q.reliable for q in offers)
-               else Reliability.BEST_EFFORT, Durability.VOLATILE, 100)
-
-
 @dataclass(frozen=True)
 class Endpoint:
     """A publisher or subscription of the stack, as the graph shows it."""
@@ -242,10 +234,6 @@ class Ledger:
         return [t for t, e in self.expect.items()
                 if self.phase_of(t) is phase and self.seen[t] < e.due_before(self.tick + 1)
                 and not (learnt_only and e.phase is None and t not in self.commands)]
-
-    def extra(self) -> list[str]:
-        """Topics that have published more than due up to this tick."""
-        return [t for t, e in self.expect.items() if self.seen[t] > e.due_before(self.tick + 1)]
 
     def learn(self, phase: Phase) -> None:
         """At tick 0, after `phase`'s wait: a topic complete by the end of the sensors phase
