@@ -235,4 +235,5 @@ def test_cli_writes_the_schema_into_a_new_folder(tmp_path: Path) -> None:
     blocked.write_text("x")
     p = _schema_cli(blocked / "sub" / "scenario.schema.json", tmp_path)
     assert p.returncode == 2 and "Traceback" not in p.stderr
-    assert "cannot write the schema" in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert "scenario.schema.json: cannot be written (Not a directory)" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
