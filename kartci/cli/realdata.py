@@ -139,20 +139,27 @@ def localize_cmd(
         "--detect-map", help="Map (PLY, the pose's frame) whose points the detector ignores; "
         "default none: every obstacle, walls included, is reported.")] = None,
 ) -> None:
-    """Replay a real robot's lidar (LaserScan or PointCloud2), IMU and odometry open loop
-    through kartci's localization node, on a map built from the log's own scans at its
+    """Replay a real robot's lidar (LaserScan or PointCloud2), odometry and IMU (without one:
+    predicted from the odometry, said on stderr) open loop through kartci's localization node, on a map built from the log's own scans at its
     recorded poses (OUT/map.ply), and score the estimate against the log's pose (APE, as
     evo_ape); writes OUT/localization.json."""
     from kartci.realdata.lidardetect import DetectAt  # CLI start-up: scipy
-    from kartci.realdata.lidarloc import replay_localization  # CLI start-up: small_gicp, scipy
+    from kartci.realdata.lidarloc import (  # CLI start-up: small_gicp, scipy
+        Prediction,
+        replay_localization,
+    )
 
     out = out_dir(out, "localize")
     r = replay_localization(log, profile, out, DetectAt(detect_at.value) if detect else None,
                             detect_map)
     doc = {"ape_rmse_m": r.ape.rmse, "ape_max_m": r.ape.max, "poses": r.ape.count,
            "scans": r.scans, "estimates": r.estimates, "log_s": r.log_s,
-           "wall_s": round(r.wall_s, 3), "map_points": r.map_points}
+           "wall_s": round(r.wall_s, 3), "map_points": r.map_points,
+           "prediction": r.prediction.value}
     write_text_atomic(out / "localization.json", json.dumps(doc, indent=2) + "\n")
+    if r.prediction is Prediction.ODOMETRY:
+        typer.echo(f"kartci: {log.name} has no IMU: the filter predicts from the odometry's yaw "
+                   "rate alone (no side slip seen between scans)", err=True)
     out_console.print(f"{log.name}: {r.scans} scans over {r.log_s:.1f} s, {r.estimates} "
                       f"estimates; APE against its odometry: RMSE {r.ape.rmse:.4f} m, max "
                       f"{r.ape.max:.4f} m ({r.ape.count} poses); {r.wall_s:.1f} s wall; "

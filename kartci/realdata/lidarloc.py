@@ -3,7 +3,13 @@ lidar (LaserScan as a planar cloud, or PointCloud2), IMU and odometry (its forwa
 wheel speeds of the node's odometry model) fed on log time, the estimate scored against the
 log's own pose with evo's APE. Without a map, one is built from the log itself: every scan
 placed at the recorded pose, voxel-thinned (so the score measures how well registration and
-the filter follow the recorded motion, not the map's truth)."""
+the filter follow the recorded motion, not the map's truth).
+
+A log without an IMU (many diff-drive robots record scan + odometry + commands only) is
+predicted from the odometry alone: each odometry message stands in for a gyro sample, its yaw
+rate (the twist's, or the recorded yaw's rate of change when the twist holds none) and the
+lateral acceleration of a robot that does not slip (v x yaw rate). The replay says so
+(`Prediction.ODOMETRY`): the filter then cannot see a side slip the wheels did not."""
 
 from __future__ import annotations
 
@@ -11,6 +17,7 @@ import math
 import tempfile
 import time
 from dataclasses import dataclass
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +44,13 @@ from kartci.track import TRACK_TOPIC
 MAP_VOXEL_M = 0.05  # a small robot's scans: a few cm between points
 
 
+class Prediction(StrEnum):
+    """What the filter's prediction step reads between scans."""
+
+    IMU = "imu"  # the log's IMU: gyro yaw rate and lateral acceleration
+    ODOMETRY = "odometry"  # no IMU in the log: the odometry's yaw rate, no side slip
+
+
 @dataclass(frozen=True)
 class LocReplay:
     """What the replay gave: the estimate's APE against the log's pose, and its cost."""
@@ -47,6 +61,7 @@ class LocReplay:
     log_s: float
     wall_s: float
     map_points: int
+    prediction: Prediction
     detections: Detections | None = None  # with `detect`
     detect_s: float = 0.0  # wall time of the detection, s
 
@@ -66,6 +81,7 @@ class _Recorded:
     t_ns: np.ndarray
     pose: np.ndarray  # x, y, yaw (unwrapped) per odometry message
     speed: np.ndarray  # forward m/s
+    yaw_rate: np.ndarray  # rad/s per odometry message: its twist's, else the yaw's rate
     imu: list[tuple[int, Any]]
     scans: list[tuple[int, np.ndarray]]
 
@@ -82,14 +98,19 @@ def _read(imported: Path, ns: str) -> _Recorded:
         if topic.endswith("/odom"):
             p, q = m.pose.pose.position, m.pose.pose.orientation
             yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-            odom.append((stamp, p.x, p.y, yaw, m.twist.twist.linear.x))
+            odom.append((stamp, p.x, p.y, yaw, m.twist.twist.linear.x,
+                         m.twist.twist.angular.z))
         elif topic.endswith("/imu"):
             imu.append((stamp, m))
         else:
             scans.append((stamp, scan_points(m)))
     rows = np.array(odom, float)
     rows[:, 3] = np.unwrap(rows[:, 3])
-    return _Recorded(rows[:, 0].astype(np.int64), rows[:, 1:4], rows[:, 4], imu, scans)
+    t_ns = rows[:, 0].astype(np.int64)
+    rate = rows[:, 5]
+    if not rate.any() and len(rows) > 1:  # a pose-only odometry: the recorded yaw's rate
+        rate = np.gradient(rows[:, 3], t_ns * 1e-9)
+    return _Recorded(t_ns, rows[:, 1:4], rows[:, 4], rate, imu, scans)
 
 
 def build_map(rec: _Recorded, path: Path) -> int:
@@ -135,12 +156,10 @@ def _node(map_ply: Path, ns: str, min_range_m: float) -> tuple[Any, Any]:
 
 
 def _check_streams(profile: Any, log: Path) -> None:
-    missing = [f"{role} ({what})" for role, what in (("lidar", "LaserScan or PointCloud2"),
-                                                      ("imu", "sensor_msgs/Imu"))
-               if getattr(profile, role) is None]
-    if missing:
-        raise SpecError(f"{log}: localization reads the lidar, the IMU and the odometry; "
-                        f"profile {profile.name} names no {' and no '.join(missing)} topic")
+    if profile.lidar is None:
+        raise SpecError(f"{log}: localization reads the lidar and the odometry (and an IMU "
+                        f"when there is one); profile {profile.name} names no lidar (LaserScan "
+                        "or PointCloud2) topic")
 
 
 def replay_localization(log: Path, profile_path: Path | None, out: Path,
@@ -151,7 +170,7 @@ def replay_localization(log: Path, profile_path: Path | None, out: Path,
     detector at the log's poses or the estimate's (on `detect_map`, default none):
     OUT/detections.mcap."""
     t_wall = time.perf_counter()
-    profile, info = resolve_profile(log, profile_path)
+    profile, info = resolve_profile(log, profile_path, sensors=True)
     _check_streams(profile, log)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
@@ -159,9 +178,10 @@ def replay_localization(log: Path, profile_path: Path | None, out: Path,
         import_log(log, profile, {r: i.msgtype for r, i in info.items()}, imported)
         rec = _read(imported, profile.agent)
     n_map = build_map(rec, out / "map.ply")
-    agent, wheels = _node(out / "map.ply", profile.agent, 0.12)
+    agent, wheels = _node((out / "map.ply").resolve(), profile.agent, 0.12)  # not a world's
     agent.on_message(TRACK_TOPIC, msg("std_msgs/msg/String",
                                       data=_start_track(*rec.pose[0])))
+    prediction = Prediction.IMU if rec.imu else Prediction.ODOMETRY
     est = _run(agent, rec, wheels)
     ref = Trajectory.planar(rec.t_ns * 1e-9, rec.pose[:, 0], rec.pose[:, 1], rec.pose[:, 2])
     r, e = associate(ref, est, max_diff_s=0.02)
@@ -171,7 +191,7 @@ def replay_localization(log: Path, profile_path: Path | None, out: Path,
         poses = (detect, rec.at if detect == DetectAt.REFERENCE else _pose_at(est))
         found = _detect(log, profile, info["lidar"].msgtype, rec.scans, poses, out, detect_map)
     return LocReplay(ape(r, e), len(rec.scans), len(est), float(rec.t_ns[-1] - rec.t_ns[0])
-                     * 1e-9, time.perf_counter() - t_wall, n_map, found,
+                     * 1e-9, time.perf_counter() - t_wall, n_map, prediction, found,
                      time.perf_counter() - t_detect if detect is not None else 0.0)
 
 
@@ -195,8 +215,12 @@ def _detect(log: Path, profile: Profile, lidar_type: str, scans: list[tuple[int,
 
 
 def _run(agent: Any, rec: _Recorded, wheels: Any) -> Trajectory:
-    """Feed the log in time order, stepping the node every period; its estimates."""
+    """Feed the log in time order, stepping the node every period; its estimates. Without an
+    IMU, each odometry message is also a gyro sample (see the module docstring)."""
     feed: list[tuple[int, int, str, Any]] = [(t, 0, "imu", m) for t, m in rec.imu]
+    if not rec.imu:
+        feed += [(int(t), 0, "imu", _odometry_gyro(int(t), float(v), float(w)))
+                 for t, v, w in zip(rec.t_ns, rec.speed, rec.yaw_rate, strict=True)]
     feed += [(t, 1, "velodyne_points", xyz) for t, xyz in rec.scans]
     feed += [(int(t), 2, "joint_states", float(v)) for t, v in zip(rec.t_ns, rec.speed,
                                                                     strict=True)]
@@ -211,6 +235,20 @@ def _run(agent: Any, rec: _Recorded, wheels: Any) -> Trajectory:
         agent.on_message(topic, _message(topic, value, t_ns, wheels))
     t, x, y, yaw = (np.array(c) for c in zip(*rows, strict=True))
     return Trajectory.planar(t, x, y, np.unwrap(yaw))
+
+
+def _odometry_gyro(t_ns: int, v_mps: float, w_radps: float) -> Any:
+    """An IMU sample made of odometry: its yaw rate, and the lateral acceleration of a robot
+    that does not slip (v w), so that the filter's side velocity stays at zero."""
+    unknown = np.zeros(9)  # covariances: none given (the node uses its own noise model)
+    return msg("sensor_msgs/msg/Imu", header=header(t_ns, "base_link"),
+               orientation=msg("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=1.0),
+               orientation_covariance=np.full(9, -1.0),  # REP 145: no orientation
+               angular_velocity=msg("geometry_msgs/msg/Vector3", x=0.0, y=0.0, z=w_radps),
+               angular_velocity_covariance=unknown,
+               linear_acceleration=msg("geometry_msgs/msg/Vector3", x=0.0, y=v_mps * w_radps,
+                                       z=0.0),
+               linear_acceleration_covariance=unknown)
 
 
 def _message(topic: str, value: Any, t_ns: int, wheels: Any) -> Any:

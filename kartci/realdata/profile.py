@@ -167,8 +167,9 @@ def load_profile(path: Path, allow_outside: bool = False) -> Profile:
     return profile
 
 
-def auto_profile(log: Path, info: list[TopicInfo]) -> Profile:
-    """A profile guessed from the log: its only pose/odometry topic, its only command topic."""
+def auto_profile(log: Path, info: list[TopicInfo], sensors: bool = False) -> Profile:
+    """A profile guessed from the log: its only pose/odometry topic, its only command topic
+    (and with `sensors`, for a command that reads them: its only IMU and lidar topics)."""
     name = re.sub(r"[^a-z0-9_]", "_", log.name.split(".")[0].lower()) or "log"
     poses = [i for i in info if i.msgtype in POSE_TYPES and i.count > 0]
     if len(poses) != 1:
@@ -177,8 +178,12 @@ def auto_profile(log: Path, info: list[TopicInfo]) -> Profile:
         raise SpecError(f"{log}: {what} with messages (topics: {listed}); "
                         "name the pose in a profile (--profile)")
     cmds = [i for i in info if i.msgtype in COMMAND_TYPES and i.count > 0]
+    imus = [i for i in info if sensors and i.msgtype in IMU_TYPES and i.count > 0]
+    lidars = [i for i in info if sensors and i.msgtype in LIDAR_TYPES and i.count > 0]
     return Profile(name=name, pose=PoseRole(topic=poses[0].topic),
-                   commands=CommandRole(topic=cmds[0].topic) if len(cmds) == 1 else None)
+                   commands=CommandRole(topic=cmds[0].topic) if len(cmds) == 1 else None,
+                   imu=TopicRole(topic=imus[0].topic) if len(imus) == 1 else None,
+                   lidar=LidarRole(topic=lidars[0].topic) if len(lidars) == 1 else None)
 
 
 def check_profile(log: Path, profile: Profile, known: list[TopicInfo] | None = None
@@ -227,10 +232,12 @@ def _check_distinct(log: Path, profile: Profile) -> None:
 
 
 def resolve_profile(log: Path, path: Path | None, allow_outside: bool = False,
-                    reader: LogReader | None = None) -> tuple[Profile, dict[str, TopicInfo]]:
-    """The profile (from its file, else guessed from the log) and the log's topic per role;
-    the log's topics are read once (from `reader` when the caller has the log open)."""
+                    reader: LogReader | None = None, sensors: bool = False
+                    ) -> tuple[Profile, dict[str, TopicInfo]]:
+    """The profile (from its file, else guessed from the log, its sensors too with `sensors`)
+    and the log's topic per role; the log's topics are read once (from `reader` when the
+    caller has the log open)."""
     loaded = load_profile(path, allow_outside) if path is not None else None
     known = reader.topics() if reader is not None else topics(log)
-    profile = loaded if loaded is not None else auto_profile(log, known)
+    profile = loaded if loaded is not None else auto_profile(log, known, sensors)
     return profile, check_profile(log, profile, known)

@@ -111,8 +111,8 @@ def test_detect_without_a_lidar_is_one_line(bags: Path, tmp_path: Path) -> None:
                "--detect")
     assert r.returncode == 2
     assert r.stderr.strip().splitlines() == [
-        f"kartci: error: {bags / BAG}: localization reads the lidar, the IMU and the odometry; "
-        "profile tb3 names no lidar (LaserScan or PointCloud2) topic"]
+        f"kartci: error: {bags / BAG}: localization reads the lidar and the odometry (and an "
+        "IMU when there is one); profile tb3 names no lidar (LaserScan or PointCloud2) topic"]
 
 
 def _with_tf_static(bag: Path, dst: Path, yaw: float) -> None:
