@@ -63,6 +63,10 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
               align_first: Annotated[int | None, typer.Option(
                   "--align-first", min=2, help="Fit se3 / sim3 on the first N pose pairs "
                   "only (evo --n_to_align).")] = None,
+              t_max_diff: Annotated[float | None, typer.Option(
+                  "--t-max-diff", min=1e-9, max=3600.0, help="The largest stamp difference, "
+                  "s, of an estimate / reference pose pair (evo --t_max_diff); default: the "
+                  "profile's, else 0.01 s as evo's.")] = None,
               html: Annotated[bool, typer.Option(
                   help="Write the HTML reports (report.html, report-static.html); "
                   "--no-html: the metrics, summary.md/json and junit.xml only, about a third "
@@ -79,7 +83,7 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
         base = baselines_dir(baselines)
         result = score_log(log, profile, out, base, allow_outside_paths,
                            None if align is None else Alignment(align.value), align_first,
-                           with_plots=html)
+                           with_plots=html, t_max_diff_s=t_max_diff)
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "score", [result.name])

@@ -52,6 +52,8 @@ def imported_scenario(profile: Profile, duration_s: float, start: str = "") -> S
     if profile.estimate is not None:
         metrics["localization"] = {"topic": ROLE_TOPIC["estimate"], "align": profile.align,
                                    "align_first": profile.align_first}
+        if profile.t_max_diff_s is not None:  # unset: the metric's default, as evo's
+            metrics["localization"]["max_diff_s"] = profile.t_max_diff_s
     world: dict[str, Any] = {"kind": "recorded", "description": profile.description}
     if profile.track is not None:
         world["track"] = profile.track

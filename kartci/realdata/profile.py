@@ -114,6 +114,10 @@ class Profile(Frozen):
                              "-as) or origin (evo --align_origin); `kartci score --align`")
     align_first: int | None = Field(None, ge=2, description="se3 / sim3 fitted on the first "
                                     "N pose pairs (evo --n_to_align); none: all")
+    t_max_diff_s: float | None = Field(None, gt=0.0, le=3600.0, description="the largest "
+                                       "stamp difference of an estimate / reference pose "
+                                       "pair, s (evo --t_max_diff); none: 0.01 s, evo's "
+                                       "default; `kartci score --t-max-diff`")
     commands: CommandRole | None = Field(None, description="the command stream: Twist, "
                                          "TwistStamped, AckermannDriveStamped, Joy, KartCommand")
     imu: TopicRole | None = Field(None, description="sensor_msgs/Imu")

@@ -20,17 +20,19 @@ from kartci.verdict.result import ScenarioResult
 
 def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
               allow_outside_paths: bool = False, align: Alignment | None = None,
-              align_first: int | None = None, with_plots: bool = True) -> ScenarioResult:
+              align_first: int | None = None, with_plots: bool = True,
+              t_max_diff_s: float | None = None) -> ScenarioResult:
     """Import `log` into OUT/<profile name>/run.mcap, compute metrics.json from it and judge it
-    against `baselines/<profile name>.json`. `align` / `align_first` replace the profile's
-    (the estimate's alignment onto the reference); `with_plots`: the report's time series and
+    against `baselines/<profile name>.json`. `align` / `align_first` / `t_max_diff_s` replace
+    the profile's (the estimate's alignment onto the reference, the pose pairs' largest stamp
+    difference); `with_plots`: the report's time series and
     paths too (only an HTML report draws them). Bad input (profile, missing topics, a
     profile's track outside the project without `allow_outside_paths`) raises before anything
     is written. The project is looked up once (every registry lookup would read its file)."""
     with project.held(), open_log(log) as reader:  # opened once: checked, then imported
         profile, info = resolve_profile(log, profile_path, allow_outside_paths, reader)
-        update = {k: v for k, v in (("align", align), ("align_first", align_first))
-                  if v is not None}
+        update = {k: v for k, v in (("align", align), ("align_first", align_first),
+                                    ("t_max_diff_s", t_max_diff_s)) if v is not None}
         profile = Profile.model_validate({**profile.model_dump(), **update})
         types = {role: i.msgtype for role, i in info.items()}
         folder = out / profile.name

@@ -190,6 +190,41 @@ def test_score_aligns_a_log_and_warns_when_frames_differ(tmp_path: Path) -> None
         assert doc["metrics"]["ape_max_m"]["value"] == pytest.approx(theirs["max"], abs=1e-6)
 
 
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
+def test_score_pairs_poses_within_t_max_diff_as_evo_does(tmp_path: Path) -> None:
+    """`--t-max-diff` (and a profile's `t_max_diff_s`) is evo's `--t_max_diff`: the same pairs,
+    so the same APE at 0.01 s (both defaults) and at 0.002 s, where the estimate's stamps
+    (jittered by 2 ms) lose about a third of their pairs."""
+    evo_exe("evo_ape")  # skips, saying how to install it, where evo is absent
+    ref, est = _noisy_pair()
+    log = tmp_path / "nav2"
+    _write_log(log, ref, est)
+    profile = tmp_path / "nav2.yaml"
+    profile.write_text("name: nav2\npose: {topic: /amcl_pose}\nestimate: {topic: /odom}\n")
+    shift = 100.0
+    Trajectory(ref.t_s + shift, ref.xyz_m, ref.quat_xyzw).to_tum(tmp_path / "ref.txt")
+    Trajectory(est.t_s + shift, est.xyz_m, est.quat_xyzw).to_tum(tmp_path / "est.txt")
+    seen = []
+    for diff, args in ((None, ()), ("0.002", ("--t-max-diff", "0.002"))):
+        out = tmp_path / f"out{diff}"
+        r = kartci("score", log, "--profile", profile, "--out", out, "--no-html", *args)
+        assert r.returncode == 0, r.stderr
+        ours = json.loads((out / "nav2" / "metrics.json").read_text(encoding="utf-8"))
+        theirs = evo(tmp_path, "evo_ape", *(("--t_max_diff", diff) if diff else ()))
+        assert ours["metrics"]["ape_rmse_m"]["value"] == pytest.approx(theirs["rmse"], abs=1e-6)
+        seen.append(theirs["rmse"])
+    assert seen[0] != seen[1]  # 0.002 s pairs fewer poses than 0.01 s: a different APE
+    profile.write_text("name: nav2\npose: {topic: /amcl_pose}\nestimate: {topic: /odom}\n"
+                       "t_max_diff_s: 0.002\n")
+    r = kartci("score", log, "--profile", profile, "--out", tmp_path / "p", "--no-html")
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "p" / "nav2" / "metrics.json").read_text(encoding="utf-8"))
+    assert doc["metrics"]["ape_rmse_m"]["value"] == pytest.approx(seen[1], abs=1e-6)
+    bad = kartci("score", log, "--profile", profile, "--out", tmp_path / "b", "--t-max-diff",
+                 "0")
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+
+
 def test_a_profile_names_the_alignment(tmp_path: Path) -> None:
     path = tmp_path / "p.yaml"
     path.write_text("pose: {topic: /a}\nestimate: {topic: /b}\nalign: sim3\nalign_first: 50\n")
