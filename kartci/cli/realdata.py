@@ -144,9 +144,10 @@ def localize_cmd(
         "default none: every obstacle, walls included, is reported.")] = None,
 ) -> None:
     """Replay a real robot's lidar (LaserScan or PointCloud2), odometry and IMU (without one:
-    predicted from the odometry, said on stderr) open loop through kartci's localization node, on a map built from the log's own scans at its
-    recorded poses (OUT/map.ply), and score the estimate against the log's pose (APE, as
-    evo_ape); writes OUT/localization.json."""
+    predicted from the odometry, said on stderr) open loop through kartci's localization
+    node, on a map built from the log's own scans at its recorded poses (OUT/map.ply), and
+    score the estimate against the log's pose (APE, as evo_ape); writes
+    OUT/localization.json."""
     from kartci.realdata.lidardetect import DetectAt  # CLI start-up: scipy
     from kartci.realdata.lidarloc import (  # CLI start-up: small_gicp, scipy
         Prediction,
