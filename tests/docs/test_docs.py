@@ -322,6 +322,21 @@ def test_every_command_and_option_is_in_the_reference(site: Path) -> None:
                 assert name in shown or f"{name}..." in shown, f"{path} {name}"
 
 
+def test_every_command_is_at_a_glance() -> None:
+    """"Commands at a glance" has a row for every command a user can run (a kind's own
+    commands included): a new command without one fails here, not in a user's search."""
+    from kartci.cli import app
+
+    text = (DOCS / "reference" / "commands.md").read_text(encoding="utf-8")
+    rows = {m.group(1) for m in re.finditer(r"^\| `kartci ([a-z0-9_-]+)", text, re.MULTILINE)}
+    rows |= {name for line in text.splitlines() if line.startswith("| `kartci ")
+             for name in re.findall(r"kartci ([a-z0-9_-]+)", line.split("|")[1])}
+    top = [path.split(" ")[1] for path, _ in _commands(typer.main.get_command(app), "kartci")
+           if path.count(" ") == 1]
+    assert len(top) > 20
+    assert [name for name in top if name not in rows] == []
+
+
 def test_every_registered_metric_is_in_the_reference(site: Path) -> None:
     from kartci import core
 
