@@ -3,7 +3,7 @@
 Writes the project's configuration (`kartci.toml`, or a `[tool.kartci]` table appended to an
 existing pyproject.toml), one short scenario, an empty `baselines/` with a README, the gate
 workflow (`.github/workflows/kartci.yml`), `constraints.txt` pinning the installed versions of
-kartci's dependencies, a README section and a `.gitignore` line for `reports/`. Nothing is
+kartci's dependencies, a README section and `.gitignore` lines for `reports/` and `.venv/`. Nothing is
 overwritten unless asked (`force`); every check is made before the first file is written.
 The templates are in `kartci/data/init/`.
 """
@@ -143,6 +143,9 @@ def _appended(folder: Path, rel: str, new: str, present: str | None = None) -> S
     return Step(Path(rel), f"{old}{sep}{new}", Action.APPENDED)
 
 
+IGNORED = ("reports", ".venv")  # run output, and the venv the README's first line makes
+
+
 def plan(folder: Path, force: bool = False) -> list[Step]:
     """What `init` would write into `folder`; raises SpecError (naming the first file) when
     it would overwrite a file and `force` is off."""
@@ -152,8 +155,9 @@ def plan(folder: Path, force: bool = False) -> list[Step]:
     steps = [_config_step(folder, conflicts), *_template_steps(folder, conflicts),
              _readme_step(folder)]
     ignored = {ln.strip().strip("/") for ln in _lines(folder / ".gitignore")}
-    if "reports" not in ignored:
-        steps.append(_appended(folder, ".gitignore", "reports/\n"))
+    missing = [name for name in IGNORED if name not in ignored]
+    if missing:
+        steps.append(_appended(folder, ".gitignore", "".join(f"{n}/\n" for n in missing)))
     _refuse_paths_in_the_way(folder, steps)
     if conflicts and not force:
         _refuse_conflicts(folder, conflicts)

@@ -86,7 +86,7 @@ def test_init_refuses_to_overwrite_and_force_does(tmp_path: Path) -> None:
     after = _tree(tmp_path)
     assert after[f"scenarios/{SCENARIO}.yaml"] != "edited: by the team\n"
     assert after["README.md"] == before["README.md"]  # the section is not added twice
-    assert after[".gitignore"].count("reports/") == 1
+    assert after[".gitignore"].count("reports/") == after[".gitignore"].count(".venv/") == 1
 
 
 def test_init_adds_a_table_to_an_existing_pyproject_and_keeps_the_rest(tmp_path: Path) -> None:
@@ -108,7 +108,8 @@ def test_init_adds_a_table_to_an_existing_pyproject_and_keeps_the_rest(tmp_path:
     assert [p.stem for p in proj.own_scenarios()] == [SCENARIO]
     readme = (tmp_path / "README.md").read_text()
     assert readme.startswith("# team-stack\n\nOur controllers.\n\n<!-- kartci -->")
-    assert (tmp_path / ".gitignore").read_text() == "*.pyc\n/reports\n"  # already ignored
+    # reports already ignored; the venv the docs make is added
+    assert (tmp_path / ".gitignore").read_text() == "*.pyc\n/reports\n\n.venv/\n"
 
     (tmp_path / "kartci.toml").unlink(missing_ok=True)
     refused = kartci("init", tmp_path)  # the table is there now: the team's file is never rewritten
