@@ -322,6 +322,22 @@ def test_every_command_and_option_is_in_the_reference(site: Path) -> None:
                 assert name in shown or f"{name}..." in shown, f"{path} {name}"
 
 
+def test_every_file_a_page_asks_for_is_named_before_it() -> None:
+    """A block the tests write to a file (`file=NAME`) is preceded by text naming NAME: the
+    site does not show the info string, and a reader must know where the text goes."""
+    unnamed = []
+    for page in pages():
+        lines = page.read_text(encoding="utf-8").splitlines()
+        for i, line in enumerate(lines):
+            found = re.match(r"^```\S+ file=(\S+)", line)
+            if found is None:
+                continue
+            before = [ln for ln in lines[:i] if ln.strip()][-1:]
+            if not before or f"`{found.group(1)}`" not in before[0]:
+                unnamed.append(f"{page.name}:{i + 1} {found.group(1)}")
+    assert unnamed == []
+
+
 def test_every_command_is_at_a_glance() -> None:
     """"Commands at a glance" has a row for every command a user can run (a kind's own
     commands included): a new command without one fails here, not in a user's search."""
