@@ -115,7 +115,14 @@ def run(
     # CLI start-up: the runner, the simulator and the report's figures (+0.9 s)
     from kartci.report.progress import ProgressView
     from kartci.report.static import scenario_svgs
-    from kartci.runner import dealt, expand, parse_shard, refused_results, run_jobs, runnable
+    from kartci.runner import (
+        expand,
+        parse_shard,
+        refused_results,
+        run_jobs,
+        runnable,
+        shard_labels,
+    )
     from kartci.runner.jobs import Vary, check_count, default_suite
     from kartci.runner.merge import write_marker
 
@@ -151,7 +158,7 @@ def run(
         todo = expand(selected, set_ or [], sweep, replicas, vary, progress,
                       allow_outside_paths=allow_outside_paths) if selected else []
     if part is not None:
-        mine = dealt({j.label for j in todo} | {r.label for r in refused}, *part)
+        mine = shard_labels({j.label for j in todo} | {r.label for r in refused}, *part)
         todo = [j for j in todo if j.label in mine]
         refused = [r for r in refused if r.label in mine]
     index, total = part or (None, None)

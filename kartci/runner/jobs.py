@@ -304,11 +304,11 @@ def parse_shard(text: str) -> tuple[int, int]:
 def shard(jobs: list[Job], index: int, total: int) -> list[Job]:
     """Shard `index` of `total` (1-based): labels sorted by name, dealt round-robin, so every
     shard gets the same count (±1) and a label with its repeats stays on one shard."""
-    mine = dealt({j.label for j in jobs}, index, total)
+    mine = shard_labels({j.label for j in jobs}, index, total)
     return [j for j in jobs if j.label in mine]
 
 
-def dealt(labels: set[str], index: int, total: int) -> set[str]:
+def shard_labels(labels: set[str], index: int, total: int) -> set[str]:
     """The labels of shard `index` of `total`: sorted, dealt round-robin."""
     return {label for i, label in enumerate(sorted(labels)) if i % total == index - 1}
 
