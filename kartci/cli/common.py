@@ -21,7 +21,7 @@ from kartci.commandline import err_console as err_console
 from kartci.commandline import out_console as out_console
 from kartci.commandline import out_dir as out_dir
 from kartci.core.registry import plugin_failure, stdout_to_stderr
-from kartci.errors import KartciError, RunError, SpecError
+from kartci.errors import KartciError, RunError, SpecError, one_line
 from kartci.report import write_all
 from kartci.report.ci import (
     annotation_lines,
@@ -33,7 +33,7 @@ from kartci.report.tables import RUN, Wording, conditioning, delta, marked, num,
 from kartci.runner.gate import strict_default
 from kartci.verdict import Status
 from kartci.verdict.criteria import ChangeKind
-from kartci.verdict.result import ScenarioResult, exit_code, one_line
+from kartci.verdict.result import ScenarioResult, exit_code
 
 COMMANDS_GROUP = "kartci.commands"  # entry points: name -> "module:attr", a typer.Typer
 
