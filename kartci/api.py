@@ -219,9 +219,9 @@ def run_suite(names: Sequence[str | Path] = (), *, overrides: Sequence[str] = ()
 
     proj = project.current()
     target = Path(out) if out is not None else proj.default_output("latest")
-    request = SuiteRequest(target, tuple(str(n) for n in names), tuple(overrides),
-                           None if baselines is None else Path(baselines), jobs, shard,
-                           sweep=tuple(sweep), repeat=repeat, timeout_s=timeout_s,
+    request = SuiteRequest(target, names=tuple(str(n) for n in names), overrides=tuple(overrides),
+                           baselines=None if baselines is None else Path(baselines), jobs=jobs,
+                           shard=shard, sweep=tuple(sweep), repeat=repeat, timeout_s=timeout_s,
                            strict=strict, allow_outside_paths=allow_outside_paths)
     return run_requested(request, proj)
 

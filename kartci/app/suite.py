@@ -101,7 +101,8 @@ class Suite:
 
     @property
     def exit_code(self) -> int:
-        """The CLI's: 0 all pass, 1 a regression or a failed criterion, 2 a run error."""
+        """The exit code the CLI gives (0 all pass, 1 a regression or a failed criterion, 2 a
+        run error)."""
         return exit_code(self.results)
 
     @property

@@ -117,9 +117,11 @@ def run(
     out = out_dir(out, "latest")
     live = err_console.is_terminal and not os.environ.get("CI")
     request = SuiteRequest(
-        out, tuple(names or ()), tuple(set_ or ()), baselines, jobs,
-        parse_shard(shard) if shard else None, executor, ray_address, tuple(sweep or ()),
-        repeat, conditioning, timeout_s, strict_mode(strict), live_view, allow_outside_paths)
+        out, names=tuple(names or ()), overrides=tuple(set_ or ()), baselines=baselines,
+        jobs=jobs, shard=parse_shard(shard) if shard else None, executor=executor,
+        ray_address=ray_address, sweep=tuple(sweep or ()), repeat=repeat,
+        conditioning=conditioning, timeout_s=timeout_s, strict=strict_mode(strict),
+        live=live_view, allow_outside_paths=allow_outside_paths)
     view = SuiteView(warn, lambda: validating(live),
                      lambda todo: running(todo, live, live_view, live_port, live_rate))
     suite = run_suite(request, project.current(), view)
