@@ -1,6 +1,8 @@
 """`RunFolder`: the one owner of a run folder's file names (OUT/<label>, a repeat's
-OUT/<label>/repeat_<k>, or a run's private staging folder), so that the runner, the importers,
-the reports and the CLI write and read one layout instead of each spelling it.
+OUT/<label>/repeat_<k>, or a run's private staging folder) and of its run state (marked
+failed, complete), so that the runner, the importers, the reports and the CLI write and read
+one layout instead of each spelling it. It is what travels: a function that works on a run
+folder takes a `RunFolder`, made once where the folder's path is decided.
 
 A run folder holds `run.mcap` (the log), `metrics.json` (deterministic), `run.json` (wall-clock
 facts), and while or after a run fails `error.json` (with `traceback.txt` for a crash); a run

@@ -53,10 +53,11 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
             o = failed[0]
             result = ScenarioResult(job.label, job.spec.description,
                                     error=f"{o.job.folder} (seed {o.job.spec.seed}): {o.error}")
+        folder = RunFolder(out / job.label)
         if main.error is None:
-            _drop_stale_repeats(out / job.label, {o.job.folder.rsplit("/", 1)[-1] for o in mine})
+            _drop_stale_repeats(folder, {o.job.folder.rsplit("/", 1)[-1] for o in mine})
         if job.vary is Vary.START and len(mine) > 1:
-            result = conditioning.judged(result, RunFolder(out / job.label), baselines)
+            result = conditioning.judged(result, folder, baselines)
         results.append(result)
     return results
 
@@ -75,8 +76,8 @@ def refused_results(refused: list[Refused], out: Path) -> list[ScenarioResult]:
     return results
 
 
-def _drop_stale_repeats(folder: Path, keep: set[str]) -> None:
+def _drop_stale_repeats(folder: RunFolder, keep: set[str]) -> None:
     """Repeats of an earlier run with a larger --repeat would pollute `compare`'s samples."""
-    for old in folder.glob(f"{REPEAT_PREFIX}*"):
+    for old in folder.path.glob(f"{REPEAT_PREFIX}*"):
         if old.is_dir() and old.name not in keep:
             shutil.rmtree(old)
