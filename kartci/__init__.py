@@ -6,6 +6,8 @@ The Python API, for a team's own scripts and tests:
   returns a `RunResult` (metrics with units, verdicts against the baseline, criteria, log).
 - `compare(base, head)`: one run judged against another (when no baseline is comparable).
 - `accept_baselines(result_or_out)`: store runs as baselines, as `kartci baseline update`.
+- `run_suite(names, shard=(i, n))`: many runs into one folder with reports, as `kartci run`;
+  `merge(parts, out=...)` joins shards' folders, as `kartci merge`.
 - `search(scenario, over)`: find a run that fails, shrunk toward the scenario's own values.
 - `load_scenario(name_or_path, overrides)`: a validated `Scenario`.
 - `Session(scenario, log_path, agents)`: a run you step yourself (`reset()`, `step()`).
@@ -30,7 +32,16 @@ if TYPE_CHECKING:
     from typing import Any
 
     from kartci import plugins
-    from kartci.api import RunResult, accept_baselines, compare, load_scenario, run, search
+    from kartci.api import (
+        RunResult,
+        accept_baselines,
+        compare,
+        load_scenario,
+        merge,
+        run,
+        run_suite,
+        search,
+    )
     from kartci.core import Agent, Direction, Metric
     from kartci.scenario.models import Scenario
     from kartci.sim.session import RunInfo, Session, StepResult
@@ -52,7 +63,9 @@ _LAZY = {
     "accept_baselines": "kartci.api",
     "compare": "kartci.api",
     "load_scenario": "kartci.api",
+    "merge": "kartci.api",
     "run": "kartci.api",
+    "run_suite": "kartci.api",
     "search": "kartci.api",
 }
 
@@ -76,8 +89,10 @@ __all__ = [
     "accept_baselines",
     "compare",
     "load_scenario",
+    "merge",
     "plugins",
     "run",
+    "run_suite",
     "search",
 ]
 __version__ = "0.1.0"

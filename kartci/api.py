@@ -14,8 +14,10 @@ it, judge it against the baseline and the scenario's criteria) and returns a `Ru
 instead of writing reports and an exit code. Agents may be handed in as objects
 (`agents={"kart0": MyController()}`) for a test of your own controller; see `kartci.Agent`.
 `kartci.compare(base, head)` judges one run against another, `kartci.accept_baselines(result)`
-stores a run as its scenario's baseline (`kartci baseline update`). For a run you step
-yourself, see `kartci.Session`.
+stores a run as its scenario's baseline (`kartci baseline update`). `kartci.run_suite` runs
+many scenarios into one output folder with its reports, as `kartci run` does, one shard of them
+if asked (`shard=(i, n)`), and `kartci.merge` joins the shards' folders, as `kartci merge`. For a
+run you step yourself, see `kartci.Session`.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from kartci.verdict import RunResult
 if TYPE_CHECKING:
     from kartci.app.accept import Accepted
     from kartci.app.search import SearchResult
+    from kartci.app.suite import Suite
 
 
 def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
@@ -170,6 +173,86 @@ def accept_baselines(run: RunResult | str | Path, names: Sequence[str] = (), *,
                   replicas=replicas, jobs=jobs)
 
 
+def run_suite(names: Sequence[str | Path] = (), *, overrides: Sequence[str] = (),
+              out: str | Path | None = None, baselines: str | Path | None = None,
+              shard: tuple[int, int] | None = None, jobs: int = 1, sweep: Sequence[str] = (),
+              repeat: int = 1, timeout_s: float | None = None, strict: bool = False,
+              allow_outside_paths: bool = False) -> Suite:
+    """Run scenarios into one output folder, score and judge them and write the reports: what
+    `kartci run` does (the same function), from Python; with `shard`, one share of them, for
+    `merge` to join.
+
+    ```python
+    for i in (1, 2):  # on two CI machines, say
+        kartci.run_suite(shard=(i, 2), out=f"reports/shard{i}")
+    suite = kartci.merge(["reports/shard1", "reports/shard2"], out="reports/latest")
+    assert suite.passed, suite.reports["markdown"].read_text()
+    ```
+
+    Args:
+        names: Scenario names or YAML paths. Default: the project's suite (as `kartci run`).
+        overrides: `dotted.key=value` assignments for every scenario (`--set`).
+        out: Output folder: `OUT/<scenario>/` per run, the reports at the top. Default: the
+            project's `reports/latest`.
+        baselines: Folder of baseline files. Default: the project's.
+        shard: `(i, n)`: run only share i of n (labels sorted, dealt round-robin); OUT then
+            holds a partial result (`shard.json`) and its reports cover that share only.
+        jobs: Runs at once (this process and jobs-1 worker processes).
+        sweep: `key=v1,v2,...` each: one run per value (every combination), as `--sweep`.
+        repeat: Seeds per scenario (seed, seed+1, ...), into `OUT/<scenario>/repeat_<k>/`.
+        timeout_s: Wall-clock limit per run, s.
+        strict: Fail a scenario without a baseline or with a stale one (as under CI).
+        allow_outside_paths: As for `load_scenario`.
+
+    Returns:
+        The `Suite`: `results` (one `RunResult` per scenario), `reports` (their paths by kind:
+        `"html"`, `"markdown"`, `"json"`, `"junit"`), `exit_code` and `passed` as the CLI's.
+
+    Raises:
+        SpecError: Bad input (a scenario, an override, a count, a shard), found before anything
+            runs; OUT busy with another kartci command.
+    """
+    # late, as in `run`: the runner loads PyBullet and pandas
+    from kartci import project
+    from kartci.app.suite import SuiteRequest
+    from kartci.app.suite import run_suite as run_requested
+
+    proj = project.current()
+    target = Path(out) if out is not None else proj.default_output("latest")
+    request = SuiteRequest(target, names=tuple(str(n) for n in names), overrides=tuple(overrides),
+                           baselines=None if baselines is None else Path(baselines), jobs=jobs,
+                           shard=shard, sweep=tuple(sweep), repeat=repeat, timeout_s=timeout_s,
+                           strict=strict, allow_outside_paths=allow_outside_paths)
+    return run_requested(request, proj)
+
+
+def merge(parts: Sequence[str | Path], *, out: str | Path, baselines: str | Path | None = None,
+          strict: bool = False) -> Suite:
+    """Join the output folders of `run_suite(shard=...)` (or `kartci run --shard`) into one run
+    in `out`, judged and reported as an unsharded run would be: what `kartci merge` does.
+
+    Args:
+        parts: The shards' output folders (every share of one split).
+        out: Output folder of the joined run.
+        baselines: Folder of baseline files. Default: the project's.
+        strict: As for `run_suite`.
+
+    Returns:
+        The joined `Suite` (as `run_suite`'s).
+
+    Raises:
+        SpecError: A shard is missing or given twice, shards of different splits, a scenario
+            in more than one part, or a part that is not a shard's output.
+    """
+    # late, as in `run`: judging loads the runner
+    from kartci import project
+    from kartci.app.suite import merge_shards
+
+    proj = None if baselines is not None else project.current()
+    return merge_shards([Path(p) for p in parts], Path(out),
+                        None if baselines is None else Path(baselines), proj, strict=strict)
+
+
 def search(scenario: str | Path, over: Sequence[str], *, overrides: Sequence[str] = (),
            budget: int = 100, objective: str = "criteria", seed: int = 0,
            out: str | Path | None = None, jobs: int = 1, baselines: str | Path | None = None,
@@ -220,4 +303,5 @@ def search(scenario: str | Path, over: Sequence[str], *, overrides: Sequence[str
     return run_search(request, target, Options(base_dir, jobs))
 
 
-__all__ = ["RunResult", "accept_baselines", "compare", "load_scenario", "run", "search"]
+__all__ = ["RunResult", "accept_baselines", "compare", "load_scenario", "merge", "run",
+           "run_suite", "search"]

@@ -1,6 +1,12 @@
 """One error base class; the CLI turns any of these into one line on stderr and exit code 2."""
 
 
+def one_line(text: str, limit: int = 500) -> str:
+    """User text for a one-line message: control characters and newlines become spaces."""
+    flat = " ".join("".join(c if c.isprintable() else " " for c in text).split())
+    return flat if len(flat) <= limit else flat[:limit - 1] + "…"
+
+
 class KartciError(Exception):
     """Base of every error kartci reports to a user (bad input or a failed run)."""
 

@@ -17,8 +17,11 @@ Options: `--kartci-out DIR` keeps the scenario items' runs in DIR/<scenario>/ (d
 temporary folders), `--kartci-baselines DIR` judges them against DIR (default: the project's
 baselines), `--kartci-accept` stores each scenario item's run as its scenario's baseline instead
 of judging it (`kartci.app.accept`, the function behind `kartci baseline update`; its criteria
-still apply) and lists what changed at the end of the session. Works with pytest-xdist (`-n 2`):
-every run has its own folder.
+still apply) and lists what changed at the end of the session, `--kartci-shard I/N` keeps only
+share I of N of the scenario items (dealt as `kartci run --shard` deals them, by
+`kartci.app.suite.shard_of`; with `--kartci-out`, DIR is marked as that share, so `kartci merge`
+joins the shards' DIRs and names a share that never reported). Works with pytest-xdist
+(`-n 2`): every run has its own folder.
 
 Accepting is an option on the scenario items, not a method of the `kartci_run` fixture: it is a
 decision about the scenario files as written, taken for a whole session as `kartci baseline
@@ -63,11 +66,44 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group.addoption("--kartci-accept", action="store_true", default=False,
                     help="store each scenario item's run as its baseline (as `kartci baseline "
                          "update`) instead of judging it; criteria still apply")
+    group.addoption("--kartci-shard", metavar="I/N", default=None,
+                    help="run share I of N of the scenario items (as `kartci run --shard`); "
+                         "with --kartci-out, DIR is a partial result for `kartci merge`")
 
 
 def pytest_configure(config: pytest.Config) -> None:
     """Register the `kartci` marker every scenario item carries."""
     config.addinivalue_line("markers", "kartci: a kartci scenario file run as a test")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """With `--kartci-shard I/N`: deselect the scenario items of the other shares (other tests
+    stay), and with `--kartci-out` mark DIR as that share of the items collected."""
+    given = config.getoption("kartci_shard")
+    if not given:
+        return
+    # late, these two: the runner (the simulator), only when scenario items are sharded
+    from kartci.app.suite import shard_of
+    from kartci.runner.jobs import parse_shard
+
+    try:
+        part = parse_shard(given)
+    except KartciError:
+        raise pytest.UsageError(f"--kartci-shard {given!r}: expected I/N with 1 <= I <= N, "
+                                "e.g. 1/4") from None
+    names = [item.name for item in items if isinstance(item, ScenarioItem)]
+    mine = shard_of(names, part)
+    dropped = [i for i in items if isinstance(i, ScenarioItem) and i.name not in mine]
+    if dropped:
+        config.hook.pytest_deselected(items=dropped)
+        items[:] = [i for i in items if i not in dropped]
+    kept = config.getoption("kartci_out")
+    if kept:
+        from kartci.runner.merge import write_marker  # late: as above
+
+        out = Path(kept).resolve()
+        out.mkdir(parents=True, exist_ok=True)
+        write_marker(out, *part, sorted(mine))
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:

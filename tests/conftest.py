@@ -14,6 +14,7 @@ import pytest
 from helpers import KartLap, kartci
 
 from kartci import portable
+from kartci.core import RunFolder
 from kartci.report import write_all
 from kartci.runner.run import evaluate
 from kartci.scenario import load_scenario
@@ -138,7 +139,7 @@ def kart_lap(tmp_path_factory: pytest.TempPathFactory) -> KartLap:
     assert run.returncode == 0, run.stderr
     update = kartci("baseline", "update", root / "out", "--baselines", root / "baselines")
     assert update.returncode == 0, update.stderr
-    result = evaluate(root / "out" / "kart_manual", root / "baselines")
+    result = evaluate(RunFolder(root / "out" / "kart_manual"), root / "baselines")
     write_all([result], root / "out")
     return KartLap(root / "out", root / "baselines", update, result)
 

@@ -19,7 +19,7 @@ from kartci.runner import conditioning
 from kartci.runner.executors import execute
 from kartci.runner.jobs import MAX_RUNS, Context, Job, check_count
 from kartci.runner.outdir import check_inside, locked, read_manifest, valid_label
-from kartci.runner.run import check_complete, check_finished, recorded_scenario, reference_plots
+from kartci.runner.run import check_finished, recorded_scenario, reference_plots
 from kartci.scenario.models import Scenario
 from kartci.verdict import (
     Change,
@@ -121,18 +121,19 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
             raise SpecError(f"{len(labels):,} scenarios x {replicas:,} replicas = "
                             f"{len(labels) * replicas:,} runs, more than the {MAX_RUNS:,} "
                             "allowed; split the command")
+        folders = [RunFolder(out / label) for label in labels]
         checked = []
-        for label in labels:  # check everything before writing anything
-            _check_acceptable(out / label, replicas)
-            load(target / f"{label}.json")
-            checked.append((label, RunFolder(out / label).read_metrics()))
+        for folder in folders:  # check everything before writing anything
+            _check_acceptable(folder, replicas)
+            load(target / f"{folder.name}.json")
+            checked.append((folder, folder.read_metrics()))
         if replicas:
             _replicate(out, target, labels, replicas, jobs, say)
         # the traces' plots read the logs: after the cheap checks, still before any write
-        traced = [(label, values, reference_plots(out / label), recorded_scenario(out / label))
-                  for label, values in checked]
-        return [_write(out / label, target, values, drawn, scenario, bool(replicas))
-                for label, values, drawn, scenario in traced]
+        traced = [(folder, values, reference_plots(folder), recorded_scenario(folder))
+                  for folder, values in checked]
+        return [_write(folder, target, values, drawn, scenario, bool(replicas))
+                for folder, values, drawn, scenario in traced]
 
 
 def _check_labels(out: Path, labels: list[str]) -> None:
@@ -145,28 +146,28 @@ def _check_labels(out: Path, labels: list[str]) -> None:
     check_finished(out, labels)
 
 
-def _check_acceptable(folder: Path, replicas: int) -> None:
+def _check_acceptable(folder: RunFolder, replicas: int) -> None:
     """A complete, current run made with pinned kernels; with replicas, one the runner can
     repeat (agent objects handed to the Python API cannot leave their process)."""
-    check_complete(folder)
+    folder.check_complete()
     simd = conditioning.platform_of(folder).get("simd")
     if simd not in (None, "pinned"):  # a baseline holds every CPU's numbers
-        raise SpecError(f"{folder}: run with {simd} SIMD kernels (KARTCI_SIMD=native or numpy "
+        raise SpecError(f"{folder.path}: run with {simd} SIMD kernels (KARTCI_SIMD=native or numpy "
                         "imported before kartci): its numbers are this CPU's only; run it again "
                         "with `kartci run`")
     replaced = _replaced(folder)
     if replicas and replaced:
         agents = ", ".join(f"{a}: {cls}" for a, cls in sorted(replaced.items()))
-        raise SpecError(f"{folder}: driven by agent objects ({agents}), which conditioning "
+        raise SpecError(f"{folder.path}: driven by agent objects ({agents}), which conditioning "
                         "replicas cannot re-create; accept it with 0 replicas")
 
 
-def _replaced(folder: Path) -> dict[str, str]:
-    replaced = RunFolder(folder).read_run_record().get("replaced_agents") or {}
+def _replaced(folder: RunFolder) -> dict[str, str]:
+    replaced = folder.read_run_record().get("replaced_agents") or {}
     return {str(k): str(v) for k, v in replaced.items()}
 
 
-def _write(folder: Path, target: Path, values: dict[str, dict[str, Any]], drawn: Plots | None,
+def _write(folder: RunFolder, target: Path, values: dict[str, dict[str, Any]], drawn: Plots | None,
            scenario: Scenario, replicated: bool) -> Accepted:
     """One scenario's baseline written, and what that changed (criteria included)."""
     label, path = folder.name, target / f"{folder.name}.json"
@@ -186,12 +187,12 @@ def _write(folder: Path, target: Path, values: dict[str, dict[str, Any]], drawn:
     return Accepted(label, path, tuple(changes), note, moved, tuple(notes), tuple(warnings))
 
 
-def _made(folder: Path) -> dict[str, Any]:
+def _made(folder: RunFolder) -> dict[str, Any]:
     platform = conditioning.platform_of(folder)
     return {"platform": platform} if platform else {}
 
 
-def _conditioning(folder: Path) -> tuple[dict[str, float | None] | None, dict[str, Any]]:
+def _conditioning(folder: RunFolder) -> tuple[dict[str, float | None] | None, dict[str, Any]]:
     measured = conditioning.spreads(folder)
     if measured is None:  # not a simulation (a scored real log): nothing to replicate
         return None, _made(folder)

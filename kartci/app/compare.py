@@ -23,7 +23,7 @@ def compare_results(base: ScenarioResult, head: ScenarioResult, baselines: Path 
     default. Criteria and warnings are head's run's own business, as in `kartci compare`: the
     result has none."""
     target = baselines if baselines is not None else project.current().baselines
-    verdicts = compare_runs(samples(base.folder), samples(head.folder),
+    verdicts = compare_runs(samples(RunFolder(base.folder)), samples(RunFolder(head.folder)),
                             load(target / f"{head.name}.json"), alpha)
     return replace(head, verdicts=verdicts, criteria=[], warnings=(), strict_warnings=(),
                    baseline=RunFolder(base.folder).metrics)

@@ -32,8 +32,8 @@ def run_scenario(scenario: str | Path | Scenario, overrides: Sequence[str] = (),
         spec = load_scenario(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
     check_criteria_names([spec])
     root = out if out is not None else Path(tempfile.mkdtemp(prefix=f"kartci-{spec.name}-"))
-    folder = root / spec.name
+    folder = RunFolder(root / spec.name)
     run_pinned(spec, root, folder, agents)
     base_dir = baselines if baselines is not None else project.current().baselines
     baseline = read_baseline(base_dir / f"{spec.name}.json")
-    return judge_folder(RunFolder(folder), spec, baseline, stale)
+    return judge_folder(folder, spec, baseline, stale)

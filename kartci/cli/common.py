@@ -6,7 +6,7 @@ from __future__ import annotations
 from functools import cache
 from importlib.metadata import entry_points
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, NoReturn
 
 import typer
 from rich.table import Table
@@ -14,6 +14,7 @@ from rich.text import Text
 from typer.core import TyperCommand, TyperGroup
 
 from kartci import __version__, project
+from kartci.app.suite import write_reports
 from kartci.commandline import AllowOutsideOpt as AllowOutsideOpt
 from kartci.commandline import OutOpt as OutOpt
 from kartci.commandline import SetOpt as SetOpt
@@ -21,8 +22,7 @@ from kartci.commandline import err_console as err_console
 from kartci.commandline import out_console as out_console
 from kartci.commandline import out_dir as out_dir
 from kartci.core.registry import plugin_failure, stdout_to_stderr
-from kartci.errors import KartciError, RunError, SpecError
-from kartci.report import write_all
+from kartci.errors import KartciError, SpecError
 from kartci.report.ci import (
     annotation_lines,
     append_step_summary,
@@ -33,7 +33,7 @@ from kartci.report.tables import RUN, Wording, conditioning, delta, marked, num,
 from kartci.runner.gate import strict_default
 from kartci.verdict import Status
 from kartci.verdict.criteria import ChangeKind
-from kartci.verdict.result import ScenarioResult, exit_code, one_line
+from kartci.verdict.result import ScenarioResult, exit_code
 
 COMMANDS_GROUP = "kartci.commands"  # entry points: name -> "module:attr", a typer.Typer
 
@@ -171,19 +171,16 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
 
 
 def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-            ci: bool = True, history: Path | None = None, html: bool = True) -> None:
-    """Write every report (the HTML ones with `html`), print the verdicts and (unless `ci` is
-    off, as for a shard, whose
-    merge reports for it) the CI outputs; exit with the gating code. A report that cannot be
-    written is exit 2, and no earlier report stays in its place (write_all removes them
-    first)."""
-    try:
-        paths = write_all(results, out, words, history, html)
-    except (KartciError, OSError):
-        raise
-    except Exception as err:  # a report that cannot be drawn: bad input, not a regression
-        raise RunError(f"writing the reports in {out} failed: {type(err).__name__}: "
-                       f"{one_line(str(err), 200)} (no report was left in place)") from err
+           ci: bool = True, history: Path | None = None, html: bool = True) -> NoReturn:
+    """Write every report (the HTML ones with `html`; see `kartci.app.suite.write_reports`),
+    then `conclude`."""
+    conclude(results, write_reports(results, out, words, history, html), words, ci, html)
+
+
+def conclude(results: list[ScenarioResult], paths: dict[str, Path], words: Wording = RUN,
+             ci: bool = True, html: bool = True) -> NoReturn:
+    """Print the verdicts and (unless `ci` is off, as for a shard, whose merge reports for it)
+    the CI outputs of reports written to `paths`; exit with the gating code."""
     print_verdicts(results, words)
     if ci:
         append_step_summary(paths["markdown"].read_text(encoding="utf-8"))

@@ -247,8 +247,9 @@ def _run_log(path: Path, which: str) -> Path:
         raise LogError(f"{which}: {path}: no such file or folder; {what}")
     if not path.is_dir() or (path / "metadata.yaml").is_file():
         return path
-    if RunFolder(path).log.is_file():
-        return RunFolder(path).log
+    folder = RunFolder(path)
+    if folder.log.is_file():
+        return folder.log
     runs = sorted(path.glob(f"*/{name}"))
     if len(runs) == 1:
         return runs[0]

@@ -7,20 +7,11 @@ from typing import Annotated
 
 import typer
 
-from kartci.cli.common import (
-    BaselinesOpt,
-    OutOpt,
-    StrictOpt,
-    app,
-    baselines_dir,
-    finish,
-    out_dir,
-    strict_mode,
-)
-from kartci.errors import SpecError
+from kartci import project
+from kartci.app.suite import compare_suites, merge_shards, rescore_suite
+from kartci.cli.common import BaselinesOpt, OutOpt, StrictOpt, app, conclude, out_dir, strict_mode
+from kartci.project import Project
 from kartci.report import COMPARE
-from kartci.runner.gate import require_baselines
-from kartci.runner.outdir import clear_reports, locked, manifest_labels, write_manifest
 
 
 @app.command()
@@ -36,13 +27,9 @@ def merge(
 ) -> None:
     """Join partial results into one run: copy the scenario folders into OUT, then judge and
     report them exactly as an unsharded run would (same summary, verdicts, exit code)."""
-    from kartci.runner.merge import merge as join  # CLI start-up: PyBullet (+0.4 s)
-
-    with locked(out):
-        clear_reports(out)
-        results = join(dirs, out, baselines_dir(baselines), strict_mode(strict))
-        write_manifest(out, "merge", [r.name for r in results])
-        finish(results, out, history=history)
+    suite = merge_shards(dirs, out, baselines, _project(baselines), strict=strict_mode(strict),
+                         history=history)
+    conclude(suite.results, suite.reports)
 
 
 @app.command("compare")
@@ -58,14 +45,9 @@ def compare_cmd(
     verdict (tolerances and directions as for baselines; with repeats, a change must also be
     significant). Reports both runs' paths and time series overlaid. Exit 1 when head
     regressed, 0 when not, 2 when a run failed."""
-    from kartci.runner.compare import compare_outs  # CLI start-up: PyBullet, scipy (+1 s)
-
     out = out_dir(out, "compare")
-    if not 0 < alpha < 1:
-        raise SpecError(f"--alpha {alpha:g}: expected 0 < alpha < 1")
-    with locked(out):
-        clear_reports(out)
-        finish(compare_outs(base, head, baselines_dir(baselines), alpha), out, COMPARE)
+    suite = compare_suites(base, head, out, baselines, _project(baselines), alpha=alpha)
+    conclude(suite.results, suite.reports, COMPARE)
 
 
 @app.command()
@@ -73,19 +55,13 @@ def report(out: Annotated[Path, typer.Argument(help="A folder written by `kartci
            baselines: BaselinesOpt = None, strict: StrictOpt = None) -> None:
     """Rebuild metrics and all reports of a run folder from its logs alone (the scenarios of
     its last run); a scenario whose log is missing or damaged is an error."""
-    from kartci.runner import rescore  # CLI start-up: PyBullet (+0.5 s)
+    suite = rescore_suite(out, baselines, _project(baselines), strict=strict_mode(strict))
+    conclude(suite.results, suite.reports)
 
-    if not out.is_dir():
-        raise SpecError(f"{out}: no such folder")
-    target = baselines_dir(baselines)
-    with locked(out):
-        clear_reports(out)
-        results = rescore(out, target)
-        if strict_mode(strict):
-            results = [require_baselines(r, out, target) for r in results]
-        if manifest_labels(out) is None:
-            write_manifest(out, "report", [r.name for r in results])
-        finish(results, out)
+
+def _project(baselines: Path | None) -> Project | None:
+    """The project, when it must say where the baselines are (no --baselines given)."""
+    return project.current() if baselines is None else None
 
 
 @app.command()

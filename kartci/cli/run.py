@@ -5,12 +5,13 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.progress import Progress
 
 from kartci import project
+from kartci.app.suite import SuiteRequest, SuiteView, run_suite
 from kartci.cli.common import (
     AllowOutsideOpt,
     BaselinesOpt,
@@ -18,18 +19,17 @@ from kartci.cli.common import (
     SetOpt,
     StrictOpt,
     app,
-    baselines_dir,
     complete_scenario,
+    conclude,
     err_console,
-    finish,
     out_dir,
     strict_mode,
 )
-from kartci.core import broken
-from kartci.errors import PluginError, SpecError
-from kartci.runner.gate import judging_all
 from kartci.runner.kinds import ExecutorKind
-from kartci.runner.outdir import check_inside, clear_reports, locked, write_manifest
+
+if TYPE_CHECKING:
+    from kartci.runner.events import Listener
+    from kartci.runner.jobs import Job
 
 SWEEP_LINE_EVERY = 1000  # points: a line per this many in a CI log
 
@@ -112,79 +112,35 @@ def run(
     Exit 0 when everything passes, 1 on a regression or failed criterion, 2 on bad input or a
     run error. Reports: OUT/report.html, summary.md, summary.json, junit.xml.
     """
-    # CLI start-up: the runner, the simulator and the report's figures (+0.9 s)
-    from kartci.report.progress import ProgressView
-    from kartci.report.static import scenario_svgs
-    from kartci.runner import dealt, expand, parse_shard, refused_results, run_jobs, runnable
-    from kartci.runner.jobs import Vary, check_count, default_suite
-    from kartci.runner.merge import write_marker
+    from kartci.runner.jobs import parse_shard  # CLI start-up: the simulator (+0.9 s)
 
     out = out_dir(out, "latest")
-    if jobs is not None and jobs < 1:
-        raise SpecError(f"--jobs {jobs}: expected 1 or more")
-    for option, count in (("--jobs", jobs or 1), ("--repeat", repeat),
-                          ("--conditioning", conditioning)):
-        check_count(option, count)
-    if timeout_s is not None and not timeout_s > 0:
-        raise SpecError(f"--timeout-s {timeout_s:g}: expected a positive number of seconds")
-    if ray_address and executor is not ExecutorKind.RAY:
-        raise SpecError("--ray-address needs --executor ray")
-    part = parse_shard(shard) if shard else None
-    if live_view and ((jobs or 1) > 1 or executor is not ExecutorKind.LOCAL):
-        raise SpecError("--live serves one run at a time in this process: drop -j / --executor")
-    proj = project.current()
-    selected = names or default_suite(proj.own_scenarios(), allow_outside_paths)
-    if not selected:
-        where = ", ".join(str(p) for p in proj.scenarios)
-        raise SpecError(f"no scenarios to run: none in {where}; name one (`kartci list` shows "
-                        "the built-in ones) or create a project with `kartci init`")
-    if conditioning and repeat > 1:
-        raise SpecError("--conditioning and --repeat both set the replicas: choose one")
-    if conditioning == 1 or conditioning < 0:
-        raise SpecError(f"--conditioning {conditioning}: expected 0 (off) or 2 or more")
     live = err_console.is_terminal and not os.environ.get("CI")
-    replicas, vary = (conditioning, Vary.START) if conditioning else (repeat, Vary.SEED)
-    strict_on = strict_mode(strict)
-    check_plugins(strict_on)
-    selected, refused = runnable(selected, set_ or [], allow_outside_paths=allow_outside_paths)
-    with validating(live) as progress:
-        todo = expand(selected, set_ or [], sweep, replicas, vary, progress,
-                      allow_outside_paths=allow_outside_paths) if selected else []
-    if part is not None:
-        mine = dealt({j.label for j in todo} | {r.label for r in refused}, *part)
-        todo = [j for j in todo if j.label in mine]
-        refused = [r for r in refused if r.label in mine]
-    index, total = part or (None, None)
-    labels = [*(r.label for r in refused), *(j.label for j in todo if j.repeat == 0)]
-    workers = jobs or (os.cpu_count() or 1 if executor is ExecutorKind.RAY else 1)
-    with locked(out):  # an unusable or busy --out fails here, before any run
-        check_inside(out, labels)
-        clear_reports(out)
-        write_marker(out, index, total, labels)
-        write_manifest(out, "run", labels)
-        with judging_all(labels, strict_on) as complete:
-            with live_server(live_view, live_port, live_rate), \
-                    ProgressView(todo, err_console, live) as view:
-                results = run_jobs(todo, out, baselines_dir(baselines), workers=workers,
-                                   executor=executor, ray_address=ray_address,
-                                   timeout_s=timeout_s, strict=strict_on, on_event=view,
-                                   draw=scenario_svgs)
-            results = complete([*refused_results(refused, out), *results])
-        finish(results, out, ci=part is None)
+    request = SuiteRequest(
+        out, names=tuple(names or ()), overrides=tuple(set_ or ()), baselines=baselines,
+        jobs=jobs, shard=parse_shard(shard) if shard else None, executor=executor,
+        ray_address=ray_address, sweep=tuple(sweep or ()), repeat=repeat,
+        conditioning=conditioning, timeout_s=timeout_s, strict=strict_mode(strict),
+        live=live_view, allow_outside_paths=allow_outside_paths)
+    view = SuiteView(warn, lambda: validating(live),
+                     lambda todo: running(todo, live, live_view, live_port, live_rate))
+    suite = run_suite(request, project.current(), view)
+    conclude(suite.results, suite.reports, ci=suite.shard is None)
 
 
-def check_plugins(strict: bool) -> None:
-    """Plugins that failed to load: in strict mode (CI) a PluginError naming them all (exit 2,
-    before anything runs or is written: a team's broken configuration must not pass because
-    its scenarios happen not to name the plugin); otherwise a warning for each, once, and
-    only the scenarios that name one fail."""
-    failed = broken()
-    if strict and failed:
-        raise PluginError(f"{'; '.join(p.message for p in failed)} (strict mode, as under CI: "
-                          "a plugin that fails to load fails the run; fix or uninstall it, or "
-                          "pass --no-strict to run the scenarios that do not need it)",
-                          failed[0].trace)
-    for plugin in failed:
-        err_console.print(f"kartci: warning: {plugin.message}; the scenarios that name it fail "
-                          "(its traceback: traceback.txt in their folders)", highlight=False,
-                          markup=False, soft_wrap=True)
+@contextmanager
+def running(todo: list[Job], live: bool, live_view: bool, port: int,
+            rate: float) -> Iterator[Listener]:
+    """The runs' progress (a live table on a terminal, a line per job in CI logs), inside the
+    --live server when asked for."""
+    from kartci.report.progress import ProgressView  # CLI start-up: rich's live table
+
+    with live_server(live_view, port, rate), ProgressView(todo, err_console, live) as view:
+        yield view
+
+
+def warn(text: str) -> None:
+    """A warning on stderr, as every command prints one."""
+    err_console.print(f"kartci: warning: {text}", highlight=False, markup=False, soft_wrap=True)
+
+

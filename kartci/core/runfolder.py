@@ -1,6 +1,8 @@
 """`RunFolder`: the one owner of a run folder's file names (OUT/<label>, a repeat's
-OUT/<label>/repeat_<k>, or a run's private staging folder), so that the runner, the importers,
-the reports and the CLI write and read one layout instead of each spelling it.
+OUT/<label>/repeat_<k>, or a run's private staging folder) and of its run state (marked
+failed, complete), so that the runner, the importers, the reports and the CLI write and read
+one layout instead of each spelling it. It is what travels: a function that works on a run
+folder takes a `RunFolder`, made once where the folder's path is decided.
 
 A run folder holds `run.mcap` (the log), `metrics.json` (deterministic), `run.json` (wall-clock
 facts), and while or after a run fails `error.json` (with `traceback.txt` for a crash); a run
@@ -11,12 +13,14 @@ from __future__ import annotations
 
 import os
 import tempfile
+import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
+from kartci.atomic import write_json_atomic, write_text_atomic
 from kartci.boundedio import RefusedFileError, is_number, read_json
-from kartci.errors import BaselineError, LogError
+from kartci.errors import BaselineError, KartciError, LogError, SpecError, one_line
 
 UNFINISHED = "the run did not finish (interrupted, or its process died)"  # error.json's reason
 
@@ -109,6 +113,37 @@ class RunFolder:
     def unfinished(self) -> bool:
         """Whether the command that started this folder's run stopped before it completed."""
         return self.failure() == UNFINISHED
+
+    def mark_failed(self, scenario: str, error: str, err: BaseException | None = None) -> None:
+        """Mark the folder as failed: its older outputs stay for debugging, but nothing
+        (report, compare, baseline update) takes them for this run's. A crash (not a
+        KartciError) also leaves its full traceback in traceback.txt; the message itself stays
+        one line."""
+        write_json_atomic(self.error, {"scenario": scenario, "error": one_line(error)})
+        if err is not None and not isinstance(err, KartciError):
+            write_text_atomic(self.traceback, "".join(traceback.format_exception(err)))
+        else:
+            self.traceback.unlink(missing_ok=True)
+
+    def failed_reason(self) -> str | None:
+        """Why the last run failed, as a result's error says it; None when not marked failed."""
+        reason = self.failure()
+        return None if reason is None else f"the last run failed: {one_line(reason)}".rstrip(": ")
+
+    def check_complete(self) -> None:
+        """Raise SpecError unless the outputs are one complete, current run: what `baseline
+        update` may promote."""
+        if not self.path.is_dir():
+            raise SpecError(f"{self.path}: no such scenario folder")
+        reason = self.failed_reason()
+        if reason is not None:
+            why = reason.removeprefix("the last run failed").lstrip(": ")
+            raise SpecError(f"{self.path}: the last run of this scenario failed"
+                            f"{f' ({why})' if why else ''}; its metrics are stale and will not "
+                            "become a baseline")
+        missing = self.missing()
+        if missing:
+            raise SpecError(f"{self.path}: incomplete (no {' or '.join(missing)}); run it again")
 
     def read_metrics(self) -> dict[str, dict[str, Any]]:
         """The metrics, checked: {NAME: {"value": number|null, ...}}; a BaselineError naming

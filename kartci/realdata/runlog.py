@@ -10,29 +10,28 @@ from typing import Any
 
 from kartci.core import UNFINISHED, RunFolder
 from kartci.runner.outdir import check_inside
-from kartci.runner.run import failure_text, mark_failed, score
+from kartci.runner.run import failure_text, score
 from kartci.verdict import write_json_atomic
 
 
-def write_result(folder: Path, name: str, make_log: Callable[[Path], Sequence[str]],
+def write_result(folder: RunFolder, name: str, make_log: Callable[[Path], Sequence[str]],
                  facts: dict[str, Any]) -> None:
     """`make_log(path)` writes the run log and returns its warnings; it is scored into
     metrics.json and, with `facts` and the warnings as run.json, moved into `folder` (never
     through a symlink leading out of OUT)."""
-    check_inside(folder.parent, [folder.name])
-    folder.mkdir(parents=True, exist_ok=True)
-    mark_failed(folder, name, UNFINISHED)
-    run = RunFolder(folder)
-    stage = run.new_stage()
+    check_inside(folder.path.parent, [folder.name])
+    folder.path.mkdir(parents=True, exist_ok=True)
+    folder.mark_failed(name, UNFINISHED)
+    stage = folder.new_stage()
     try:
         warnings = list(make_log(stage.log))
-        score(stage.path)
-        write_json_atomic(stage.run_record, {**facts, "log": str(run.log),
+        score(stage)
+        write_json_atomic(stage.run_record, {**facts, "log": str(folder.log),
                                              **({"warnings": warnings} if warnings else {})})
-        run.adopt(stage)
-        run.error.unlink(missing_ok=True)
+        folder.adopt(stage)
+        folder.error.unlink(missing_ok=True)
     except BaseException as err:
-        mark_failed(folder, name, failure_text(err), err)
+        folder.mark_failed(name, failure_text(err), err)
         raise
     finally:
         shutil.rmtree(stage.path, ignore_errors=True)

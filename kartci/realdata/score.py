@@ -9,6 +9,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from kartci import project
+from kartci.core import RunFolder
 from kartci.logs import open_log
 from kartci.metrics.alignment import Alignment
 from kartci.realdata.importer import import_log
@@ -35,7 +36,7 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
                                     ("t_max_diff_s", t_max_diff_s)) if v is not None}
         profile = Profile.model_validate({**profile.model_dump(), **update})
         types = {role: i.msgtype for role, i in info.items()}
-        folder = out / profile.name
+        folder = RunFolder(out / profile.name)
         write_result(folder, profile.name,
                      lambda dst: import_log(log, profile, types, dst, reader).warnings,
                      {"imported_from": str(log.resolve()), "profile": profile.name})
@@ -64,10 +65,11 @@ def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
         simreal.simreal_log(log, profile, types, setup, window_s, dst)
         return ()
 
-    write_result(out / name, name, make,
+    folder = RunFolder(out / name)
+    write_result(folder, name, make,
                  {"imported_from": str(log.resolve()), "profile": profile.name,
                   "scenario": setup.scenario.name, "overrides": list(setup.overrides),
                   "window_s": window_s})
-    result = evaluate(out / name, baselines)
+    result = evaluate(folder, baselines)
     result.run["wall_s"] = round(time.perf_counter() - t0, 3)
     return result

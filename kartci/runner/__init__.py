@@ -14,11 +14,11 @@ if TYPE_CHECKING:
         Job,
         Outcome,
         Refused,
-        dealt,
         expand,
         parse_shard,
         runnable,
         shard,
+        shard_labels,
     )
     from kartci.runner.kinds import ExecutorKind
     from kartci.runner.run import (
@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from kartci.runner.suite import refused_results, run_jobs
 
 _WHERE = {"Event": "events", "EventKind": "events", "ExecutorKind": "kinds",
-          "Job": "jobs", "Outcome": "jobs", "Refused": "jobs", "dealt": "jobs",
+          "Job": "jobs", "Outcome": "jobs", "Refused": "jobs", "shard_labels": "jobs",
           "expand": "jobs", "parse_shard": "jobs", "runnable": "jobs",
           "shard": "jobs", "default_baselines": "run",
           "evaluate": "run", "rescore": "run", "run_one": "run", "scenario_folders": "run",
@@ -48,5 +48,6 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = ["Event", "EventKind", "ExecutorKind", "Job", "Outcome", "Refused",
-           "dealt", "default_baselines", "evaluate", "expand", "parse_shard", "refused_results",
-           "rescore", "run_jobs", "run_one", "runnable", "scenario_folders", "score", "shard"]
+           "default_baselines", "evaluate", "expand", "parse_shard", "refused_results",
+           "rescore", "run_jobs", "run_one", "runnable", "scenario_folders", "score", "shard",
+           "shard_labels"]

@@ -12,19 +12,19 @@ from kartci.errors import SpecError
 from kartci.figures import overlay
 from kartci.runner.jobs import REPEAT_PREFIX
 from kartci.runner.outdir import check_inside
-from kartci.runner.run import evaluate, failed_reason, scenario_folders
+from kartci.runner.run import evaluate, scenario_folders
 from kartci.verdict import load
 from kartci.verdict.result import ScenarioResult
 from kartci.verdict.runs import ALPHA, Samples, compare_runs
 
 
-def samples(folder: Path) -> Samples:
+def samples(folder: RunFolder) -> Samples:
     """The judged run's metrics plus those of its repeats (`repeat_<k>/metrics.json`)."""
     repeats = sorted((RunFolder(p.parent) for p in
-                      folder.glob(f"{REPEAT_PREFIX}*/{RunFolder.METRICS_NAME}")),
+                      folder.path.glob(f"{REPEAT_PREFIX}*/{RunFolder.METRICS_NAME}")),
                      key=lambda r: int(re.sub(r"\D", "", r.name) or 0))
     out: Samples = {}
-    for run in [RunFolder(folder), *repeats]:
+    for run in [folder, *repeats]:
         for name, m in run.read_metrics().items():
             entry = out.setdefault(name, {"unit": str(m.get("unit", "")), "values": []})
             entry["values"].append(m.get("value"))
@@ -51,7 +51,7 @@ def compare_outs(base_out: Path, head_out: Path, baselines: Path,
             for label in sorted(set(base) | set(head))]
 
 
-def _one(label: str, b: Path | None, h: Path | None, baselines: Path,
+def _one(label: str, b: RunFolder | None, h: RunFolder | None, baselines: Path,
          alpha: float) -> ScenarioResult:
     """A scenario in one run only: its metrics are all NEW (head) or MISSING (base)."""
     hr = evaluate(h, baselines) if h is not None else None
@@ -60,8 +60,8 @@ def _one(label: str, b: Path | None, h: Path | None, baselines: Path,
         if r is not None and r.error:
             return ScenarioResult(label, r.description, error=f"{side}: {r.error}")
     for side, folder in (("head", h), ("base", b)):
-        for rep in sorted(folder.glob(f"{REPEAT_PREFIX}*")) if folder else []:
-            reason = failed_reason(rep)
+        for rep in sorted(folder.path.glob(f"{REPEAT_PREFIX}*")) if folder else []:
+            reason = RunFolder(rep).failed_reason()
             if reason is not None:  # its stale metrics must not count as a sample
                 return ScenarioResult(label, "", error=f"{side}: {rep.name}: {reason}")
     verdicts = compare_runs(samples(b) if b else {}, samples(h) if h else {},

@@ -32,41 +32,41 @@ from kartci.verdict.result import ScenarioResult
 DEFAULT_REPLICAS = 4  # the run itself and 3 nudged: enough to see a bifurcation, 4x the cost
 
 
-def _run_fact(folder: Path, key: str) -> dict[str, Any]:
+def _run_fact(folder: RunFolder, key: str) -> dict[str, Any]:
     try:
-        run = read_json(RunFolder(folder).run_record)
+        run = read_json(folder.run_record)
     except (OSError, ValueError):
         return {}
     found = run.get(key) if isinstance(run, dict) else None
     return found if isinstance(found, dict) else {}
 
 
-def _variation(folder: Path) -> dict[str, Any]:
+def _variation(folder: RunFolder) -> dict[str, Any]:
     return _run_fact(folder, "variation")
 
 
-def platform_of(folder: Path) -> dict[str, Any]:
+def platform_of(folder: RunFolder) -> dict[str, Any]:
     """Where a run folder's numbers were made (run.json), or {} when it does not say."""
     return _run_fact(folder, "platform")
 
 
-def replica_folders(folder: Path) -> list[Path]:
+def replica_folders(folder: RunFolder) -> list[RunFolder]:
     """The complete start replicas of a scenario folder."""
     out = []
-    for rep in sorted(folder.glob(f"{REPEAT_PREFIX}*")):
-        run = RunFolder(rep)
-        if run.metrics.is_file() and not run.error.exists() and (
+    for path in sorted(folder.path.glob(f"{REPEAT_PREFIX}*")):
+        rep = RunFolder(path)
+        if rep.metrics.is_file() and not rep.error.exists() and (
                 _variation(rep).get("vary") == Vary.START.value):
             out.append(rep)
     return out
 
 
-def spreads(folder: Path) -> dict[str, float | None] | None:
+def spreads(folder: RunFolder) -> dict[str, float | None] | None:
     """Each metric's range over the judged run and its start replicas; None without replicas."""
     reps = replica_folders(folder)
     if not reps:
         return None
-    samples = [RunFolder(f).read_metrics() for f in [folder, *reps]]
+    samples = [f.read_metrics() for f in [folder, *reps]]
     names = sorted(set().union(*samples))
 
     def value(sample: dict[str, dict[str, Any]], name: str) -> float | None:
@@ -76,37 +76,35 @@ def spreads(folder: Path) -> dict[str, float | None] | None:
     return {n: spread([value(s, n) for s in samples]) for n in names}
 
 
-def record(folder: Path) -> dict[str, Any]:
+def record(folder: RunFolder) -> dict[str, Any]:
     """How the spreads of `folder` were measured, for the baseline file."""
     return {"replicas": len(replica_folders(folder)) + 1, "vary": Vary.START.value,
             "step_m": START_STEP_M, "tolerance_at_least": f"{SPREAD_MULTIPLE:g} x spread"}
 
 
-def stack_repeats(folder: Path) -> bool:
+def stack_repeats(folder: RunFolder) -> bool:
     """Whether the replicas of `folder` repeat it unchanged (an external stack's scenario)."""
     return any(_variation(rep).get("step") == 0.0 for rep in replica_folders(folder))
 
 
-def divergence(folder: Path, varied: list[str]) -> str:
+def divergence(folder: RunFolder, varied: list[str]) -> str:
     """Why repeats of an external stack's run differ: the first differing message between the
     run and the first repeat whose metrics differ, and the first tick at which the stack's
     messages arrived in another order."""
     from kartci.logs.diff import DiffOptions, diff_logs  # the log reader, only when needed
 
-    run = RunFolder(folder)
-    mine = run.read_metrics()
+    mine = folder.read_metrics()
     other = next((r for r in replica_folders(folder)
-                  if any(RunFolder(r).read_metrics().get(n) != mine.get(n) for n in varied)),
-                 None)
+                  if any(r.read_metrics().get(n) != mine.get(n) for n in varied)), None)
     if other is None:
         return ""
     where = []
-    first = diff_logs(run.log, RunFolder(other).log, DiffOptions()).first
+    first = diff_logs(folder.log, other.log, DiffOptions()).first
     if first is not None:
         where.append(f"first difference against {other.name}: {first.topic} message "
                      f"{first.index} at t = {first.t_ns * 1e-9:.3f} s")
-    for mine_log in sorted(folder.glob(f"*.{ARRIVALS}")):
-        theirs = other / mine_log.name
+    for mine_log in sorted(folder.path.glob(f"*.{ARRIVALS}")):
+        theirs = other.path / mine_log.name
         if not theirs.is_file():
             continue
         for a, b in zip(mine_log.read_text().splitlines(), theirs.read_text().splitlines(),
@@ -125,7 +123,7 @@ def divergence(folder: Path, varied: list[str]) -> str:
     return "; ".join(where)
 
 
-def stack_warnings(verdicts: list[MetricVerdict], folder: Path) -> list[str]:
+def stack_warnings(verdicts: list[MetricVerdict], folder: RunFolder) -> list[str]:
     """One line for the metrics that differ between repeats of an external stack's run."""
     varied = [v.name for v in verdicts if v.conditioning is Conditioning.ILL]
     if not varied:
@@ -136,7 +134,7 @@ def stack_warnings(verdicts: list[MetricVerdict], folder: Path) -> list[str]:
             "(docs/explain/lockstep.md says what the lockstep cannot order)"]
 
 
-def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioResult:
+def judged(result: ScenarioResult, folder: RunFolder, baselines: Path) -> ScenarioResult:
     """A result judged again with the spreads its own replicas measured (a --conditioning run);
     unchanged without replicas or with an error."""
     measured = spreads(folder) if result.error is None else None
@@ -145,7 +143,7 @@ def judged(result: ScenarioResult, folder: Path, baselines: Path) -> ScenarioRes
     base = load(baselines / f"{result.name}.json")
     entries = None if base is None else {
         name: {**entry, "spread": measured.get(name)} for name, entry in base.items()}
-    verdicts = compare(RunFolder(folder).read_metrics(), entries)
+    verdicts = compare(folder.read_metrics(), entries)
     verdicts = [v if v.baseline is not None or v.name not in measured else
                 _unjudged(v, measured[v.name]) for v in verdicts]
     exact = stack_repeats(folder)
@@ -170,11 +168,11 @@ def _unjudged(v: MetricVerdict, sp: float | None) -> MetricVerdict:
 
 
 def missing_jobs(out: Path, labels: list[str], replicas: int,
-                 recorded: Callable[[Path], Job]) -> list[Job]:
+                 recorded: Callable[[RunFolder], Job]) -> list[Job]:
     """The start replicas still to run so that each label has `replicas` samples."""
     jobs = []
     for label in simulated(out, labels):
-        folder = out / label
+        folder = RunFolder(out / label)
         have = {int(p.name.removeprefix(REPEAT_PREFIX)) for p in replica_folders(folder)
                 if p.name.removeprefix(REPEAT_PREFIX).isdigit()}
         need = [k for k in range(1, replicas) if k not in have]
@@ -187,13 +185,13 @@ def missing_jobs(out: Path, labels: list[str], replicas: int,
 def simulated(out: Path, labels: list[str]) -> list[str]:
     """The labels whose folders kartci simulated (an imported or scored real log has nothing
     to replicate: its spread is not measured)."""
-    return [label for label in labels if platform_of(out / label)]
+    return [label for label in labels if platform_of(RunFolder(out / label))]
 
 
 def check_complete(out: Path, labels: list[str], replicas: int) -> None:
     """Every simulated label has its replicas (after running them): else nothing is written."""
     for label in simulated(out, labels):
-        n = len(replica_folders(out / label)) + 1
+        n = len(replica_folders(RunFolder(out / label))) + 1
         if n < replicas:
             raise BaselineError(f"{label}: {n} of {replicas} conditioning replicas finished; "
                                 "nothing written (see the replicas' error.json)")

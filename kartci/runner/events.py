@@ -11,7 +11,6 @@ from enum import StrEnum
 
 from kartci.core import RunFolder
 from kartci.runner.jobs import Context, Job, Outcome
-from kartci.runner.run import mark_failed
 
 
 class EventKind(StrEnum):
@@ -38,9 +37,9 @@ Listener = Callable[[Event], None]
 def lost(job: Job, ctx: Context, error: str) -> Outcome:
     """A job whose process died: its folder is marked failed here, since the dead process
     could not (its own unfinished mark says no more than that it did not finish)."""
-    folder = ctx.out / job.folder
-    if folder.is_dir():
-        mark_failed(folder, job.label, error)
-        for stage in RunFolder(folder).stages():  # its half-written run: nobody owns it
+    folder = RunFolder(ctx.out / job.folder)
+    if folder.path.is_dir():
+        folder.mark_failed(job.label, error)
+        for stage in folder.stages():  # its half-written run: nobody owns it
             shutil.rmtree(stage, ignore_errors=True)
     return Outcome.failed(job, error)

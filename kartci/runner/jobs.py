@@ -24,7 +24,8 @@ from types import FrameType
 from typing import Any
 
 from kartci import project
-from kartci.errors import PluginError, RunError, SpecError
+from kartci.core import RunFolder
+from kartci.errors import PluginError, RunError, SpecError, one_line
 from kartci.figures import Plots
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
@@ -36,7 +37,7 @@ from kartci.runner.run import (
 from kartci.scenario import Scenario, load_scenario
 from kartci.scenario.load import scenario_loader
 from kartci.scenario.yamlio import clip
-from kartci.verdict.result import ScenarioResult, one_line
+from kartci.verdict.result import ScenarioResult
 
 REPEAT_PREFIX = "repeat_"
 START_STEP_M = 1e-9  # replica k starts k x 1 nm to the left: far below anything physical
@@ -304,11 +305,11 @@ def parse_shard(text: str) -> tuple[int, int]:
 def shard(jobs: list[Job], index: int, total: int) -> list[Job]:
     """Shard `index` of `total` (1-based): labels sorted by name, dealt round-robin, so every
     shard gets the same count (±1) and a label with its repeats stays on one shard."""
-    mine = dealt({j.label for j in jobs}, index, total)
+    mine = shard_labels({j.label for j in jobs}, index, total)
     return [j for j in jobs if j.label in mine]
 
 
-def dealt(labels: set[str], index: int, total: int) -> set[str]:
+def shard_labels(labels: set[str], index: int, total: int) -> set[str]:
     """The labels of shard `index` of `total`: sorted, dealt round-robin."""
     return {label for i, label in enumerate(sorted(labels)) if i % total == index - 1}
 
@@ -360,15 +361,16 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
             sim_t[1] = t
             report(job.folder, t)
 
+    folder = RunFolder(ctx.out / job.folder)
     try:
         with wall_clock_limit(ctx.timeout_s, where):
-            run = run_one(job.spec, ctx.out, progress, ctx.out / job.folder,
+            run = run_one(job.spec, ctx.out, progress, folder,
                           facts={"variation": job.variation})
     except (Exception, SystemExit) as err:  # a crashing controller (or one calling sys.exit)
         return Outcome.failed(job, one_line(failure_text(err)))  # must not end the suite
     if job.repeat != 0:
         return Outcome(job, None, None, run, time.perf_counter() - start)
-    result = evaluate(ctx.out / job.folder, ctx.baselines)
+    result = evaluate(folder, ctx.baselines)
     if result.plots is not None and ctx.draw is not None:
         result = replace(result, static_figures=ctx.draw(result.plots))
     if ctx.strict:

@@ -15,7 +15,7 @@ from kartci.core import UNFINISHED, RunFolder
 from kartci.errors import SpecError
 from kartci.runner.gate import require_baselines
 from kartci.runner.outdir import check_inside, valid_label
-from kartci.runner.run import evaluate, mark_failed, scenario_folders
+from kartci.runner.run import evaluate, scenario_folders
 from kartci.verdict import read_json, write_json_atomic
 from kartci.verdict.judging import check_allowed
 from kartci.verdict.result import ScenarioResult
@@ -121,20 +121,20 @@ def merge(dirs: list[Path], out: Path, baselines: Path,
     out.mkdir(parents=True, exist_ok=True)
     check_inside(out, sources)
     for label, src in sources.items():
-        dst = out / label
-        if dst.is_dir() and (src is None or src.resolve() != dst.resolve()):
-            mark_failed(dst, label, UNFINISHED)
+        dst = RunFolder(out / label)
+        if dst.path.is_dir() and (src is None or src.resolve() != dst.path.resolve()):
+            dst.mark_failed(label, UNFINISHED)
     root = out.resolve()
     results = []
     for label, src in sorted(sources.items()):
         if src is None:
             results.append(ScenarioResult(label, "", error="its shard wrote no result"))
             continue
-        dst = out / label
-        if dst.resolve().parent != root:
+        dst = RunFolder(out / label)
+        if dst.path.resolve().parent != root:
             raise SpecError(f"{label}: would be written outside {out}")
-        if src.resolve() != dst.resolve():
-            _replace_tree(src, dst)
+        if src.resolve() != dst.path.resolve():
+            _replace_tree(src, dst.path)
         result = evaluate(dst, baselines)
         results.append(require_baselines(result, out, baselines) if strict else result)
     write_marker(out, None, None, [])
@@ -148,7 +148,7 @@ def _replace_tree(src: Path, dst: Path) -> None:
     try:
         stages = shutil.ignore_patterns(f"{RunFolder.STAGE_PREFIX}*")
         shutil.copytree(src, tmp / "new", ignore=stages)
-        _relocate_log(tmp / "new", dst)
+        _relocate_log(RunFolder(tmp / "new"), dst)
         if dst.is_symlink() or dst.is_file():
             dst.unlink()
         elif dst.exists():
@@ -158,15 +158,14 @@ def _replace_tree(src: Path, dst: Path) -> None:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _relocate_log(folder: Path, final: Path) -> None:
+def _relocate_log(folder: RunFolder, final: Path) -> None:
     """Point run.json's `log` at where the folder will be (`final`)."""
-    for run_json in [RunFolder(folder).run_record,
-                     *folder.glob(f"*/{RunFolder.RUN_RECORD_NAME}")]:
+    for run_json in [folder.run_record, *folder.path.glob(f"*/{RunFolder.RUN_RECORD_NAME}")]:
         try:
             doc = read_json(run_json)
         except (OSError, ValueError):
             continue
         if isinstance(doc, dict) and "log" in doc:
-            where = final / run_json.parent.relative_to(folder)
+            where = final / run_json.parent.relative_to(folder.path)
             doc["log"] = str(where / Path(str(doc["log"])).name)
             write_json_atomic(run_json, doc)

@@ -12,7 +12,6 @@ from kartci.runner.events import Event, Listener
 from kartci.runner.executors import Warm, execute
 from kartci.runner.jobs import REPEAT_PREFIX, Context, Draw, Job, Outcome, Refused, Vary
 from kartci.runner.kinds import ExecutorKind
-from kartci.runner.run import mark_failed
 from kartci.verdict.result import ScenarioResult
 
 
@@ -36,8 +35,9 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
     pass for one of this command's (report, compare and baseline update refuse marked ones)."""
     emit = on_event or _ignore
     for job in jobs:
-        if (out / job.folder).is_dir():
-            mark_failed(out / job.folder, job.spec.name, UNFINISHED)
+        folder = RunFolder(out / job.folder)
+        if folder.path.is_dir():
+            folder.mark_failed(job.spec.name, UNFINISHED)
     ctx = Context(out, baselines, timeout_s, strict, draw)
     outcomes: dict[str, Outcome] = {}
     for outcome in execute(costs.order(jobs), ctx, emit, workers, executor, ray_address, warm):
@@ -53,10 +53,11 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
             o = failed[0]
             result = ScenarioResult(job.label, job.spec.description,
                                     error=f"{o.job.folder} (seed {o.job.spec.seed}): {o.error}")
+        folder = RunFolder(out / job.label)
         if main.error is None:
-            _drop_stale_repeats(out / job.label, {o.job.folder.rsplit("/", 1)[-1] for o in mine})
+            _drop_stale_repeats(folder, {o.job.folder.rsplit("/", 1)[-1] for o in mine})
         if job.vary is Vary.START and len(mine) > 1:
-            result = conditioning.judged(result, out / job.label, baselines)
+            result = conditioning.judged(result, folder, baselines)
         results.append(result)
     return results
 
@@ -66,17 +67,17 @@ def refused_results(refused: list[Refused], out: Path) -> list[ScenarioResult]:
     plugin's own traceback in traceback.txt (the message names the plugin and its error)."""
     results = []
     for r in refused:
-        folder = out / r.label
-        folder.mkdir(parents=True, exist_ok=True)
-        mark_failed(folder, r.label, str(r.error))
+        folder = RunFolder(out / r.label)
+        folder.path.mkdir(parents=True, exist_ok=True)
+        folder.mark_failed(r.label, str(r.error))
         if r.error.trace:
-            write_text_atomic(RunFolder(folder).traceback, r.error.trace)
+            write_text_atomic(folder.traceback, r.error.trace)
         results.append(ScenarioResult(r.label, "", error=str(r.error)))
     return results
 
 
-def _drop_stale_repeats(folder: Path, keep: set[str]) -> None:
+def _drop_stale_repeats(folder: RunFolder, keep: set[str]) -> None:
     """Repeats of an earlier run with a larger --repeat would pollute `compare`'s samples."""
-    for old in folder.glob(f"{REPEAT_PREFIX}*"):
+    for old in folder.path.glob(f"{REPEAT_PREFIX}*"):
         if old.is_dir() and old.name not in keep:
             shutil.rmtree(old)

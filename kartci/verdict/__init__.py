@@ -24,9 +24,9 @@ from kartci.verdict.baseline import (
     worst,
     write_json_atomic,
 )
-from kartci.verdict.result import RunResult, ScenarioResult, exit_code, one_line
+from kartci.verdict.result import RunResult, ScenarioResult, exit_code
 
 __all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Baseline", "Change", "Conditioning", "CriterionResult",
            "MetricVerdict", "Policy", "RunResult", "ScenarioResult", "Status", "check_criteria",
-           "compare", "exit_code", "ill_conditioned", "load", "loosened", "one_line", "police",
+           "compare", "exit_code", "ill_conditioned", "load", "loosened", "police",
            "read_baseline", "read_json", "spread", "update", "worst", "write_json_atomic"]

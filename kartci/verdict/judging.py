@@ -11,7 +11,7 @@ from typing import Any
 
 from kartci import portable, project
 from kartci.core import Metric, RunFolder, definitions
-from kartci.errors import SpecError
+from kartci.errors import SpecError, one_line
 from kartci.project import did_you_mean
 from kartci.scenario.models import Scenario
 from kartci.verdict import criteria, fingerprint
@@ -26,7 +26,7 @@ from kartci.verdict.baseline import (
     read_baseline,
     read_json,
 )
-from kartci.verdict.result import ScenarioResult, one_line
+from kartci.verdict.result import ScenarioResult
 
 UNPINNED = ("this Python process was not started pinned (numpy or the process came before "
             "`import kartci`) and agent objects run here: last bits may differ from `kartci run`; "

@@ -168,12 +168,6 @@ def _num(x: float | None, unit: str) -> str:
 RunResult = ScenarioResult  # the Python API's name for it (kartci.RunResult)
 
 
-def one_line(text: str, limit: int = 500) -> str:
-    """User text for a one-line message: control characters and newlines become spaces."""
-    flat = " ".join("".join(c if c.isprintable() else " " for c in text).split())
-    return flat if len(flat) <= limit else flat[:limit - 1] + "…"
-
-
 def exit_code(results: list[ScenarioResult]) -> int:
     """0 all pass, 1 a regression or a failed criterion, 2 a run error."""
     if any(r.status is Status.ERROR for r in results):

@@ -14,9 +14,8 @@ from helpers import kartci
 
 import kartci as api
 from kartci import SpecError
-from kartci.core import UNFINISHED
+from kartci.core import UNFINISHED, RunFolder
 from kartci.logs import header, msg
-from kartci.runner.run import mark_failed
 from kartci.verdict import Status
 
 QUICK = ("duration_s=3", "metrics.line_tracking.transient_s=1", "criteria={}")
@@ -70,7 +69,7 @@ def test_an_unacceptable_run_is_refused_before_anything_is_written(tmp_path: Pat
     with pytest.raises(SpecError, match=r"driven by agent objects \(lt0: test_accept.Straight"
                                         r"\), which conditioning replicas cannot re-create"):
         api.accept_baselines(result, baselines=base, replicas=2)
-    mark_failed(result.folder, "line_straight", UNFINISHED)  # as a Ctrl-C leaves it
+    RunFolder(result.folder).mark_failed("line_straight", UNFINISHED)  # as a Ctrl-C leaves it
     with pytest.raises(SpecError, match=r"line_straight: not finished in .* \(the command that "
                                         r"selected it was interrupted\)"):
         api.accept_baselines(result, baselines=base, replicas=0)

@@ -181,6 +181,29 @@ def test_the_kartci_run_fixture_returns_results_for_my_asserts(
     result.assert_outcomes(passed=2)
 
 
+def test_kartci_shard_deals_the_scenario_items_into_shares_that_merge(
+        project: pytest.Pytester) -> None:
+    """`--kartci-shard I/N` deals the items as `kartci run --shard` deals scenarios, and with
+    `--kartci-out` each share's DIR is a partial result `kartci.merge` joins."""
+    import kartci
+
+    (project.path / "scenarios" / "line_circle.yaml").write_text(
+        _scenario(world="line_lab/circle", description="a circle, short", criteria={}))
+    for i in (1, 2):
+        result = project.runpytest(*PLUGIN, "scenarios/", "--kartci-shard", f"{i}/2",
+                                   "--kartci-out", f"s{i}")
+        result.assert_outcomes(passed=1, deselected=1)
+    assert json.loads((project.path / "s1" / "shard.json").read_text()) == {
+        "index": 1, "total": 2, "scenarios": ["line_circle"]}
+    merged = kartci.merge([project.path / "s1", project.path / "s2"],
+                          out=project.path / "merged", baselines=project.path / "baselines")
+    assert [r.name for r in merged.results] == ["line_circle", "line_straight"]
+    assert merged.passed
+    result = project.runpytest(*PLUGIN, "scenarios/", "--kartci-shard", "3/2")
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    assert "--kartci-shard '3/2': expected I/N with 1 <= I <= N" in result.stderr.str()
+
+
 @pytest.mark.long(reason="pytest under xdist in a subprocess")
 def test_scenario_items_and_the_fixture_run_under_xdist(project: pytest.Pytester) -> None:
     pytest.importorskip("xdist")

@@ -10,6 +10,7 @@ import pytest
 from conftest import changed
 from helpers import kartci
 
+from kartci.core import RunFolder
 from kartci.errors import SpecError
 from kartci.realdata.calibrate import Objective, parse_params
 from kartci.realdata.drive import read_drive
@@ -66,7 +67,7 @@ def test_simreal_command_writes_a_judged_report(kart_logs: dict[float, Path], ka
     base = json.loads(path.read_text(encoding="utf-8"))
     base["metrics"]["simreal_ape_window_rmse_m"]["value"] = m["simreal_ape_window_rmse_m"] / 10
     path.write_text(json.dumps(base), encoding="utf-8")
-    assert evaluate(out / "synth_kart_simreal", baselines).status is Status.REGRESSED
+    assert evaluate(RunFolder(out / "synth_kart_simreal"), baselines).status is Status.REGRESSED
 
 
 def test_unknown_parameter_is_refused(kart_profile: Path) -> None:
