@@ -1,8 +1,11 @@
+"""The line lab's courses: offsets, progress, poses and ink, each shape its own."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from kartci.core.course import Course
 from kartci.worlds.line_lab import CircleCourse, StraightCourse
 
 
@@ -35,3 +38,15 @@ def test_ink_coverage_antialiases_edges() -> None:
     pts = np.array([[0.5, 0.0], [0.5, 0.007], [0.5, 0.02]])
     cov = c.ink_coverage(0.014, pts[:, 0], pts[:, 1], pixel_m=0.002)
     assert cov == pytest.approx([1.0, 0.5, 0.0])
+
+
+def test_both_shapes_answer_what_shared_code_asks_of_a_course() -> None:
+    """Kind-neutral code asks `kartci.core.course.Course`; each shape answers it, and says
+    itself whether robots finish past an end."""
+    straight, circle = StraightCourse(), CircleCourse()
+    assert isinstance(straight, Course) and isinstance(circle, Course)
+    assert (straight.closed, circle.closed) == (False, True)
+    assert straight.polyline().shape == (2, 2)
+    ring = circle.polyline(50)
+    assert ring.shape == (50, 2) and ring[0] == pytest.approx(ring[-1])
+    assert straight.pose_at(0.0, 0.0) == pytest.approx(straight.start_pose())
