@@ -32,10 +32,10 @@ import numpy as np
 from kartci import portable
 from kartci.bench import Better, Record
 from kartci.scenario import load_scenario
-from kartci.scenario.models import HallWorld
 from kartci.sim import lidar, parts, simulate
-from kartci.sim.hall import Hall as World
-from kartci.sim.hall import blocks
+from kartci.worlds.hall import HallWorld
+from kartci.worlds.hall.world import Hall as World
+from kartci.worlds.hall.world import blocks
 
 RUNS: tuple[tuple[str, str, list[str]], ...] = (
     ("kart_manual, no lidar", "kart_manual", []),

@@ -30,11 +30,11 @@ from kartci.pointcloud import read_ply
 from kartci.robots.gokart.noise import distorted_scan
 from kartci.scenario import load_scenario
 from kartci.scenario.load import load_world
-from kartci.scenario.models import HallWorld
 from kartci.sim import lidar, simulate
 from kartci.sim.body import BodyState
-from kartci.sim.hall import blocks
-from kartci.track import load_track
+from kartci.worlds.hall import HallWorld
+from kartci.worlds.hall.world import blocks
+from kartci.worlds.track import load_track
 
 V, W, H = 6.0, 0.5, 1.28
 VLP16 = lidar.MODELS["vlp16"]

@@ -107,6 +107,63 @@ def test_no_module_outside_the_kinds_names_one() -> None:
     assert kind_mentions(kind_names()) == []
 
 
+WORLDS = ROOT / "worlds"
+
+
+def world_kind_names(root: Path = WORLDS) -> list[str]:
+    """kartci's own world kinds: the packages in kartci/worlds/ that export a `WORLD` (the
+    others, like `track`, hold what several kinds share)."""
+    return sorted(p.parent.name for p in root.glob("*/__init__.py")
+                  if any(isinstance(n, ast.Assign) and [ast.unparse(t) for t in n.targets]
+                         == ["WORLD"] for n in ast.parse(p.read_text(encoding="utf-8")).body))
+
+
+def world_kind_imports(kinds: list[str], root: Path = ROOT) -> list[str]:
+    """Every import of a world kind's package (`kartci.worlds.<kind>...`) from outside it,
+    robot kinds aside (a robot built for one world, the line tracker for the line lab, may know
+    it), with its file and line."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root)
+        if rel.parts[0] == "robots":
+            continue
+        for n in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(n, ast.Import | ast.ImportFrom):
+                continue
+            names = ([a.name for a in n.names] if isinstance(n, ast.Import) else
+                     [n.module or ""])
+            for name in names:
+                parts = name.split(".")
+                if (parts[:2] == ["kartci", "worlds"] and len(parts) > 2 and parts[2] in kinds
+                        and rel.parts[:2] != ("worlds", parts[2])):
+                    found.append(f"kartci/{rel.as_posix()}:{n.lineno}: {name}")
+    return found
+
+
+def test_no_shared_module_imports_a_world_kind() -> None:
+    """Kind-neutral code learns a world from its registered `WorldKind` (and what the track
+    worlds share from `kartci.worlds.track`), never from one kind's package (issue 41)."""
+    assert world_kind_names() == ["circuit", "hall", "line_lab"]  # what the scan looks for
+    assert world_kind_imports(world_kind_names()) == []
+
+
+def test_the_world_kind_scan_finds_what_it_looks_for(tmp_path: Path) -> None:
+    """The scan is not vacuous: an import of a kind from shared code is caught; a kind's own
+    import of itself, a robot kind's, and an import of the shared track package are not."""
+    for folder in ("worlds/line_lab", "robots/line_tracker", "sim"):
+        (tmp_path / folder).mkdir(parents=True)
+    (tmp_path / "worlds/line_lab/__init__.py").write_text("WORLD = None\n")
+    (tmp_path / "worlds/line_lab/world.py").write_text(
+        "from kartci.worlds.line_lab.course import StraightCourse\n")
+    (tmp_path / "robots/line_tracker/robot.py").write_text(
+        "from kartci.worlds.line_lab import LineLabWorld\n")
+    (tmp_path / "sim/mod.py").write_text("from kartci.worlds.track import Track\n"
+                                         "import kartci.worlds.line_lab.world\n")
+    assert world_kind_names(tmp_path / "worlds") == ["line_lab"]
+    assert world_kind_imports(["line_lab"], tmp_path) == [
+        "kartci/sim/mod.py:2: kartci.worlds.line_lab.world"]
+
+
 def test_the_kind_scan_finds_what_it_looks_for(tmp_path: Path) -> None:
     """The scan is not vacuous: an import, a string and an identifier are each caught; a
     declared re-export and a word that merely contains a kind's name are not."""

@@ -4,7 +4,7 @@
     python tools/layers.py --late     # also list each import made inside a function
     python tools/layers.py --levels   # the packages by level, top to bottom (no cycle: arrows down)
 
-A package is a subpackage of kartci (`kartci.runner`) or a top-level module (`kartci.track`);
+A package is a subpackage of kartci (`kartci.runner`) or a top-level module (`kartci.atomic`);
 `kartci` itself is the package's `__init__.py`. An import inside a function counts as an edge
 too: it is a dependency all the same, only a late one. tests/test_layers.py asserts the result.
 """
@@ -31,7 +31,7 @@ class Edge:
 
 
 def package_of(module: str) -> str:
-    """`kartci.runner.jobs` -> `kartci.runner`; `kartci.track` -> `kartci.track`."""
+    """`kartci.runner.jobs` -> `kartci.runner`; `kartci.atomic` -> `kartci.atomic`."""
     parts = module.split(".")
     if len(parts) == 1:
         return "kartci"

@@ -25,7 +25,10 @@ def map_(
 ) -> None:
     """Build a world's point-cloud map (PLY, world frame, m) from a mapping run of the simulated
     lidar along its track: the map a localization node registers scans against."""
-    from kartci.sim.mapping import MapRun, save_map  # CLI start-up: PyBullet, scipy (+0.8 s)
+    from kartci.worlds.track.mapping import (  # CLI start-up: PyBullet, scipy (+0.8 s)
+        MapRun,
+        save_map,
+    )
 
     params, path = load_world(world)
     target = out if out is not None else path.with_name(f"{path.stem}_map.ply")

@@ -23,7 +23,7 @@ from kartci.localization.params import LocalizationParams
 from kartci.localization.registration import MapMatcher, Match, pose_matrix
 from kartci.logs.types import WORLD_FRAME, header, msg, stamp_ns
 from kartci.pointcloud import cloud_xyz
-from kartci.track import TRACK_TOPIC, track_from_text
+from kartci.worlds.track import TRACK_TOPIC, track_from_text
 
 SCAN_RATE_HZ = 10.0  # the revolution time deskewing assumes when the header gives none
 

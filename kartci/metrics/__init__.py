@@ -27,7 +27,7 @@ from kartci.scenario import Scenario, scenario_from_json
 if TYPE_CHECKING:  # pandas, the log readers and scipy load when a log is scored, not before
     import pandas as pd
 
-    from kartci.track import Track
+    from kartci.worlds.track import Track
 
 T = TypeVar("T")
 
@@ -105,8 +105,8 @@ def recorded_scenario(log_tables: Mapping[str, Any], path: Path) -> Scenario:
 
 def recorded_track(log_tables: Mapping[str, Any], path: Path) -> Track:
     """The track a run log recorded on /kartci/track, so laps are scored from the log alone."""
-    # start-up: kartci.track brings scipy (+0.3 s), needed once a log's laps are scored
-    from kartci.track import TRACK_TOPIC, track_from_text
+    # start-up: kartci.worlds.track brings scipy (+0.3 s), needed once a log's laps are scored
+    from kartci.worlds.track import TRACK_TOPIC, track_from_text
 
     table = log_tables.get(TRACK_TOPIC)
     if table is None or getattr(table, "empty", True):

@@ -23,7 +23,7 @@ from kartci.logs.reader import messages
 from kartci.logs.types import stamp_ns
 from kartci.metrics import ScoreContext, outline_of
 from kartci.metrics.outline import bounds
-from kartci.track import OBSTACLES_TOPIC
+from kartci.worlds.track import OBSTACLES_TOPIC
 
 
 class DetectionMetricsParams(MetricParams):

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from kartci.track import Track
+from kartci.worlds.track import Track
 
 
 def kart_track(track: Track, odom: pd.DataFrame) -> pd.DataFrame:

@@ -32,7 +32,7 @@ from kartci.realdata.tfchain import TF_TYPES, TfTree
 from kartci.scenario import Scenario
 from kartci.scenario.dispatch import context
 from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
-from kartci.track import TRACK_TOPIC
+from kartci.worlds.track import TRACK_TOPIC
 
 # where each role's messages go, relative to the robot's namespace (commands by type)
 COMMAND_TOPIC = {"ackermann_msgs/msg/AckermannDriveStamped": "ackermann_cmd",

@@ -39,7 +39,7 @@ from kartci.realdata.lidardetect import (
     lidar_mount,
 )
 from kartci.realdata.profile import Profile, resolve_profile
-from kartci.track import TRACK_TOPIC
+from kartci.worlds.track import TRACK_TOPIC
 
 MAP_VOXEL_M = 0.05  # a small robot's scans: a few cm between points
 

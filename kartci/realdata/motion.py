@@ -14,7 +14,7 @@ from kartci.core import Direction, Metric, MetricDef
 from kartci.metrics import ScoreContext
 from kartci.metrics.defs import DEFS
 from kartci.metrics.progress import kart_track, lap_crossings
-from kartci.track import TRACK_TOPIC, track_from_text
+from kartci.worlds.track import TRACK_TOPIC, track_from_text
 
 MOTION_DEFS = {
     "duration_s": MetricDef("s", Direction.EQUAL, 0.5, 0.02, "time from the first pose to the "

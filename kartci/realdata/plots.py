@@ -9,7 +9,7 @@ import pandas as pd
 from kartci.figures import PlotContext, Plots
 from kartci.metrics.progress import kart_track
 from kartci.realdata.divergence import SIM_WHOLE, SIM_WINDOWS
-from kartci.track import TRACK_TOPIC, track_from_text
+from kartci.worlds.track import TRACK_TOPIC, track_from_text
 
 
 def path_frame(odom: pd.DataFrame, t0: float) -> pd.DataFrame:

@@ -10,23 +10,13 @@ from kartci.scenario.load import (
     scenario_names,
     with_overrides,
 )
-from kartci.scenario.models import (
-    AgentSpec,
-    CircleCourse,
-    Criterion,
-    LineLabWorld,
-    Scenario,
-    StraightCourse,
-)
+from kartci.scenario.models import AgentSpec, Criterion, Scenario
 
 __all__ = [
     "AgentSpec",
-    "CircleCourse",
     "Criterion",
-    "LineLabWorld",
     "Scenario",
     "ScenarioEntry",
-    "StraightCourse",
     "json_schema",
     "load_scenario",
     "project_root",

@@ -6,12 +6,13 @@ import contextlib
 import copy
 import json
 import os
+import typing
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from kartci import core, project
 from kartci.errors import KartciError, SpecError
@@ -306,14 +307,15 @@ def _item_index(items: list[Any], part: str, where: str) -> int:
 
 
 def _one_line(errors: list[dict[str, Any]], path: Path, overrides: list[str], marks: Marks,
-              prefix: tuple[str | int, ...] = ()) -> str:
+              registries: core.Registries, prefix: tuple[str | int, ...] = ()) -> str:
     """The first validation error as `file:LINE:COLUMN: dotted.key: problem` for a value from
     a file (the key as written in that file: a world's, a model's), or `file: dotted.key
     (from --set): problem (got value)`; the value only when it came from `--set`."""
     first = errors[0]
     parts = [str(p) for p in (*prefix, *first.get("loc", ()))]
-    # a discriminated union (a line course) puts its tag into the location: not a key
-    keys = [p for p in parts if not p.startswith(("function-", "tagged")) and p not in COURSE_TAGS]
+    # a discriminated union (a world's course shape) puts its tag into the location: not a key
+    tags = union_tags(registries)
+    keys = [p for p in parts if not p.startswith(("function-", "tagged")) and p not in tags]
     head, loc = _place(keys, path, overrides, marks)
     source = " (from --set)" if _set_by(loc, overrides) >= 0 else ""
     msg = clip(first["msg"].removeprefix("Value error, "))
@@ -356,7 +358,41 @@ def _set_by(loc: str, overrides: list[str]) -> int:
                 or loc.startswith(f"{k}.")), default=-1)
 
 
-COURSE_TAGS = ("straight", "circle")
+def union_tags(registries: core.Registries) -> frozenset[str]:
+    """The tags of the discriminated unions in every registered world kind's parameters (the
+    line lab's `straight` and `circle` courses, a plugin world's own): what pydantic writes
+    into an error's location between two keys. Read from the kinds' models, so a world added by
+    a plugin needs no list here."""
+    found: set[str] = set()
+    for kind in registries.worlds.all():
+        _tags_in(kind.params, found, set())
+    return frozenset(found)
+
+
+def _tags_in(annotation: Any, found: set[str], seen: set[Any]) -> None:
+    """Collect discriminated-union tags from a type annotation (models, unions, containers)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        if annotation in seen:
+            return
+        seen.add(annotation)
+        for field in annotation.model_fields.values():
+            if isinstance(field.discriminator, str):
+                for member in typing.get_args(_unannotated(field.annotation)):
+                    tag = member.model_fields.get(field.discriminator) if (
+                        isinstance(member, type) and issubclass(member, BaseModel)) else None
+                    found.update(str(v) for v in typing.get_args(tag.annotation if tag else None))
+            _tags_in(field.annotation, found, seen)
+        return
+    for arg in typing.get_args(annotation):
+        _tags_in(arg, found, seen)
+
+
+def _unannotated(annotation: Any) -> Any:
+    """`Annotated[X, ...]` -> X."""
+    return typing.get_args(annotation)[0] if typing.get_origin(annotation) is Annotated else (
+        annotation)
+
+
 BOUNDS = {"greater_than": "more than", "greater_than_equal": "at least",
           "less_than": "less than", "less_than_equal": "at most"}  # pydantic's error types
 
@@ -436,10 +472,11 @@ def _validated(data: dict[str, Any], path: Path, overrides: list[str],
     try:
         return Scenario.model_validate(data, context=context(registries))
     except ParamsError as err:
-        raise SpecError(_one_line(err.errors, path, overrides, marks, err.loc)) from err
+        raise SpecError(_one_line(err.errors, path, overrides, marks, registries,
+                                  err.loc)) from err
     except ValidationError as err:
         raise SpecError(_one_line(with_allowed_keys(Scenario, err), path, overrides,
-                                  marks)) from err
+                                  marks, registries)) from err
     except (ArithmeticError, RecursionError) as err:  # a validator's arithmetic on odd values
         raise SpecError(f"{path}: a value is out of range ({clip(str(err))})") from err
 

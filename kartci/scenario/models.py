@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Any, Literal
+from typing import Any
 
 from pydantic import (
     Field,
@@ -16,7 +16,7 @@ from pydantic import (
 
 from kartci.core.params import Angle_rad as Angle_rad
 from kartci.core.params import ControllerParams as ControllerParams
-from kartci.core.params import Distance_m, Duration_s, Friction, Period_s, Size_m
+from kartci.core.params import Distance_m, Duration_s, Period_s
 from kartci.core.params import Frozen as Frozen
 from kartci.core.params import Length_m as Length_m
 from kartci.core.params import MetricParams as MetricParams
@@ -39,144 +39,6 @@ def unit_of(key: str) -> str:
     if key.endswith("_per_sqrt_s"):
         return f"{unit_of(key.removesuffix('_per_sqrt_s'))}/sqrt(s)"
     return next((unit for suffix, unit in UNITS.items() if key.endswith(suffix)), "")
-
-
-# --- worlds -----------------------------------------------------------------------------------
-
-
-class StraightCourse(Frozen):
-    """A straight black line from `start_m` to `end_m`."""
-
-    type: Literal["straight"] = Field("straight", description="course shape: a straight line")
-    start_m: Point_m = Field((0.0, 0.0), description="start of the line's axis, (x, y) in m, "
-                             "world frame; the robot drives from here")
-    end_m: Point_m = Field((2.5, 0.0), description="end of the line's axis, (x, y) in m, world "
-                           "frame (the seed's straight test line)")
-
-    @model_validator(mode="after")
-    def _has_length(self) -> StraightCourse:
-        if (self.end_m[0] - self.start_m[0]) ** 2 + (self.end_m[1] - self.start_m[1]) ** 2 < 1e-4:
-            raise ValueError("end_m must be at least 0.01 m from start_m")
-        return self
-
-
-class CircleCourse(Frozen):
-    """A closed circular black line, driven counter-clockwise from angle `start_rad`."""
-
-    type: Literal["circle"] = Field("circle", description="course shape: a closed circle")
-    center_m: Point_m = Field((0.0, 0.0), description="centre of the circle, (x, y) in m, world "
-                              "frame")
-    radius_m: float = Field(1.0, gt=0.05, le=1e6, description="radius of the line's axis, m "
-                            "(seed 001 Sec. 7.2 does not give it; line_lab/circle uses 0.362 m)")
-    start_rad: Angle_rad = Field(-1.5707963267948966, description="polar angle of the start "
-                                 "point about the centre, rad (-pi/2: the bottom of the circle, "
-                                 "heading +x)")
-
-
-Course = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]
-
-
-class Box(Frozen):
-    """A static box obstacle standing on the floor."""
-
-    center_m: Point_m = Field(description="centre of the box's footprint, (x, y) "
-                                          "in m, world frame")
-    size_m: tuple[Size_m, Size_m, Size_m] = Field((0.1, 0.1, 0.1), description="edge lengths "
-                                               "(x, y, z) in m, before the yaw rotation")
-    yaw_rad: Angle_rad = Field(0.0, description="rotation about the vertical axis, rad, "
-                               "counter-clockwise")
-
-
-class LineLabWorld(WorldParams):
-    """White floor with one black line (seed 001, Sec. 5.2.1), plus optional obstacles."""
-
-    kind: Literal["line_lab"] = Field("line_lab", description="world kind: the line lab")
-    description: str = Field("", description="one line about the world, shown in reports")
-    line_width_m: float = Field(0.014, gt=0.0, lt=0.2, description="width of the black line, "
-                                "m (14 mm: with the 14.5 mm camera height, the seed's Eq. 5.2 "
-                                "dead-zone field of view of 1.38 rad)")
-    light_level: float = Field(
-        0.571, gt=0.0, le=1.0,
-        description="luminance of the white floor as the line cameras see it (0-1, Eq. 5.1); "
-        "calibrated so that the sensor sweep gives the seed's slope, Eq. 6.12 (39.4 per m)",
-    )
-    floor_friction: Friction = Field(1.0, description="Coulomb friction coefficient of "
-                                     "the floor (dimensionless); seed 001 Sec. 5.6: no slip")
-    course: Course = Field(description="the black line: `{type: straight, ...}` or "
-                           "`{type: circle, ...}`")
-    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (the sonar "
-                                       "sees them, seed 001 Sec. 5.3)")
-
-
-class FloorZone(Frozen):
-    """A rectangle of floor with its own friction coefficient (mu = pull force / weight)."""
-
-    name: str = Field(description="name of the surface, e.g. `coated`")
-    min_m: Point_m = Field(description="lower-left corner (x, y), m, world frame")
-    max_m: Point_m = Field(description="upper-right corner (x, y), m, world frame")
-    friction: Friction = Field(description="friction coefficient mu = pull force / "
-                               "weight (seed 000 Sec. 4.2; REFERENCE.md: about 0.6 for a coated "
-                               "floor)")
-
-
-class TrackWorldParams(WorldParams):
-    """What every world around a closed race track has (each kind documents its own)."""
-
-    track: str = Field(description="closed track, TUMFTM CSV on the project's world path")
-    floor_friction: Friction = Field(0.9, description="friction coefficient of the floor")
-    zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
-    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor")
-
-
-class HallWorld(TrackWorldParams):
-    """An indoor hall: walls, pillars, a ceiling, floor zones and a closed TUMFTM track."""
-
-    kind: Literal["hall"] = Field("hall", description="world kind: an indoor hall")
-    description: str = Field("", description="one line about the world, shown in reports")
-    size_m: tuple[Size_m, Size_m] = Field((32.0, 20.0), description="interior (x, y) extent, m, "
-                                        "from (0, 0) (an approximation of the Winti lab, "
-                                        "REFERENCE.md)")
-    wall_height_m: float = Field(4.0, gt=0.5, le=1e4, description="height of walls and pillars, m")
-    wall_thickness_m: Size_m = Field(0.3, description="thickness of the walls, m, outside the "
-                                     "interior")
-    pillars_m: tuple[Point_m, ...] = Field((), description="centres (x, y) of "
-                                                       "square pillars, m")
-    pillar_size_m: Size_m = Field(0.5, description="side of a square pillar, m")
-    floor_friction: Friction = Field(0.9, description="friction coefficient of the floor "
-                                     "outside any zone (mu = pull force / weight, seed 000 Sec. "
-                                     "4.2); 0.9: tire on concrete (REFERENCE.md)")
-    zones: tuple[FloorZone, ...] = Field((), description="rectangles of floor with their own "
-                                         "friction (the seed's second, coated surface)")
-    track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
-                       "w_tr_left_m`: relative to a world folder on the project's search path "
-                       "(e.g. `winti/track.csv`), or absolute")
-    obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (seed 000 "
-                                       "Sec. 6.5)")
-
-
-class CircuitWorld(TrackWorldParams):
-    """An outdoor race circuit from a TUMFTM track alone: ground sized to the track, optional
-    barriers along both edges, no hall."""
-
-    kind: Literal["circuit"] = Field("circuit", description="world kind: an outdoor race "
-                                     "circuit")
-    description: str = Field("", description="one line about the world, shown in reports")
-    track: str = Field(description="closed track, TUMFTM CSV `x_m,y_m,w_tr_right_m,"
-                       "w_tr_left_m`: relative to a world folder on the project's search path, "
-                       "or absolute")
-    margin_m: float = Field(10.0, ge=1.0, le=1e4, description="ground beyond the track's extent, m")
-    floor_friction: Friction = Field(0.9, description="friction coefficient of the ground "
-                                     "(mu, dimensionless): tyre on asphalt or concrete, about 0.9 "
-                                     "(REFERENCE.md)")
-    zones: tuple[FloorZone, ...] = Field((), description="areas with their own friction")
-    barriers: bool = Field(True, description="walls along both track edges")
-    barrier_offset_m: Distance_m = Field(1.0, description="gap from the track edge to the "
-                                         "barrier's inner face, m")
-    barrier_height_m: Size_m = Field(0.8, description="barrier height, m")
-    barrier_thickness_m: Size_m = Field(0.3, description="barrier thickness, m")
-    barrier_segment_m: float = Field(3.0, gt=0.2, le=1e4, description="length of one barrier box "
-                                     "along the edge, m (shorter follows curves closer)")
-    obstacles: tuple[Box, ...] = Field((), description="static boxes on or beside the track")
 
 
 # --- agents -----------------------------------------------------------------------------------
@@ -253,18 +115,6 @@ class PhysicsSpec(Frozen):
     odom_rate_hz: float = Field(50.0, gt=0.0, le=1e5,
                                 description="rate of each robot's ground-truth "
                                 "odometry (`odom`, nav_msgs/Odometry), Hz")
-
-
-class LineMetricsParams(MetricParams):
-    """Parameters of the line tracker's tracking metrics."""
-
-    transient_s: Duration_s = Field(5.0, description="start-up transient excluded from "
-                                    "the cross-track errors, s")
-    lost_threshold_m: Size_m = Field(0.021, description="the sensor's range, m: farther "
-                                     "from the line axis counts as lost (seed 001 Eq. 6.15: "
-                                     "+-0.021 m)")
-    settle_band_m: Size_m = Field(0.002, description="the cross-track error band that "
-                                  "ends settling (settle_time_s), m")
 
 
 class Criterion(Frozen):

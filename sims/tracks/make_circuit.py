@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from make_tracks import centreline
 
-from kartci.track import track_from_rows, write_csv
+from kartci.worlds.track import track_from_rows, write_csv
 
 HALF_WIDTH_M = 3.0
 WAYPOINTS = [(0, 0), (25, 0), (50, 0), (68, 4), (77, 18), (71, 33), (56, 38), (45, 31),

@@ -14,8 +14,8 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from kartci.scenario import load_scenario
-from kartci.sim.hall import blocks
-from kartci.track import track_from_rows, write_csv
+from kartci.worlds.hall.world import blocks
+from kartci.worlds.track import track_from_rows, write_csv
 
 HALF_WIDTH_M = 1.8
 WAYPOINTS = {

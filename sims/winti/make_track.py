@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from kartci.track import write_csv
+from kartci.worlds.track import write_csv
 
 HALF_WIDTH_M = 2.0
 STEP_M = 1.0

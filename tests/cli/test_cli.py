@@ -319,8 +319,9 @@ def test_plugins_lists_every_registered_one_with_its_module(tmp_path: Path) -> N
     (tmp_path / "kartci.toml").write_text('plugins = ["team_worlds"]\n')
     (tmp_path / "team_worlds.py").write_text(
         "from kartci.plugins import WorldKind, lazy, register\n"
-        "from kartci.scenario.models import LineLabWorld\n"
-        "register(WorldKind('team_floor', LineLabWorld, lazy('kartci.sim.line_lab:LineLab'),\n"
+        "from kartci.worlds.line_lab import LineLabWorld\n"
+        "register(WorldKind('team_floor', LineLabWorld,\n"
+        "                   lazy('kartci.worlds.line_lab.world:LineLab'),\n"
         "                   'our lab floor, taped'))\n")
     p = kartci("plugins", cwd=tmp_path)
     assert p.returncode == 0, p.stderr

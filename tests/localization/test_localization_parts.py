@@ -16,11 +16,11 @@ from kartci.localization.node import map_path
 from kartci.localization.registration import MapMatcher, pose_matrix
 from kartci.robots.gokart.noise import distorted_scan
 from kartci.scenario.load import load_world
-from kartci.scenario.models import HallWorld
 from kartci.sim import lidar
 from kartci.sim.blocks import Block
 from kartci.sim.body import BodyState
-from kartci.sim.hall import blocks
+from kartci.worlds.hall import HallWorld
+from kartci.worlds.hall.world import blocks
 
 VLP16 = lidar.MODELS["vlp16"]
 AZ = VLP16.azimuths(10.0)

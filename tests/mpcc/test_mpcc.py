@@ -21,7 +21,7 @@ from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, MpccWei
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.track import load_track
+from kartci.worlds.track import load_track
 
 
 def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]]:

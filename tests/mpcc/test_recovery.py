@@ -15,8 +15,8 @@ from kartci.robots.gokart.mpcc.params import MpccRecovery, MpccVehicle
 from kartci.robots.gokart.mpcc.recovery import Measured, MpccStatus, Watchdog
 from kartci.robots.gokart.mpcc.reference import FrictionMap, Obstacle, TrackWidths, stage_params
 from kartci.robots.gokart.params import GokartModel, axle_distance_m
-from kartci.scenario.models import FloorZone, HallWorld
-from kartci.track import Track, track_from_rows
+from kartci.worlds.hall import HallWorld
+from kartci.worlds.track import FloorZone, Track, track_from_rows
 
 PERIOD_S = 0.05
 KART = GokartModel()

@@ -26,7 +26,7 @@ from kartci.robots.gokart.mpcc.rti import RtiStatus, qp_options
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
-from kartci.track import load_track
+from kartci.worlds.track import load_track
 
 ROOT = Path(__file__).resolve().parents[2]
 RTI = "agents.kart0.controller.method=rti"

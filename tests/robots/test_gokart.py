@@ -13,11 +13,11 @@ from kartci.metrics import compute
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario, project_root
-from kartci.scenario.models import HallWorld
 from kartci.sim import lidar, simulate
-from kartci.sim.hall import Hall as World
-from kartci.sim.hall import blocks
 from kartci.vehicle import KartInput, wheel_angles
+from kartci.worlds.hall import HallWorld
+from kartci.worlds.hall.world import Hall as World
+from kartci.worlds.hall.world import blocks
 
 MODELS = project_root() / "models" / "gokart"
 TABLE_3_2 = {  # joint: (type, axis, parent, child, translation)

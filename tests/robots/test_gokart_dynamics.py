@@ -22,8 +22,8 @@ from kartci.robots.gokart.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, Singl
 from kartci.robots.gokart.mpcc.params import MpccVehicle
 from kartci.robots.gokart.params import GokartModel, air_drag_per_m, rolling_decel_mps2
 from kartci.scenario import load_scenario, project_root
-from kartci.sim.circuit import Circuit
 from kartci.vehicle import KartInput, wheel_angles
+from kartci.worlds.circuit.world import Circuit
 
 MODELS = project_root() / "models" / "gokart"
 DT = 0.002

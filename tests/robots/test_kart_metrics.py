@@ -17,7 +17,7 @@ from kartci.robots.gokart.race import overtakes
 from kartci.scenario import load_scenario
 from kartci.sim.messages import ZEROS36, pose, vec
 from kartci.sim.urdf import robot_descriptions
-from kartci.track import TRACK_TOPIC
+from kartci.worlds.track import TRACK_TOPIC
 
 R_M = 8.0  # the track: a circle, 2.5 m either side of its centreline
 DT_S, SAMPLES = 0.02, 1000  # 20 s of odometry at 50 Hz

@@ -13,9 +13,9 @@ from kartci.robots.line_tracker.params import LineSensorSpec
 from kartci.robots.line_tracker.render import RenderScene, unseen_links
 from kartci.robots.line_tracker.sensors import LineCamera
 from kartci.scenario import load_scenario
-from kartci.scenario.models import CircleCourse
-from kartci.sim.line_lab import LineLab
 from kartci.sim.urdf import fixed_frames, urdf_path
+from kartci.worlds.line_lab import CircleCourse
+from kartci.worlds.line_lab.world import LineLab
 
 DT = 0.002
 DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # x axis (view) down

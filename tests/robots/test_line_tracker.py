@@ -12,7 +12,7 @@ from kartci.metrics import compute
 from kartci.robots.line_tracker.body import LineTracker
 from kartci.scenario import load_scenario, project_root
 from kartci.sim import simulate
-from kartci.sim.line_lab import LineLab as World
+from kartci.worlds.line_lab.world import LineLab as World
 
 DT = 0.002
 

@@ -5,13 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kartci import geometry
 from kartci._bullet import pb
 from kartci.robots.line_tracker.characterise import Sweep, sweep
 from kartci.robots.line_tracker.params import LineSensorSpec
 from kartci.robots.line_tracker.sensors import GEOMETRIC_GRID_PX, LineCamera
-from kartci.scenario import CircleCourse, StraightCourse, load_scenario
-from kartci.scenario.models import LineLabWorld
+from kartci.scenario import load_scenario
+from kartci.worlds.line_lab import CircleCourse, LineLabWorld, StraightCourse
 
 OFFSETS = np.round(np.arange(-0.025, 0.02501, 0.0005), 6)
 
@@ -85,7 +84,7 @@ def _luminances_before(cam: LineCamera, poses: list[tuple[np.ndarray, np.ndarray
 
 
 def _ink_before(world: LineLabWorld, xy: np.ndarray, pixel: float) -> np.ndarray:
-    """geometry.ink_coverage before its in-place rewrite."""
+    """The courses' ink_coverage before its in-place rewrite."""
     course, half = world.course, world.line_width_m / 2.0
     if isinstance(course, StraightCourse):
         d = np.subtract(course.end_m, course.start_m)
@@ -98,7 +97,7 @@ def _ink_before(world: LineLabWorld, xy: np.ndarray, pixel: float) -> np.ndarray
         off = course.radius_m - np.hypot(rel[..., 0], rel[..., 1])
     ink = np.clip((half - np.abs(off)) / pixel + 0.5, 0.0, 1.0)
     if isinstance(course, StraightCourse):
-        total = geometry.length_m(course)
+        total = course.length_m()
         ink = ink * np.clip(along / pixel + 0.5, 0, 1)
         ink = ink * np.clip((total - along) / pixel + 0.5, 0, 1)
     out: np.ndarray = ink
@@ -115,14 +114,14 @@ def test_geometric_camera_gives_the_bits_it_gave_before(course: StraightCourse |
     world = LineLabWorld(course=course)
     cam = LineCamera(0, LineSensorSpec(), world)
     rng = np.random.default_rng(7)
-    length = geometry.length_m(course)
+    length = course.length_m()
     for k in range(300):
         along = rng.uniform(-0.02, 0.02) + (length if k % 3 == 1 else 0.0)
         if k % 3 == 2:
             along = rng.uniform(0.0, length)
         poses = []
         for _ in range(1 + k % 2):
-            x, y, h = geometry.pose_at(course, along, rng.uniform(-0.03, 0.03))
+            x, y, h = course.pose_at(along, rng.uniform(-0.03, 0.03))
             tilt = rng.normal(0.0, 0.1 if k % 10 else 1.5)
             quat = pb.getQuaternionFromEuler((rng.normal(0.0, 0.1), np.pi / 2 + tilt, h))
             rot = np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
@@ -131,7 +130,7 @@ def test_geometric_camera_gives_the_bits_it_gave_before(course: StraightCourse |
         assert np.array_equal(new, old, equal_nan=True), (k, new, old)
         xy = np.array(poses[0][0][:2]) + rng.normal(0.0, 0.01, (256, 2))
         pixel = rng.uniform(0.0005, 0.003)
-        new_ink = geometry.ink_coverage(course, world.line_width_m, xy[:, 0], xy[:, 1], pixel)
+        new_ink = course.ink_coverage(world.line_width_m, xy[:, 0], xy[:, 1], pixel)
         assert np.array_equal(new_ink, _ink_before(world, xy, pixel), equal_nan=True), k
 
 
@@ -145,7 +144,7 @@ def test_ink_of_a_pose_gone_non_finite_is_what_it_was_not_an_exception(
     world = LineLabWorld(course=course)
     xy = np.array([[0.1, 0.0], [np.nan, 0.0], [0.2, np.inf], [-0.3, 0.01]])
     with np.errstate(all="ignore"):
-        new = geometry.ink_coverage(course, world.line_width_m, xy[:, 0].copy(),
-                                    xy[:, 1].copy(), pixel)
+        new = course.ink_coverage(world.line_width_m, xy[:, 0].copy(), xy[:, 1].copy(),
+                                  pixel)
         old = _ink_before(world, xy, pixel)
     assert np.array_equal(new, old, equal_nan=True)

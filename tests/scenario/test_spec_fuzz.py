@@ -34,7 +34,7 @@ from kartci.scenario.yamlio import (
     preview,
     read_text_bounded,
 )
-from kartci.track import load_track
+from kartci.worlds.track import load_track
 
 # the scenario's body, without its editor modeline (the tests splice text after the first key)
 STRAIGHT = "".join(line for line in (BUILTIN_SCENARIOS / "line_straight.yaml").read_text(

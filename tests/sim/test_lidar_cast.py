@@ -8,10 +8,10 @@ import numpy as np
 
 from kartci.robots.gokart.noise import SECTORS, distorted_scan
 from kartci.scenario import load_scenario
-from kartci.scenario.models import HallWorld
 from kartci.sim import lidar
 from kartci.sim.body import BodyState
-from kartci.sim.hall import blocks
+from kartci.worlds.hall import HallWorld
+from kartci.worlds.hall.world import blocks
 
 VLP16 = lidar.MODELS["vlp16"]
 AZ = VLP16.azimuths(10.0)

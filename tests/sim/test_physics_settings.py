@@ -11,7 +11,7 @@ import pytest
 
 from kartci.scenario import load_scenario
 from kartci.sim.session import Session
-from kartci.sim.track_world import TrackWorld
+from kartci.worlds.track.world import TrackWorld
 
 
 def _drive(name: str, sets: list[str]) -> tuple[np.ndarray, list[Any]]:

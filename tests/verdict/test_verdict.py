@@ -7,9 +7,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from kartci.robots.line_tracker.metrics import line_metrics
+from kartci.robots.line_tracker.metrics import LineMetricsParams, line_metrics
 from kartci.scenario import Criterion, load_scenario
-from kartci.scenario.models import LineMetricsParams
 from kartci.verdict import Status, check_criteria, compare, update
 from kartci.verdict import load as load_baseline
 

@@ -30,7 +30,7 @@ from kartci.robots.gokart.joy import (
 )
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario.models import LogSource
-from kartci.track import TRACK_TOPIC, Track, track_from_text
+from kartci.worlds.track import TRACK_TOPIC, Track, track_from_text
 
 
 def _kart(ctx: AgentContext) -> GokartModel:

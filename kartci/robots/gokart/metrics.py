@@ -19,7 +19,7 @@ from kartci.robots.gokart.handling import HANDLING_DEFS, HandlingParams, handlin
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.race import SLACK_DEF, race_metrics
 from kartci.scenario.models import Scenario
-from kartci.track import Track
+from kartci.worlds.track import Track
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:

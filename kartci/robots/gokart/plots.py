@@ -15,7 +15,7 @@ from kartci.metrics.outline import box
 from kartci.metrics.progress import crossing_time, kart_track, wheel_margins_m
 from kartci.metrics.trajectory import Trajectory, TrajectoryError, ape_errors, associate
 from kartci.robots.gokart.params import GokartModel
-from kartci.track import Track
+from kartci.worlds.track import Track
 
 SECTORS = 3
 CONTROLS = ("steering_wheel_angle_rad", "acceleration_mps2", "brake_mps2")

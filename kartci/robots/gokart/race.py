@@ -12,7 +12,7 @@ import pandas as pd
 
 from kartci.core import Direction, Metric, MetricDef
 from kartci.metrics.outline import Placed, box, fixed, outline_gap_m
-from kartci.scenario.models import Box
+from kartci.worlds.parts import Box
 
 SLACK_DEF = MetricDef("m", Direction.LOWER, 0.05, 0.2, "largest slack the MPCC applied (its "
                       "first predicted stage's, the state its command leads to, from "

@@ -30,8 +30,8 @@ from kartci.sim.messages import WORLD_FRAME, frozen, joint_state, tf_message, tr
 from kartci.sim.reach import Reach
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
-from kartci.sim.track_world import TrackWorld
 from kartci.sim.urdf import urdf_path
+from kartci.worlds.track.world import TrackWorld
 
 
 @dataclass

@@ -5,13 +5,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from kartci import geometry
 from kartci._bullet import pb, quiet_c_output
 from kartci.errors import SpecError
 from kartci.robots.line_tracker.params import LineTrackerModel
-from kartci.scenario.models import AgentSpec, LineLabWorld
+from kartci.scenario.models import AgentSpec
 from kartci.sim.body import Base
 from kartci.sim.urdf import fixed_frames, physics_urdf
+from kartci.worlds.line_lab import LineLabWorld
 
 
 class LineTracker(Base):
@@ -25,7 +25,7 @@ class LineTracker(Base):
         if not isinstance(m, LineTrackerModel):
             raise SpecError(f"model {m.kind} is not a line tracker")
         self.model = m
-        sx, sy, yaw0 = geometry.pose_at(world.course, spec.start.along_m, spec.start.lateral_m)
+        sx, sy, yaw0 = world.course.pose_at(spec.start.along_m, spec.start.lateral_m)
         yaw = yaw0 + spec.start.heading_rad
         base = (sx - m.sensor_point_x_m * math.cos(yaw), sy - m.sensor_point_x_m * math.sin(yaw))
         with quiet_c_output():

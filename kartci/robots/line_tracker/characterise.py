@@ -15,8 +15,8 @@ from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineTrackerSensors, line_parts
 from kartci.robots.line_tracker.sensors import LineCamera
 from kartci.scenario import Scenario
-from kartci.sim.line_lab import LineLab
 from kartci.sim.urdf import urdf_path
+from kartci.worlds.line_lab.world import LineLab
 
 
 @dataclass(frozen=True)

@@ -7,14 +7,27 @@ import math
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
-from kartci import geometry
-from kartci.core import Metric, MetricSet
+from kartci.core import Metric, MetricParams, MetricSet
+from kartci.core.params import Duration_s, Size_m
 from kartci.errors import SpecError
 from kartci.metrics import ScoreContext
 from kartci.metrics.defs import DEFS, defs_of
 from kartci.robots.line_tracker.params import line_parts
-from kartci.scenario.models import LineMetricsParams, Scenario, StraightCourse
+from kartci.scenario.models import Scenario
+
+
+class LineMetricsParams(MetricParams):
+    """Parameters of the line tracker's tracking metrics."""
+
+    transient_s: Duration_s = Field(5.0, description="start-up transient excluded from "
+                                    "the cross-track errors, s")
+    lost_threshold_m: Size_m = Field(0.021, description="the sensor's range, m: farther "
+                                     "from the line axis counts as lost (seed 001 Eq. 6.15: "
+                                     "+-0.021 m)")
+    settle_band_m: Size_m = Field(0.002, description="the cross-track error band that "
+                                  "ends settling (settle_time_s), m")
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:
@@ -30,8 +43,8 @@ def sensor_track(scenario: Scenario, agent: str, odom: pd.DataFrame) -> pd.DataF
     pts = np.column_stack([x, y])
     course = world.course
     return pd.DataFrame({"t": odom["t"].to_numpy(), "x": x, "y": y,
-                         "offset": geometry.offset_m(course, pts),
-                         "progress": geometry.progress_m(course, pts),
+                         "offset": course.offset_m(pts),
+                         "progress": course.progress_m(pts),
                          "vx": odom["vx"].to_numpy()})
 
 
@@ -53,16 +66,16 @@ def line_metrics(scenario: Scenario, agent: str, odom: pd.DataFrame,
             "metrics.line_tracking.transient_s or raise duration_s")
     tr = sensor_track(scenario, agent, odom)
     course = line_parts(scenario, agent)[0].course
-    length = geometry.length_m(course)
+    length = course.length_m()
     t, off, prog = tr["t"].to_numpy(), tr["offset"].to_numpy(), tr["progress"].to_numpy()
-    on_course = prog <= length if isinstance(course, StraightCourse) else np.ones_like(t, bool)
+    on_course = np.ones_like(t, bool) if course.closed else prog <= length
 
     lost_idx = np.flatnonzero((np.abs(off) > spec.lost_threshold_m) & on_course)
     lost = lost_idx.size > 0
     end = lost_idx[0] if lost else len(t)
     covered = float(np.max(prog[:end]) - prog[0]) if end > 0 else 0.0
     # a straight is covered from where the robot starts; a circle is one lap from anywhere
-    todo = length - prog[0] if isinstance(course, StraightCourse) else length
+    todo = length if course.closed else length - prog[0]
     completion = min(1.0, max(0.0, covered / max(todo, 1e-9)))
 
     window = (t >= spec.transient_s) & on_course

@@ -9,7 +9,8 @@ from pydantic import Field
 from kartci.core import Frozen, RobotParams
 from kartci.core.params import Duration_s, Friction, Length_m
 from kartci.errors import SpecError
-from kartci.scenario.models import LineLabWorld, Scenario
+from kartci.scenario.models import Scenario
+from kartci.worlds.line_lab import LineLabWorld
 
 
 class LineTrackerModel(RobotParams):

@@ -5,11 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from kartci import geometry
 from kartci.figures import PlotContext, Plots, wheel_series
-from kartci.robots.line_tracker.metrics import sensor_track
+from kartci.robots.line_tracker.metrics import LineMetricsParams, sensor_track
 from kartci.robots.line_tracker.params import line_parts
-from kartci.scenario.models import LineMetricsParams
 
 
 def line_plots(ctx: PlotContext) -> Plots:
@@ -27,5 +25,5 @@ def line_plots(ctx: PlotContext) -> Plots:
     params = scenario.metrics.get("line_tracking")
     transient = (params if isinstance(params, LineMetricsParams)
                  else LineMetricsParams()).transient_s
-    return Plots("line", np.asarray(geometry.polyline(world.course, 400)), [], tracks, wheels,
+    return Plots("line", np.asarray(world.course.polyline(400)), [], tracks, wheels,
                  commands, collisions, transient)

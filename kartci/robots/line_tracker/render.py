@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from kartci._bullet import pb
-from kartci.sim.line_lab import LineLab
 from kartci.sim.urdf import fixed_frames, parsed
+from kartci.worlds.line_lab.world import LineLab
 
 ARCS = 36  # 10 degrees each: 6 cm of line at r = 0.36 m, 2.5x a camera's footprint
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 (m)

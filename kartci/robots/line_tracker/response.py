@@ -9,13 +9,11 @@ import math
 import numpy as np
 from pydantic import Field
 
-from kartci import geometry
 from kartci.core import Direction, Metric, MetricDef, MetricParams, MetricSet
 from kartci.core.params import Duration_s, Size_m
 from kartci.metrics import ScoreContext
 from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
-from kartci.scenario.models import StraightCourse
 
 DEFS: dict[str, MetricDef] = {
     "overshoot_ratio": MetricDef("1", Direction.LOWER, 0.02, 0.10,
@@ -53,8 +51,8 @@ def response_metrics(ctx: ScoreContext, params: LineResponseParams) -> list[Metr
     course = line_parts(ctx.scenario, ctx.agent)[0].course
     t, off = tr["t"].to_numpy(), tr["offset"].to_numpy()
     keep = np.ones_like(t, bool)
-    if isinstance(course, StraightCourse):
-        keep &= tr["progress"].to_numpy() <= geometry.length_m(course)
+    if not course.closed:
+        keep &= tr["progress"].to_numpy() <= course.length_m()
     lost = np.flatnonzero(np.abs(off) > params.lost_threshold_m)
     if lost.size:
         keep[lost[0]:] = False

@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 
-from kartci import geometry
 from kartci._bullet import pb
 from kartci.errors import SpecError
 from kartci.logs import header, msg
@@ -16,13 +15,13 @@ from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineTrackerSensors
 from kartci.robots.line_tracker.render import unseen_links
 from kartci.robots.line_tracker.sensors import LineCamera, Sonar
-from kartci.scenario.models import StraightCourse
 from kartci.sim.body import BodyState
-from kartci.sim.line_lab import LineLab
 from kartci.sim.messages import joint_state
 from kartci.sim.robot import Put, RobotContext
 from kartci.sim.robots import RobotBase, every
 from kartci.sim.urdf import urdf_path
+from kartci.worlds.line_lab import StraightCourse
+from kartci.worlds.line_lab.world import LineLab
 
 
 class LineTrackerRobot(RobotBase):
@@ -159,4 +158,4 @@ class LineTrackerRobot(RobotBase):
         if (isinstance(course, StraightCourse)
                 and math.dist(pt.tolist(), course.start_m) < self.end_m + 0.02 - 1e-6):
             return False  # progress along the line is at most the distance from its start
-        return bool(geometry.progress_m(course, pt[None, :])[0] > self.end_m + 0.02)
+        return bool(course.progress_m(pt[None, :])[0] > self.end_m + 0.02)

@@ -7,13 +7,12 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from kartci import geometry
 from kartci._bullet import pb
 from kartci.robots.line_tracker.params import LineSensorSpec, SonarSpec
 from kartci.robots.line_tracker.render import RenderScene
-from kartci.scenario.models import LineLabWorld
-from kartci.sim.line_lab import LineLab
 from kartci.sim.world import SENSED_GROUPS
+from kartci.worlds.line_lab import LineLabWorld
+from kartci.worlds.line_lab.world import LineLab
 
 # Eq. 5.1 of the line-tracker seed (ITU-R BT.709 luma weights).
 LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -71,9 +70,9 @@ class LineCamera:
         pixel = 0.0
         for z in pos[:, 2].tolist():
             pixel = max(pixel, 2.0 * z * self._tan_half / GEOMETRIC_GRID_PX)
-        ink = geometry.ink_coverage(self.world.course, self.world.line_width_m,
-                                    pos[:, 0, None] - reach * rays[:, 0],
-                                    pos[:, 1, None] - reach * rays[:, 1], pixel)
+        ink = self.world.course.ink_coverage(self.world.line_width_m,
+                                             pos[:, 0, None] - reach * rays[:, 0],
+                                             pos[:, 1, None] - reach * rays[:, 1], pixel)
         means = np.add.reduce(ink, axis=1) / ink.shape[1]  # ndarray.mean's sums, less wrapper
         return [self.world.light_level * (1.0 - m) for m in means.tolist()]
 

@@ -14,7 +14,7 @@ from kartci.logs import tables
 from kartci.metrics import recorded_scenario
 from kartci.robots.line_tracker.metrics import sensor_track
 from kartci.robots.line_tracker.params import line_parts
-from kartci.scenario.models import CircleCourse
+from kartci.worlds.line_lab import CircleCourse
 
 KP, TS, V1 = "agents.lt0.controller.kp", "agents.lt0.controller.period_s", (
     "agents.lt0.controller.v1_mps")

@@ -21,7 +21,7 @@ from kartci.robots.gokart.mpcc.recovery import Measured, MpccStatus, Watchdog
 from kartci.robots.gokart.mpcc.reference import FrictionMap, Obstacle, obstacle_from_xy
 from kartci.robots.gokart.outline import footprint_m
 from kartci.robots.gokart.params import GokartModel, axle_distance_m, cog_x_m
-from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
+from kartci.worlds.track import OBSTACLES_TOPIC, TRACK_TOPIC, Track, track_from_text
 
 
 class MpccAgent:

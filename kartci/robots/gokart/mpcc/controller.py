@@ -43,7 +43,7 @@ from kartci.robots.gokart.mpcc.reference import (
 from kartci.robots.gokart.mpcc.rti import Rti
 from kartci.robots.gokart.outline import footprint_m, half_width_m
 from kartci.robots.gokart.params import GokartModel
-from kartci.track import Track
+from kartci.worlds.track import Track
 
 SUCCESS = {"Solve_Succeeded", "Solved_To_Acceptable_Level", "Success"}
 FEASIBLE = 1e-4  # largest constraint violation of a usable iterate (m, m/s, ...)

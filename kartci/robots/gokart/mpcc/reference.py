@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kartci.track import Track
+from kartci.worlds.track import Track
 
 NO_LIMIT_M = 1e6
 

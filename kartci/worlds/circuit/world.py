@@ -9,10 +9,10 @@ import math
 import numpy as np
 
 from kartci.core import WorldParams
-from kartci.scenario.models import CircuitWorld
 from kartci.sim.blocks import Block
-from kartci.sim.track_world import TrackWorld
-from kartci.track import Track
+from kartci.worlds.circuit.params import CircuitWorld
+from kartci.worlds.track.model import Track
+from kartci.worlds.track.world import TrackWorld
 
 NO_CEILING_M = 1000.0  # open sky: upward lidar beams find nothing in range
 

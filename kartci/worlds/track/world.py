@@ -9,13 +9,14 @@ from typing import Any
 from kartci.core import WorldParams
 from kartci.errors import SpecError
 from kartci.logs import msg
-from kartci.scenario.models import Pose2D, TrackWorldParams
+from kartci.scenario.models import Pose2D
 from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
 from kartci.sim.blocks import Block
-from kartci.sim.line_lab import COURSE_TOPIC, path_message
 from kartci.sim.markers import CUBE, TRACK_MARKERS_TOPIC, array, marker, track_markers
 from kartci.sim.world import World
-from kartci.track import OBSTACLES_TOPIC, TRACK_TOPIC, load_track
+from kartci.worlds.messages import COURSE_TOPIC, path_message
+from kartci.worlds.track.model import OBSTACLES_TOPIC, TRACK_TOPIC, load_track
+from kartci.worlds.track.params import TrackWorldParams
 
 
 class TrackWorld(World):

@@ -22,7 +22,7 @@ from kartci.core import WorldParams
 from kartci.errors import SpecError
 from kartci.pointcloud import voxel_downsample, write_ply
 from kartci.sim import lidar as lidar_mod
-from kartci.sim.track_world import TrackWorld
+from kartci.worlds.track.world import TrackWorld
 
 SENSOR_HEIGHT_M = 1.28  # bumblebee's velodyne_link above the floor (URDF 1.154 m + wheel)
 

@@ -10,9 +10,9 @@ import numpy as np
 from kartci._bullet import pb
 from kartci.core import WorldParams
 from kartci.errors import SpecError
-from kartci.scenario.models import HallWorld
 from kartci.sim.blocks import Block
-from kartci.sim.track_world import TrackWorld
+from kartci.worlds.hall.params import HallWorld
+from kartci.worlds.track.world import TrackWorld
 
 
 def blocks(spec: HallWorld) -> list[Block]:
