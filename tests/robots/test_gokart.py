@@ -10,6 +10,7 @@ import pytest
 
 from kartci._bullet import pb
 from kartci.metrics import compute
+from kartci.robots.gokart import KartInput, wheel_angles
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario, project_root
@@ -17,7 +18,6 @@ from kartci.scenario.models import HallWorld
 from kartci.sim import lidar, simulate
 from kartci.sim.hall import Hall as World
 from kartci.sim.hall import blocks
-from kartci.vehicle import KartInput, wheel_angles
 
 MODELS = project_root() / "models" / "gokart"
 TABLE_3_2 = {  # joint: (type, axis, parent, child, translation)
@@ -256,7 +256,7 @@ def test_reverse_and_emergency_stop() -> None:
 
 @pytest.mark.parametrize("mapping", ["ps4", "g29"])
 def test_joystick_mappings_round_trip(mapping: str) -> None:
-    from kartci.agents.joy import load_mapping, to_command, to_joy
+    from kartci.robots.gokart.joy import load_mapping, to_command, to_joy
 
     m = load_mapping(mapping)
     model = load_scenario("kart_replay").agents["kart0"].model
