@@ -151,8 +151,9 @@ def above(tolerance: float, bound: float) -> bool:
     return tolerance > bound * (1 + 1e-9)
 
 
-def police(verdicts: list[MetricVerdict], baseline: Mapping[str, Mapping[str, Any]] | None,
-           factor: float, allowed: Collection[str]) -> list[MetricVerdict]:
+def apply_tolerance_policy(verdicts: list[MetricVerdict],
+                           baseline: Mapping[str, Mapping[str, Any]] | None, factor: float,
+                           allowed: Collection[str]) -> list[MetricVerdict]:
     """Each verdict with its baseline entry's stored tolerance checked against the policy bound
     (`allowed`: metric names the project allows above it)."""
     out = []

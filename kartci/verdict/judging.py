@@ -18,11 +18,11 @@ from kartci.verdict import criteria, fingerprint
 from kartci.verdict.baseline import (
     Baseline,
     MetricVerdict,
+    apply_tolerance_policy,
     check_criteria,
     compare,
     ill_conditioned,
     loosened,
-    police,
     read_baseline,
     read_json,
 )
@@ -108,8 +108,8 @@ def trusted(verdicts: list[MetricVerdict], baseline: Baseline | None,
         return verdicts, [], []
     proj, label = project.current(), baseline.path.stem
     allowed = dict(proj.allow_loose_tolerances)  # "scenario:metric" -> reason
-    verdicts = police(verdicts, baseline.metrics, proj.loosen_factor,
-                      {name for name in baseline.metrics if f"{label}:{name}" in allowed})
+    kept = {name for name in baseline.metrics if f"{label}:{name}" in allowed}
+    verdicts = apply_tolerance_policy(verdicts, baseline.metrics, proj.loosen_factor, kept)
     loose = loosened(verdicts, label, proj.loosen_factor)
     note = check.message(baseline.path)
     stale = [] if note is None else [note]
