@@ -16,7 +16,7 @@ from kartci.verdict.baseline import (
     compare,
     ill_conditioned,
     load,
-    loosened,
+    loose_tolerance_messages,
     read_baseline,
     read_json,
     spread,
@@ -29,5 +29,5 @@ from kartci.verdict.result import RunResult, ScenarioResult, exit_code, one_line
 __all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Baseline", "Change", "Conditioning", "CriterionResult",
            "MetricVerdict", "Policy", "RunResult", "ScenarioResult", "Status",
            "apply_tolerance_policy", "check_criteria", "compare", "exit_code", "ill_conditioned",
-           "load", "loosened", "one_line", "read_baseline", "read_json", "spread", "update",
-           "worst", "write_json_atomic"]
+           "load", "loose_tolerance_messages", "one_line", "read_baseline", "read_json", "spread",
+           "update", "worst", "write_json_atomic"]

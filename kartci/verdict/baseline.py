@@ -170,7 +170,7 @@ def apply_tolerance_policy(verdicts: list[MetricVerdict],
     return out
 
 
-def loosened(verdicts: list[MetricVerdict], label: str, factor: float) -> list[str]:
+def loose_tolerance_messages(verdicts: list[MetricVerdict], label: str, factor: float) -> list[str]:
     """One line per loosened tolerance: which, its bound, and the two ways out."""
     return [f"{v.name}: baseline tolerance {v.tolerance:.3g} is loosened beyond the policy bound "
             f"{v.policy_bound:.3g} (the larger of {factor:g}x its default tolerance and "

@@ -22,7 +22,7 @@ from kartci.verdict.baseline import (
     check_criteria,
     compare,
     ill_conditioned,
-    loosened,
+    loose_tolerance_messages,
     read_baseline,
     read_json,
 )
@@ -110,7 +110,7 @@ def trusted(verdicts: list[MetricVerdict], baseline: Baseline | None,
     allowed = dict(proj.allow_loose_tolerances)  # "scenario:metric" -> reason
     kept = {name for name in baseline.metrics if f"{label}:{name}" in allowed}
     verdicts = apply_tolerance_policy(verdicts, baseline.metrics, proj.loosen_factor, kept)
-    loose = loosened(verdicts, label, proj.loosen_factor)
+    loose = loose_tolerance_messages(verdicts, label, proj.loosen_factor)
     note = check.message(baseline.path)
     stale = [] if note is None else [note]
     strict = [*(stale if check.freshness is fingerprint.Freshness.STALE else []), *loose]
