@@ -73,12 +73,12 @@ class Accepted:
         out += [f"  scenario {f.field}: {_clip(f.old)} -> {_clip(f.new)}"
                 for f in self.scenario_changes]
         out.append(f"{self.label}: {len(self.changed)} of {len(self.changes)} metrics changed")
-        out += [f"  {c.kind:8s} {c.metric}: {exact(c.old)} -> {exact(c.new)}"
+        out += [f"  {c.kind:8s} {c.metric}: {round_trip_text(c.old)} -> {round_trip_text(c.new)}"
                 for c in self.changed]
         return out + list(self.notes)
 
 
-def exact(x: float | None) -> str:
+def round_trip_text(x: float | None) -> str:
     """A value as the shortest text that reads back as the same float: a change shows even
     where 4 significant digits would print "0.6612 -> 0.6612"."""
     return "—" if x is None else repr(float(x))
