@@ -171,11 +171,11 @@ def _write(folder: Path, target: Path, values: dict[str, dict[str, Any]], drawn:
     """One scenario's baseline written, and what that changed (criteria included)."""
     label, path = folder.name, target / f"{folder.name}.json"
     fields = fingerprint.fields(scenario, _replaced(folder))
-    spreads, made = _conditioning(folder) if replicated else (None, _made(folder))
+    spreads, provenance = _conditioning(folder) if replicated else (None, _provenance(folder))
     note, moved = _scenario_diff(path, fields)
     old = read_baseline(path)
     accepted = criteria.changes(None if old is None else old.doc, scenario.criteria)
-    changes = update(path, label, values, spreads, made, fields, scenario.criteria)
+    changes = update(path, label, values, spreads, provenance, fields, scenario.criteria)
     notes = [f"  accepted: {c.text().partition(':')[0]}" for c in accepted]
     more, warnings = _conditioning_notes(path)
     notes += more
@@ -186,7 +186,7 @@ def _write(folder: Path, target: Path, values: dict[str, dict[str, Any]], drawn:
     return Accepted(label, path, tuple(changes), note, moved, tuple(notes), tuple(warnings))
 
 
-def _made(folder: Path) -> dict[str, Any]:
+def _provenance(folder: Path) -> dict[str, Any]:
     platform = conditioning.platform_of(folder)
     return {"platform": platform} if platform else {}
 
@@ -194,8 +194,8 @@ def _made(folder: Path) -> dict[str, Any]:
 def _conditioning(folder: Path) -> tuple[dict[str, float | None] | None, dict[str, Any]]:
     measured = conditioning.spreads(folder)
     if measured is None:  # not a simulation (a scored real log): nothing to replicate
-        return None, _made(folder)
-    return measured, {**_made(folder), "conditioning": conditioning.record(folder)}
+        return None, _provenance(folder)
+    return measured, {**_provenance(folder), "conditioning": conditioning.record(folder)}
 
 
 def _replicate(out: Path, target: Path, labels: list[str], replicas: int, workers: int,

@@ -213,7 +213,7 @@ class Baseline:
     doc: dict[str, Any]
 
     @property
-    def made(self) -> dict[str, Any]:
+    def provenance(self) -> dict[str, Any]:
         """Where it was made (`platform`, `conditioning`); {} for none."""
         return {k: self.doc[k] for k in ("platform", "conditioning")
                 if isinstance(self.doc.get(k), dict)}
@@ -353,11 +353,11 @@ class Change:
 
 def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
            spreads: dict[str, float | None] | None = None,
-           made: dict[str, Any] | None = None,
+           provenance: dict[str, Any] | None = None,
            fields: Mapping[str, Any] | None = None,
            accepted: Mapping[str, Criterion] | None = None) -> list[Change]:
     """Write a scenario's baseline from a run's metrics, keeping hand-set tolerances; with each
-    metric's spread over replicas (`spreads`), where it was made (`made`: the platform and
+    metric's spread over replicas (`spreads`), where it was made (`provenance`: the platform and
     how the replicas were perturbed) and the resolved scenario it was made from (`fields`,
     kartci.verdict.fingerprint, with their hash: a later run of a changed scenario is stale)
     and its pass criteria (`accepted`, kartci.verdict.criteria: a later run tells which were
@@ -388,5 +388,5 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
                                         "scenario_fields": dict(fields)}
     if accepted is not None:
         record[criteria.KEY] = criteria.recorded(accepted)
-    write_json_atomic(path, {"scenario": scenario, **(made or {}), **record, "metrics": new})
+    write_json_atomic(path, {"scenario": scenario, **(provenance or {}), **record, "metrics": new})
     return changes

@@ -58,8 +58,8 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
                                                else baseline.metrics), baseline, check)
     platform = record.get("platform") or {}
     warnings = [str(w) for w in record.get("warnings") or [] if isinstance(w, str)]
-    made = None if baseline is None else baseline.made.get("platform")
-    note = portable.mismatch(made, platform) if made else None
+    made_on = None if baseline is None else baseline.provenance.get("platform")
+    note = portable.mismatch(made_on, platform) if made_on else None
     warnings += [note] if note else []
     warnings += ill_conditioned(verdicts)
     warnings += [UNPINNED] if platform.get("simd") == portable.Pin.UNPINNED.value else []
