@@ -11,7 +11,7 @@ from typing import Annotated
 import typer
 
 from kartci.atomic import check_target, write_text_atomic
-from kartci.commandline import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
+from kartci.command_options import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
 from kartci.errors import SpecError
 from kartci.scenario import load_scenario
 
