@@ -1,4 +1,5 @@
-"""The go-kart against the seed's tables, its lidar against PyBullet's rays, and its runs."""
+"""The go-kart against the source document's tables, its lidar against PyBullet's rays, and its
+runs."""
 
 from __future__ import annotations
 
@@ -109,8 +110,8 @@ def test_steering_wheel_angles_of_table_3_3_give_eq_3_4_and_3_5(steering: str) -
             assert (left, right) == pytest.approx((exp_left, exp_right), abs=2e-3), beta
     finally:
         world.close()
-    # by hand, mirrored left-right to kartci's left-positive column (vehicle.wheel_angles): the
-    # seed's right wheel (Eq. 3.2, 3.4) is the inner, left wheel of a left turn
+    # by hand, mirrored left-right to kartci's left-positive column (gokart.wheel_angles): the
+    # source document's right wheel (Eq. 3.2, 3.4) is the inner, left wheel of a left turn
     if steering == "measured":  # Eq. 3.4 at beta_C = 1.0
         assert wheel_angles(model, 1.0)[0] == pytest.approx(-0.0355 + 0.0455 + 0.36)
     else:  # Eq. 3.2, l = 1.27, w = 0.94, centre wheel 0.36 x 1.0 rad
