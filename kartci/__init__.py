@@ -12,7 +12,7 @@ The Python API, for a team's own scripts and tests:
 - `load_scenario(name_or_path, overrides)`: a validated `Scenario`.
 - `Session(scenario, log_path, agents)`: a run you step yourself (`reset()`, `step()`).
 - `Agent`: the protocol a controller satisfies (messages in, messages out).
-- `plugins`: `Controller`, `MetricSet`, `register` and the other registries' types.
+- `kartci.core`: `Controller`, `MetricSet`, `register` and the other registries' types.
 - `KartciError` and its subclasses: every problem kartci reports.
 
 `import kartci` is cheap: the simulator, solvers and tables load when first used. It pins the
@@ -31,7 +31,6 @@ TYPE_CHECKING = False  # not `from typing import ...`: importing typing costs mo
 if TYPE_CHECKING:
     from typing import Any
 
-    from kartci import plugins
     from kartci.api import (
         RunResult,
         accept_baselines,
@@ -90,7 +89,6 @@ __all__ = [
     "compare",
     "load_scenario",
     "merge",
-    "plugins",
     "run",
     "run_suite",
     "search",
@@ -100,8 +98,6 @@ __version__ = "0.1.0"
 
 def __getattr__(name: str) -> Any:
     """Import a public name's module on first access (keeps `import kartci` cheap)."""
-    if name == "plugins":
-        return __import__("kartci.plugins", fromlist=["plugins"])
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'kartci' has no attribute '{name}'")

@@ -1,5 +1,5 @@
 """Figure data: what a run's figures draw (`Plots`, read back from its log) and what a robot
-kind's `plots` function reads to make them (`PlotContext`, see `kartci.plugins.RobotKind`).
+kind's `plots` function reads to make them (`PlotContext`, see `kartci.core.RobotKind`).
 Neutral value types below everything that makes or reads them: the robot kinds and real-data
 import draw into Plots, the judge keeps a baseline's reference trace from them, the reports
 render them."""

@@ -3,8 +3,8 @@
 Writes the project's configuration (`kartci.toml`, or a `[tool.kartci]` table appended to an
 existing pyproject.toml), one short scenario, an empty `baselines/` with a README, the gate
 workflow (`.github/workflows/kartci.yml`), `constraints.txt` pinning the installed versions of
-kartci's dependencies, a README section and `.gitignore` lines for `reports/` and `.venv/`. Nothing is
-overwritten unless asked (`force`); every check is made before the first file is written.
+kartci's dependencies, a README section and `.gitignore` lines for `reports/` and `.venv/`.
+Nothing is overwritten unless asked (`force`); every check is made before the first file is written.
 The templates are in `kartci/data/init/`.
 """
 

@@ -73,12 +73,12 @@ class Accepted:
         out += [f"  scenario {f.field}: {_clip(f.old)} -> {_clip(f.new)}"
                 for f in self.scenario_changes]
         out.append(f"{self.label}: {len(self.changed)} of {len(self.changes)} metrics changed")
-        out += [f"  {c.kind:8s} {c.metric}: {exact(c.old)} -> {exact(c.new)}"
+        out += [f"  {c.kind:8s} {c.metric}: {round_trip_text(c.old)} -> {round_trip_text(c.new)}"
                 for c in self.changed]
         return out + list(self.notes)
 
 
-def exact(x: float | None) -> str:
+def round_trip_text(x: float | None) -> str:
     """A value as the shortest text that reads back as the same float: a change shows even
     where 4 significant digits would print "0.6612 -> 0.6612"."""
     return "—" if x is None else repr(float(x))
@@ -172,11 +172,11 @@ def _write(folder: RunFolder, target: Path, values: dict[str, dict[str, Any]], d
     """One scenario's baseline written, and what that changed (criteria included)."""
     label, path = folder.name, target / f"{folder.name}.json"
     fields = fingerprint.fields(scenario, _replaced(folder))
-    spreads, made = _conditioning(folder) if replicated else (None, _made(folder))
+    spreads, provenance = _conditioning(folder) if replicated else (None, _provenance(folder))
     note, moved = _scenario_diff(path, fields)
     old = read_baseline(path)
     accepted = criteria.changes(None if old is None else old.doc, scenario.criteria)
-    changes = update(path, label, values, spreads, made, fields, scenario.criteria)
+    changes = update(path, label, values, spreads, provenance, fields, scenario.criteria)
     notes = [f"  accepted: {c.text().partition(':')[0]}" for c in accepted]
     more, warnings = _conditioning_notes(path)
     notes += more
@@ -187,7 +187,7 @@ def _write(folder: RunFolder, target: Path, values: dict[str, dict[str, Any]], d
     return Accepted(label, path, tuple(changes), note, moved, tuple(notes), tuple(warnings))
 
 
-def _made(folder: RunFolder) -> dict[str, Any]:
+def _provenance(folder: RunFolder) -> dict[str, Any]:
     platform = conditioning.platform_of(folder)
     return {"platform": platform} if platform else {}
 
@@ -195,8 +195,8 @@ def _made(folder: RunFolder) -> dict[str, Any]:
 def _conditioning(folder: RunFolder) -> tuple[dict[str, float | None] | None, dict[str, Any]]:
     measured = conditioning.spreads(folder)
     if measured is None:  # not a simulation (a scored real log): nothing to replicate
-        return None, _made(folder)
-    return measured, {**_made(folder), "conditioning": conditioning.record(folder)}
+        return None, _provenance(folder)
+    return measured, {**_provenance(folder), "conditioning": conditioning.record(folder)}
 
 
 def _replicate(out: Path, target: Path, labels: list[str], replicas: int, workers: int,

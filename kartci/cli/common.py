@@ -15,12 +15,12 @@ from typer.core import TyperCommand, TyperGroup
 
 from kartci import __version__, project
 from kartci.app.suite import write_reports
-from kartci.commandline import AllowOutsideOpt as AllowOutsideOpt
-from kartci.commandline import OutOpt as OutOpt
-from kartci.commandline import SetOpt as SetOpt
-from kartci.commandline import err_console as err_console
-from kartci.commandline import out_console as out_console
-from kartci.commandline import out_dir as out_dir
+from kartci.command_options import AllowOutsideOpt as AllowOutsideOpt
+from kartci.command_options import OutOpt as OutOpt
+from kartci.command_options import SetOpt as SetOpt
+from kartci.command_options import err_console as err_console
+from kartci.command_options import out_console as out_console
+from kartci.command_options import out_dir as out_dir
 from kartci.core.registry import plugin_failure, stdout_to_stderr
 from kartci.errors import KartciError, SpecError
 from kartci.report.ci import (

@@ -12,7 +12,7 @@ class Agent(Protocol):
     topics that are recorded, so a controller that runs in kartci would run on a robot.
 
     Implement it to drive a robot from your own code, register it as a controller (see
-    `kartci.plugins.Controller`), or hand an object in directly:
+    `kartci.core.Controller`), or hand an object in directly:
     `kartci.run("kart_wall", agents={"kart0": MyController()})`.
 
     ```python

@@ -272,7 +272,7 @@ class Registry(Generic[T]):
     def register(self, item: T, replace: bool = False, source: str = "") -> T:
         """Add one plugin; the same name twice is an error unless `replace`."""
         if not isinstance(item, self.kind):
-            raise SpecError(f"{self.group}: {item!r} is not a kartci.plugins."
+            raise SpecError(f"{self.group}: {item!r} is not a kartci.core."
                             f"{self.kind.__name__}")
         old = self.items.get(item.name)
         if old is not None and old != item and not replace:

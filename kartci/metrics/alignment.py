@@ -18,7 +18,6 @@ from enum import Enum
 
 import numpy as np
 
-from kartci.metrics.quaternion import Rotations
 from kartci.metrics.trajectory import Trajectory, TrajectoryError
 
 __all__ = ["Alignment", "Transform", "align", "umeyama"]
@@ -44,7 +43,9 @@ class Transform:
     def apply(self, tr: Trajectory) -> Trajectory:
         """The trajectory moved: positions scaled, rotated and shifted, orientations rotated."""
         xyz = self.scale * tr.xyz_m @ self.rotation.T + self.translation_m
-        quat = (Rotations.from_matrix(self.rotation) * tr.orientations()).quat
+        from scipy.spatial.transform import Rotation  # start-up: 0.3 s, only where it aligns
+
+        quat = (Rotation.from_matrix(self.rotation) * tr.rotations()).as_quat()
         return Trajectory(tr.t_s, xyz, quat)
 
 
@@ -83,7 +84,7 @@ def align(ref: Trajectory, est: Trajectory, how: Alignment,
     if how is Alignment.NONE:
         return est, Transform(np.eye(3), np.zeros(3))
     if how is Alignment.ORIGIN:  # T_ref[0] T_est[0]^-1
-        rot = (ref.orientations()[0] * est.orientations()[0].inv()).as_matrix()[0]
+        rot = (ref.rotations()[0] * est.rotations()[0].inv()).as_matrix()
         moved = Transform(rot, ref.xyz_m[0] - rot @ est.xyz_m[0])
     else:
         n = len(est) if first is None else min(first, len(est))

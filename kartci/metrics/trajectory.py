@@ -29,7 +29,6 @@ import numpy as np
 import pandas as pd
 
 from kartci.errors import KartciError
-from kartci.metrics.quaternion import Rotations
 
 if TYPE_CHECKING:
     from scipy.spatial.transform import Rotation
@@ -124,13 +123,9 @@ class Trajectory:
 
     def rotations(self) -> Rotation:
         """The orientations as scipy rotations (quaternions normalised, as evo does)."""
-        from scipy.spatial.transform import Rotation  # start-up: 0.3 s; kartci uses orientations
+        from scipy.spatial.transform import Rotation  # start-up: 0.3 s, only where it scores
 
         return Rotation.from_quat(self.quat_xyzw)
-
-    def orientations(self) -> Rotations:
-        """The orientations, normalised as `rotations()` (the same bits, without scipy)."""
-        return Rotations.from_quat(self.quat_xyzw)
 
 
 @dataclass(frozen=True)
@@ -191,7 +186,7 @@ def associate(ref: Trajectory, est: Trajectory, max_diff_s: float = 0.01,
     return (a, b) if est_longer else (b, a)
 
 
-def _rotation_angle_deg(r: Rotations) -> np.ndarray:
+def _rotation_angle_deg(r: Rotation) -> np.ndarray:
     return np.asarray(np.rad2deg(np.atleast_1d(r.magnitude())), float)
 
 
@@ -204,7 +199,7 @@ def ape_errors(ref: Trajectory, est: Trajectory,
                               f"{len(est)} poses")
     if relation is Relation.TRANSLATION:
         return np.asarray(np.linalg.norm(est.xyz_m - ref.xyz_m, axis=1))
-    return _rotation_angle_deg(est.orientations().inv() * ref.orientations())
+    return _rotation_angle_deg(est.rotations().inv() * ref.rotations())
 
 
 def ape(ref: Trajectory, est: Trajectory,
@@ -260,7 +255,7 @@ def rpe_errors(ref: Trajectory, est: Trajectory, delta: float,
         raise TrajectoryError(f"an RPE delta of {delta} {unit.value} gives no pose pairs: the "
                               f"trajectory is shorter than that")
     i, j = (np.array(p) for p in zip(*pairs, strict=True))
-    rq, rp = ref.orientations(), est.orientations()
+    rq, rp = ref.rotations(), est.rotations()
     q_rel_r = rq[i].inv() * rq[j]
     p_rel_r = rp[i].inv() * rp[j]
     q_rel_t = rq[i].inv().apply(ref.xyz_m[j] - ref.xyz_m[i])

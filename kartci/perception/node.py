@@ -3,7 +3,7 @@ map frame with its pose, loses its floor, ceiling and every point near the map; 
 clustered, boxed and tracked. Publishes `obstacle_detector/detections`
 (vision_msgs/Detection3DArray: the standard 3D detection type Foxglove and ROS tools draw; the
 class is `static` or `dynamic`, the id the track's) and `obstacle_detector/markers`
-(visualization_msgs/MarkerArray: static boxes blue, dynamic ones orange, as in the seed's
+(visualization_msgs/MarkerArray: static boxes blue, dynamic ones orange, as in the source document's
 Fig. 6.4)."""
 
 from __future__ import annotations

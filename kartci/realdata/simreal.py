@@ -27,7 +27,7 @@ from kartci.scenario.dispatch import context
 
 TWIST = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
 # what a log's commands may be when the robot's kind says nothing (`RobotKind.simreal`): the
-# standard drive commands and the seed's KartCommand, applied as recorded
+# standard drive commands and the source document's KartCommand, applied as recorded
 AS_RECORDED = (*TWIST, "ackermann_msgs/msg/AckermannDriveStamped",
                "kartci_msgs/msg/KartCommand")
 

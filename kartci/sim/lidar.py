@@ -22,7 +22,7 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class LidarModel:
-    """Table 3.5 of the go-kart seed."""
+    """Table 3.5 of the go-kart source document."""
 
     name: str
     elevations_rad: Array  # one per ring, lowest first

@@ -11,12 +11,12 @@ from kartci.verdict.baseline import (
     MetricVerdict,
     Policy,
     Status,
+    apply_tolerance_policy,
     check_criteria,
     compare,
     ill_conditioned,
     load,
-    loosened,
-    police,
+    loose_tolerance_messages,
     read_baseline,
     read_json,
     spread,
@@ -27,6 +27,7 @@ from kartci.verdict.baseline import (
 from kartci.verdict.result import RunResult, ScenarioResult, exit_code
 
 __all__ = ["SEVERITY", "SPREAD_MULTIPLE", "Baseline", "Change", "Conditioning", "CriterionResult",
-           "MetricVerdict", "Policy", "RunResult", "ScenarioResult", "Status", "check_criteria",
-           "compare", "exit_code", "ill_conditioned", "load", "loosened", "police",
-           "read_baseline", "read_json", "spread", "update", "worst", "write_json_atomic"]
+           "MetricVerdict", "Policy", "RunResult", "ScenarioResult", "Status",
+           "apply_tolerance_policy", "check_criteria", "compare", "exit_code", "ill_conditioned",
+           "load", "loose_tolerance_messages", "read_baseline", "read_json", "spread",
+           "update", "worst", "write_json_atomic"]

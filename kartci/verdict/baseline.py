@@ -151,8 +151,9 @@ def above(tolerance: float, bound: float) -> bool:
     return tolerance > bound * (1 + 1e-9)
 
 
-def police(verdicts: list[MetricVerdict], baseline: Mapping[str, Mapping[str, Any]] | None,
-           factor: float, allowed: Collection[str]) -> list[MetricVerdict]:
+def apply_tolerance_policy(verdicts: list[MetricVerdict],
+                           baseline: Mapping[str, Mapping[str, Any]] | None, factor: float,
+                           allowed: Collection[str]) -> list[MetricVerdict]:
     """Each verdict with its baseline entry's stored tolerance checked against the policy bound
     (`allowed`: metric names the project allows above it)."""
     out = []
@@ -169,7 +170,7 @@ def police(verdicts: list[MetricVerdict], baseline: Mapping[str, Mapping[str, An
     return out
 
 
-def loosened(verdicts: list[MetricVerdict], label: str, factor: float) -> list[str]:
+def loose_tolerance_messages(verdicts: list[MetricVerdict], label: str, factor: float) -> list[str]:
     """One line per loosened tolerance: which, its bound, and the two ways out."""
     return [f"{v.name}: baseline tolerance {v.tolerance:.3g} is loosened beyond the policy bound "
             f"{v.policy_bound:.3g} (the larger of {factor:g}x its default tolerance and "
@@ -212,7 +213,7 @@ class Baseline:
     doc: dict[str, Any]
 
     @property
-    def made(self) -> dict[str, Any]:
+    def provenance(self) -> dict[str, Any]:
         """Where it was made (`platform`, `conditioning`); {} for none."""
         return {k: self.doc[k] for k in ("platform", "conditioning")
                 if isinstance(self.doc.get(k), dict)}
@@ -352,11 +353,11 @@ class Change:
 
 def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
            spreads: dict[str, float | None] | None = None,
-           made: dict[str, Any] | None = None,
+           provenance: dict[str, Any] | None = None,
            fields: Mapping[str, Any] | None = None,
            accepted: Mapping[str, Criterion] | None = None) -> list[Change]:
     """Write a scenario's baseline from a run's metrics, keeping hand-set tolerances; with each
-    metric's spread over replicas (`spreads`), where it was made (`made`: the platform and
+    metric's spread over replicas (`spreads`), where it was made (`provenance`: the platform and
     how the replicas were perturbed) and the resolved scenario it was made from (`fields`,
     kartci.verdict.fingerprint, with their hash: a later run of a changed scenario is stale)
     and its pass criteria (`accepted`, kartci.verdict.criteria: a later run tells which were
@@ -387,5 +388,5 @@ def update(path: Path, scenario: str, metrics: dict[str, dict[str, Any]],
                                         "scenario_fields": dict(fields)}
     if accepted is not None:
         record[criteria.KEY] = criteria.recorded(accepted)
-    write_json_atomic(path, {"scenario": scenario, **(made or {}), **record, "metrics": new})
+    write_json_atomic(path, {"scenario": scenario, **(provenance or {}), **record, "metrics": new})
     return changes

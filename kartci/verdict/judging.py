@@ -18,11 +18,11 @@ from kartci.verdict import criteria, fingerprint
 from kartci.verdict.baseline import (
     Baseline,
     MetricVerdict,
+    apply_tolerance_policy,
     check_criteria,
     compare,
     ill_conditioned,
-    loosened,
-    police,
+    loose_tolerance_messages,
     read_baseline,
     read_json,
 )
@@ -58,8 +58,8 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
                                                else baseline.metrics), baseline, check)
     platform = record.get("platform") or {}
     warnings = [str(w) for w in record.get("warnings") or [] if isinstance(w, str)]
-    made = None if baseline is None else baseline.made.get("platform")
-    note = portable.mismatch(made, platform) if made else None
+    made_on = None if baseline is None else baseline.provenance.get("platform")
+    note = portable.mismatch(made_on, platform) if made_on else None
     warnings += [note] if note else []
     warnings += ill_conditioned(verdicts)
     warnings += [UNPINNED] if platform.get("simd") == portable.Pin.UNPINNED.value else []
@@ -108,9 +108,9 @@ def trusted(verdicts: list[MetricVerdict], baseline: Baseline | None,
         return verdicts, [], []
     proj, label = project.current(), baseline.path.stem
     allowed = dict(proj.allow_loose_tolerances)  # "scenario:metric" -> reason
-    verdicts = police(verdicts, baseline.metrics, proj.loosen_factor,
-                      {name for name in baseline.metrics if f"{label}:{name}" in allowed})
-    loose = loosened(verdicts, label, proj.loosen_factor)
+    kept = {name for name in baseline.metrics if f"{label}:{name}" in allowed}
+    verdicts = apply_tolerance_policy(verdicts, baseline.metrics, proj.loosen_factor, kept)
+    loose = loose_tolerance_messages(verdicts, label, proj.loosen_factor)
     note = check.message(baseline.path)
     stale = [] if note is None else [note]
     strict = [*(stale if check.freshness is fingerprint.Freshness.STALE else []), *loose]

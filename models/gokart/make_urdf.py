@@ -1,4 +1,5 @@
-"""Write the Bumblebee and Herbie URDFs from the seed's tables (run once; URDFs are the data).
+"""Write the Bumblebee and Herbie URDFs from the source document's tables (run once; URDFs are the
+data).
 
 Frames and joints: Table 3.2 (joints), Table 3.4 (sensors), Table 3.1 (tire radii). Mass, centre
 of mass and yaw inertia come from params.yaml (Table 3.1 and REFERENCE.md, cited there): the

@@ -1,4 +1,5 @@
-"""The line PID's offset estimate: Eq. 6.13 alone, or the seed's widened range (Sec. 6.3)."""
+"""The line PID's offset estimate: Eq. 6.13 alone, or the source document's widened range (Sec.
+6.3)."""
 
 from __future__ import annotations
 

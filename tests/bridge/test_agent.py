@@ -8,19 +8,19 @@ from typing import Any
 import numpy as np
 import pytest
 
-from kartci import plugins
+from kartci import core
 from kartci.bridge.agent import ExternalAgent
 from kartci.bridge.params import ExternalController
+from kartci.core import AgentContext
 from kartci.errors import RunError
 from kartci.logs.types import header, msg, typestore
-from kartci.plugins import AgentContext
 from kartci.scenario import load_scenario
 
 
 def agent(commands: list[dict[str, str]]) -> ExternalAgent:
     spec = load_scenario("external_pure_pursuit")
     params = ExternalController(commands=commands)  # no program: nothing is started
-    built = plugins.CONTROLLERS.get("external").build(
+    built = core.CONTROLLERS.get("external").build(
         params, AgentContext("kart0", spec.agents["kart0"].model))
     assert isinstance(built, ExternalAgent)
     return built

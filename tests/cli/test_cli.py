@@ -314,11 +314,11 @@ def test_list_without_any_scenario_is_one_line(tmp_path: Path,
 
 
 def test_plugins_lists_every_registered_one_with_its_module(tmp_path: Path) -> None:
-    from kartci import plugins
+    from kartci import core
 
     (tmp_path / "kartci.toml").write_text('plugins = ["team_worlds"]\n')
     (tmp_path / "team_worlds.py").write_text(
-        "from kartci.plugins import WorldKind, lazy, register\n"
+        "from kartci.core import WorldKind, lazy, register\n"
         "from kartci.worlds.line_lab import LineLabWorld\n"
         "register(WorldKind('team_floor', LineLabWorld,\n"
         "                   lazy('kartci.worlds.line_lab.world:LineLab'),\n"
@@ -326,7 +326,7 @@ def test_plugins_lists_every_registered_one_with_its_module(tmp_path: Path) -> N
     p = kartci("plugins", cwd=tmp_path)
     assert p.returncode == 0, p.stderr
     lines = p.stdout.splitlines()
-    for reg in plugins.REGISTRIES:
+    for reg in core.REGISTRIES:
         words = reg.what.split()  # "controller", "robot kind", ...
         for name in reg.names():
             assert any(ln.split()[:len(words) + 1] == [*words, name] for ln in lines), name

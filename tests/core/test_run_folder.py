@@ -8,9 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from kartci.agents.base import Outbox
 from kartci.api import load_scenario
-from kartci.core import UNFINISHED, RunFolder
+from kartci.core import UNFINISHED, Outbox, RunFolder
 from kartci.errors import SpecError
 from kartci.logs import SCENARIO_TOPIC, messages
 from kartci.robots.line_tracker.line_pid import LinePid

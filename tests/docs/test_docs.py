@@ -101,7 +101,7 @@ RUN_PAGES = [p for p in pages() if runnable(p)]
 # pages whose examples take under ~10 s on a loaded 2-core machine: run in the default tier
 QUICK_PAGES = {"howto/project.md", "howto/real-logs.md", "howto/ros2-dds.md"}
 # pages whose blocks another test runs or checks
-OWN_TESTS = {"tutorial.md": "tests/plugins/test_tutorial.py runs or checks every block"}
+OWN_TESTS = {"tutorial.md": "tests/docs/test_tutorial.py runs or checks every block"}
 # fenced blocks that hold commands or Python: each runs or says why it cannot
 CODE_LANGS = {"", "bash", "sh", "shell", "console", "python", "pycon"}
 SHOWN = "Not run by the tests: "

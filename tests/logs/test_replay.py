@@ -183,8 +183,8 @@ def test_a_topic_of_the_wrong_type_says_so(tmp_path: Path) -> None:
 def test_a_projects_own_mapping_is_found_and_listed(tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     from kartci import project
-    from kartci.agents.joy import load_mapping
     from kartci.errors import SpecError
+    from kartci.robots.gokart.joy import load_mapping
 
     joy = tmp_path / "models" / "gokart" / "joy"
     joy.mkdir(parents=True)

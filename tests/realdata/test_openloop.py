@@ -16,7 +16,7 @@ from kartci.realdata.openloop import open_loop
 AGENT = '''
 import numpy as np
 from pydantic import Field
-from kartci.plugins import Controller, ControllerParams, register
+from kartci.core import Controller, ControllerParams, register
 
 
 class EchoParams(ControllerParams):

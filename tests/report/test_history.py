@@ -11,7 +11,7 @@ from typing import Any
 
 from helpers import kartci
 
-from kartci.metrics.base import Direction
+from kartci.core import Direction
 from kartci.report import summary_json, write_all
 from kartci.verdict import MetricVerdict, Status
 from kartci.verdict.result import ScenarioResult

@@ -9,7 +9,7 @@ import pytest
 import yaml
 from helpers import PAIR, QUICK, kartci
 
-from kartci.agents.base import Outbox
+from kartci.core import Outbox
 from kartci.project import BUILTIN_SCENARIOS
 from kartci.report import write_all
 from kartci.robots.line_tracker.line_pid import LinePid
@@ -48,7 +48,7 @@ from typing import Any, Literal
 import numpy as np
 
 from kartci.logs import header, msg
-from kartci.plugins import Controller, register
+from kartci.core import Controller, register
 from kartci.scenario.models import ControllerParams
 
 

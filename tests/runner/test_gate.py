@@ -23,8 +23,8 @@ from helpers import kartci
 from mcap.writer import Writer
 
 from kartci import metrics
-from kartci.agents.base import Outbox
 from kartci.cli.common import finish
+from kartci.core import Outbox
 from kartci.errors import BaselineError, RunError
 from kartci.figures import Plots
 from kartci.logs import McapLogWriter, messages, msg
@@ -504,7 +504,7 @@ def test_a_strict_run_that_judged_fewer_scenarios_than_selected_fails_each_missi
 
 QUITTER = """
 import sys
-from kartci.plugins import Controller, register
+from kartci.core import Controller, register
 from kartci.scenario.models import ControllerParams
 from typing import Literal
 

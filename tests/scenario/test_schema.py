@@ -15,8 +15,8 @@ import pytest
 import yaml
 from pydantic import Field
 
-from kartci import plugins
-from kartci.agents.base import Agent
+from kartci import core
+from kartci.core import Agent
 from kartci.project import BUILTIN_SCENARIOS
 from kartci.scenario import json_schema, load_scenario
 from kartci.scenario.models import ControllerParams
@@ -48,8 +48,8 @@ def pure_pursuit() -> Iterator[None]:
     sys.path.insert(0, str(EXAMPLE / "src"))
     try:
         mod = importlib.import_module("kartci_pure_pursuit")
-        added = [(reg, item) for reg, item in ((plugins.CONTROLLERS, mod.CONTROLLER),
-                                               (plugins.METRICS, mod.CORNERING))
+        added = [(reg, item) for reg, item in ((core.CONTROLLERS, mod.CONTROLLER),
+                                               (core.METRICS, mod.CORNERING))
                  if item.name not in reg.names()]
         for reg, item in added:
             reg.register(item)
@@ -136,13 +136,13 @@ def _alternatives(node: dict[str, Any]) -> Iterator[dict[str, Any]]:
 def test_every_registered_plugin_appears(schema: dict[str, Any]) -> None:
     text = json.dumps(schema)
     defs = schema["$defs"]
-    for reg in plugins.REGISTRIES:
+    for reg in core.REGISTRIES:
         for item in reg.all():
             for model in (item.params, getattr(item, "sensors", None)):
                 if model is not None:
                     assert model.__name__ in defs, (reg.what, item.name)
             assert f"`{item.name}`" in text, (reg.what, item.name)
-    assert set(schema["properties"]["metrics"]["properties"]) == set(plugins.METRICS.names())
+    assert set(schema["properties"]["metrics"]["properties"]) == set(core.METRICS.names())
     from kartci.metrics import definitions
 
     criteria = schema["properties"]["criteria"]["properties"]
@@ -163,14 +163,14 @@ class LooseParams(ControllerParams):
     gain: float = Field(1.0, description="a gain, 1")
 
 
-def _not_run(params: ControllerParams, ctx: plugins.AgentContext) -> Agent:
+def _not_run(params: ControllerParams, ctx: core.AgentContext) -> Agent:
     raise AssertionError("the schema never builds a controller")
 
 
 def test_a_plugin_registered_at_run_time_appears() -> None:
-    ctl = plugins.Controller("schema_test_hold", HoldSpeed, _not_run, ("gokart",),
+    ctl = core.Controller("schema_test_hold", HoldSpeed, _not_run, ("gokart",),
                              "holds a speed")
-    plugins.register(ctl)
+    core.register(ctl)
     try:
         schema = scenario_schema()
         assert schema["$defs"]["HoldSpeed"]["properties"]["speed_mps"]["description"]
@@ -182,12 +182,12 @@ def test_a_plugin_registered_at_run_time_appears() -> None:
         doc["agents"]["kart0"]["controller"]["speed_mps"] = -1  # type: ignore[index]
         assert not check.is_valid(doc)
     finally:
-        del plugins.CONTROLLERS.items["schema_test_hold"]
+        del core.CONTROLLERS.items["schema_test_hold"]
     assert "HoldSpeed" not in scenario_schema()["$defs"]
 
 
 def test_a_plugin_with_an_untyped_name_does_not_swallow_the_others() -> None:
-    plugins.register(plugins.Controller("schema_test_loose", LooseParams, _not_run))
+    core.register(core.Controller("schema_test_loose", LooseParams, _not_run))
     try:
         check = validator(scenario_schema())
         doc = yaml.safe_load((BUILTIN_SCENARIOS / "mpcc_lap.yaml").read_text("utf-8"))
@@ -195,7 +195,7 @@ def test_a_plugin_with_an_untyped_name_does_not_swallow_the_others() -> None:
         doc["agents"]["kart0"]["controller"] = {"type": "schema_test_loose", "gain": 2.0}
         check.validate(doc)
     finally:
-        del plugins.CONTROLLERS.items["schema_test_loose"]
+        del core.CONTROLLERS.items["schema_test_loose"]
 
 
 @pytest.mark.parametrize(("path", "value"), [

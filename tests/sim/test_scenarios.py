@@ -1,4 +1,4 @@
-"""The seed's closed-loop results, reproduced by runs (seed 001, Sec. 7)."""
+"""The source document's closed-loop results, reproduced by runs (source document 001, Sec. 7)."""
 
 from __future__ import annotations
 
@@ -41,8 +41,9 @@ def test_gain_too_low_for_the_curve_loses_the_line(tmp_path: Path) -> None:
     assert m["completion"].value < 0.5
 
 
-def test_circle_at_60_ms_leaves_the_band_as_the_seed_reports(tmp_path: Path) -> None:
+def test_circle_at_60_ms_leaves_the_band_as_the_source_document_reports(tmp_path: Path) -> None:
     """Near the sensor's 8 mm limit, the longer hold of a 0.06 s period carries the robot past
-    the plateau of the camera difference, where the controller loses authority (seed Sec. 7.2)."""
+    the plateau of the camera difference, where the controller loses authority (source document,
+    Sec. 7.2)."""
     m = _run(tmp_path, "line_circle", "agents.lt0.controller.period_s=0.06")
     assert m["line_lost"].value == 1 or m["cross_track_max_m"].value > 0.008

@@ -9,7 +9,7 @@ import pytest
 from helpers import PAIR, QUICK, ROOT, kartci
 from junitparser import JUnitXml
 
-from kartci.metrics.base import Direction
+from kartci.core import Direction
 from kartci.report.ci import annotation_lines, scenario_files, truncate
 from kartci.report.markdown import summary_md
 from kartci.verdict import MetricVerdict, Status

@@ -3,10 +3,7 @@
 Public for a team's own kart controller: the command (`KartInput`), the steering map
 (`wheel_angles`, `column_for_wheel_angle`, `steer_for_turn_rate`); the outline is in
 `kartci.robots.gokart.outline` (`outline`, `half_width_m`, `footprint_m`: from the kart's URDF).
-`FOOTPRINT_M` is deprecated: it is `footprint_m` of the default kart.
 """
-
-from typing import Any
 
 from kartci.core import RobotKind, SimReal, WheelOdometry, lazy
 from kartci.robots.gokart.params import GokartModel, KartSensors, axle_distance_m
@@ -39,17 +36,6 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                       "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped",
                       "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")),
                   control=lazy("kartci.robots.gokart.control:control"))
-
-
-def __getattr__(name: str) -> Any:
-    """Deprecated `FOOTPRINT_M`: the default kart's bounding box (centre ahead of base_link,
-    length, width; m), now derived from its URDF (it was a 1.2 m wide constant)."""
-    if name == "FOOTPRINT_M":
-        # start-up cost: the outline's module imports kartci.sim, which loads PyBullet
-        from kartci.robots.gokart.outline import footprint_m
-
-        return footprint_m(GokartModel())
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = ["ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",

@@ -1,5 +1,6 @@
-"""The kart as vectors for a learning loop (`kartci.gym`): the seed's command (steering-column
-angle, motor acceleration, brake deceleration) and its odometry plus the steering column."""
+"""The kart as vectors for a learning loop (`kartci.gym`): the source document's command
+(steering-column angle, motor acceleration, brake deceleration) and its odometry plus the steering
+column."""
 
 from __future__ import annotations
 

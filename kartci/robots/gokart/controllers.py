@@ -15,11 +15,12 @@ from kartci.scenario.models import LogSource
 
 
 class ManualController(ControllerParams):
-    """The manual agent (seed Sec. 5.1.2): Joy axes/buttons mapped to kart commands."""
+    """The manual agent (source document, Sec. 5.1.2): Joy axes/buttons mapped to kart commands."""
 
     type: Literal["manual"] = Field("manual", description="controller type: the manual agent")
     mapping: str = Field("ps4", description="joystick mapping: `gokart/joy/<mapping>.yaml` on "
-                         "the project's model path (built in: ps4, g29; seed 000 Sec. 5.1)")
+                         "the project's model path (built in: ps4, g29; source document 000 "
+                         "Sec. 5.1)")
     source: LogSource = Field(description="the recorded sensor_msgs/Joy stream to replay")
     period_s: Period_s = Field(0.02, description="control period, s: a whole multiple of "
                                "physics.dt_s")
@@ -38,8 +39,8 @@ class CommandsController(ControllerParams):
 
 
 class ScriptStep(Frozen):
-    """One command of a script, held from `t_s` until the next step's time (seed 000 Sec. 5.2
-    command format: steering-wheel angle, motor acceleration, brake deceleration)."""
+    """One command of a script, held from `t_s` until the next step's time (source document 000 Sec.
+    5.2 command format: steering-wheel angle, motor acceleration, brake deceleration)."""
 
     t_s: Duration_s = Field(description="sim time from which this command holds, s")
     steering_rad: Angle_rad = Field(0.0, description="steering-column (steering-wheel) angle, rad; "

@@ -1,4 +1,4 @@
-"""Joystick mappings (seed Sec. 5.1.2): which Joy axes and buttons mean throttle, brake,
+"""Joystick mappings (source document, Sec. 5.1.2): which Joy axes and buttons mean throttle, brake,
 steering, reverse and emergency stop. One YAML file per controller in models/gokart/joy/.
 The kart's own: its controllers, the bridge and log import turn Joy into `KartInput` here."""
 
@@ -174,7 +174,7 @@ def joystick(model: RobotParams, mapping: str) -> JoyCommand:
 
 
 def kart_command(cmd: KartInput, t_ns: int, frame: str) -> Any:
-    """A command as the seed's kartci_msgs/KartCommand, stamped `t_ns` in `frame`."""
+    """A command as the source document's kartci_msgs/KartCommand, stamped `t_ns` in `frame`."""
     return typestore().types["kartci_msgs/msg/KartCommand"](  # fields in the .msg's order
         header(t_ns, frame), cmd.steering_rad, cmd.accel_mps2, cmd.brake_mps2, cmd.reverse,
         cmd.estop)

@@ -1,4 +1,5 @@
-"""The go-kart's parameters and sensors (seed 000, Tables 3.1-3.6); units in the key names."""
+"""The go-kart's parameters and sensors (source document 000, Tables 3.1-3.6); units in the key
+names."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ class Tyre(Frozen):
 
 
 class GokartModel(RobotParams):
-    """The ETH go-kart (seed 000, Tables 3.1, 3.2, 3.4); limits from REFERENCE.md."""
+    """The ETH go-kart (source document 000, Tables 3.1, 3.2, 3.4); limits from REFERENCE.md."""
 
     kind: Literal["gokart"] = Field("gokart", description="robot kind: the ETH go-kart")
     variant: Literal["bumblebee", "herbie"] = Field("bumblebee", description="which of the two "
@@ -72,14 +73,14 @@ class GokartModel(RobotParams):
     tire_friction: float = Field(1.0, ge=0.0, le=10.0,
                                  description="tyre friction factor (dimensionless): "
                                  "scales the tyres' D on top of the floor's or zone's friction")
-    mass_kg: float = Field(283.4, gt=0.0, le=1e5, description="total mass, kg (seed 000 Table 3.1, "
-                           "Bumblebee); the URDF's link masses add up to it")
+    mass_kg: float = Field(283.4, gt=0.0, le=1e5, description="total mass, kg (source document "
+                           "000 Table 3.1, Bumblebee); the URDF's link masses add up to it")
     cog_to_rear_axle_m: float = Field(0.46, gt=0.0, le=1e4,
                                       description="centre of mass ahead of the "
                                       "rear axle, m (REFERENCE.md: ETH kart, 0.46 m)")
     cog_height_m: float = Field(0.24, gt=0.0, le=1e4,
                                 description="centre of mass above the floor, m "
-                                "(seed 000 Table 3.1): the load transfer's lever")
+                                "(source document 000 Table 3.1): the load transfer's lever")
     yaw_inertia_kgm2: float = Field(20.0, gt=0.0, le=1e5, description="yaw moment of inertia about "
                                     "the centre of mass, kg m^2 (REFERENCE.md: ETH kart, about "
                                     "20 kg m^2)")
@@ -189,7 +190,7 @@ class WheelSpec(Frozen):
 
 
 class CameraSpec(Frozen):
-    """An RGB camera on camera_link (Table 3.4); the seed's cameras are not calibrated
+    """An RGB camera on camera_link (Table 3.4); the source document's cameras are not calibrated
     (Sec. 3.4.3), so these are small defaults for a cheap image."""
 
     enabled: bool = Field(False, description="render images (`camera/image_raw`, "

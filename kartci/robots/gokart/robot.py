@@ -318,8 +318,8 @@ class KartRobot(RobotBase):
         self.collisions_marked += 1
 
     def apply(self, topic: str, m: Any) -> None:
-        """Commands the kart understands: `cmd` (kartci_msgs/KartCommand, the seed's format),
-        `ackermann_cmd` (ackermann_msgs/AckermannDriveStamped) and `cmd_vel`
+        """Commands the kart understands: `cmd` (kartci_msgs/KartCommand, the source document's
+        format), `ackermann_cmd` (ackermann_msgs/AckermannDriveStamped) and `cmd_vel`
         (geometry_msgs/Twist or TwistStamped). The standard ones go through a drive-by-wire:
         the steering map for the wheel angle, a speed loop for the pedals."""
         if topic == "cmd":

@@ -11,7 +11,7 @@ from kartci.robots.gokart.params import GokartModel, axle_distance_m
 
 @dataclass(frozen=True)
 class KartInput:
-    """A go-kart command in the seed's simulation format (Sec. 5.2)."""
+    """A go-kart command in the source document's simulation format (Sec. 5.2)."""
 
     steering_rad: float = 0.0  # steering-column (steering-wheel) angle, left +
     accel_mps2: float = 0.0  # motor: acceleration
@@ -26,9 +26,9 @@ STEERING_RATIO = 0.36  # wheel angle per steering-column angle: the linear term 
 def wheel_angles(model: GokartModel, beta_c: float) -> tuple[float, float]:
     """Left and right front-wheel (steer-joint) angles, rad, for a steering-column angle, rad.
 
-    The seed's Eq. 3.1/3.2 and 3.4/3.5 turn the right wheel more for a positive column angle:
-    Ackermann-consistent (inner wheel more) when positive means a right turn. Here positive
-    is a left turn (about +z), so the map is mirrored left-right: the seed's right-wheel
+    The source document's Eq. 3.1/3.2 and 3.4/3.5 turn the right wheel more for a positive column
+    angle: Ackermann-consistent (inner wheel more) when positive means a right turn. Here positive
+    is a left turn (about +z), so the map is mirrored left-right: the source document's right-wheel
     equations give the left wheel, which is then the inner wheel of a left turn. (Taking the
     equations with their sides as written would be anti-Ackermann: with slip-angle tyres the
     front wheels would fight each other in tight turns.) The measured map is not symmetric: at

@@ -163,8 +163,8 @@ class FourTyres:
     same between steps worked out once: the physics loop's fast path (its Python was half of
     a kart's step). The arithmetic is `normal_loads`, `wheel_force` and `air_drag_n` operation
     for operation, min and max written out as the builtins compare (`max(a, b)` is `b if b > a
-    else a`), so the results are equal to the last bit (tests/robots/test_gokart_plant.py holds
-    them so).
+    else a`), so the results are equal to the last bit
+    (tests/robots/gokart/test_gokart_plant.py holds them so).
 
     Args:
         model: The kart's parameters.

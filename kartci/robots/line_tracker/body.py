@@ -60,7 +60,8 @@ class LineTracker(Base):
         self._fresh = False  # a command not yet applied (set_velocity drive)
 
     def _wheel_inertia(self, m: LineTrackerModel) -> None:
-        """Mass and inertia overrides of both wheels (the seed's Gazebo defaults, when asked)."""
+        """Mass and inertia overrides of both wheels (the source document's Gazebo defaults, when
+        asked)."""
         for j in self.wheels:
             if m.wheel_mass_kg is not None:
                 pb.changeDynamics(self.body, j, mass=m.wheel_mass_kg, physicsClientId=self.client)

@@ -1,7 +1,8 @@
-"""Reproduce the seed's line-sensor characterisation (Fig. 5.2.2.2, 6.3.1 and 5.2.2.3).
+"""Reproduce the source document's line-sensor characterisation (Fig. 5.2.2.2, 6.3.1 and 5.2.2.3).
 
 The robot, parallel to a straight line, is placed at a series of lateral offsets across it (as
-the seed's plugin did with SetWorldPose) and both cameras are read at each, without noise.
+the source document's plugin did with SetWorldPose) and both cameras are read at each, without
+noise.
 """
 
 from __future__ import annotations

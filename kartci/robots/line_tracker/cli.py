@@ -1,5 +1,6 @@
 """The line tracker's own commands (entry points `kartci.commands`): `kartci characterise`,
-its sensor characterisation, and `kartci study`, the seed's study figures from its grid runs."""
+its sensor characterisation, and `kartci study`, the source document's study figures from its grid
+runs."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from typing import Annotated
 import typer
 
 from kartci.atomic import check_target, write_text_atomic
-from kartci.commandline import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
+from kartci.command_options import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
 from kartci.errors import SpecError
 from kartci.scenario import load_scenario
 
@@ -29,8 +30,8 @@ def characterise(
     set_: SetOpt = None,
     allow_outside_paths: AllowOutsideOpt = False,
 ) -> None:
-    """Sweep the line tracker across the line and characterise its sensor (seed Fig. 5.2.2.2,
-    6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
+    """Sweep the line tracker across the line and characterise its sensor (source document, Fig.
+    5.2.2.2, 6.3.1, 5.2.2.3): sweep.csv, fov_sweep.csv, characterisation.html, fitted slope."""
     # CLI start-up: numpy and the simulator load when the command runs, not on `kartci --help`
     import numpy as np
 
@@ -73,7 +74,7 @@ def characterise(
     rslope, rintercept, rr2 = ren.fit()
     lines = [f"geometric: y = {slope:.2f} d + {intercept:.4f}  (R^2 {r2:.4f} over |d| <= 8 mm)",
              f"rendered:  y = {rslope:.2f} d + {rintercept:.4f}  (R^2 {rr2:.4f})",
-             "seed (Eq. 6.12): y = 39.4022 d + 0.0036"]
+             "source document (Eq. 6.12): y = 39.4022 d + 0.0036"]
     for x in fov_list:
         s, _, r = fov_curves[x].fit()
         lines.append(f"fov {x:g} rad: slope {s:.2f} /m, R^2 {r:.3f}")
@@ -115,8 +116,8 @@ def study(
     out: Annotated[Path, typer.Argument(help="A folder written by `kartci run` with the line "
                                               "tracker's grids in it.")],
 ) -> None:
-    """Draw the seed's study figures (Figs. 7.1.2-7.1.4, Sec. 7.2) from the line tracker's grid
-    runs in OUT (line_straight_grid, line_circle_grid, line_circle_edge_fast/slow):
+    """Draw the source document's study figures (Figs. 7.1.2-7.1.4, Sec. 7.2) from the line
+    tracker's grid runs in OUT (line_straight_grid, line_circle_grid, line_circle_edge_fast/slow):
     OUT/study.html, one SVG per figure."""
     # CLI start-up: matplotlib and the run folders' tables load when the command runs
     from kartci.robots.line_tracker import figures
@@ -142,7 +143,7 @@ def study(
         raise SpecError(f"{out}: no line-tracker grid runs in it (line_straight_grid@..., "
                         "line_circle_grid@..., line_circle_edge_*@...)")
     html_text = ("<!doctype html><html><head><meta charset='utf-8'><title>line tracker study"
-                 "</title></head><body><h1>The seed's study, run by kartci</h1>"
+                 "</title></head><body><h1>The source document's study, run by kartci</h1>"
                  + "".join(svgs) + "</body></html>\n")
     write_text_atomic(out / "study.html", html_text)
     out_console.print(f"wrote {out}/study.html ({len(svgs)} figures)", highlight=False)

@@ -1,5 +1,5 @@
-"""Plots of the seed's study figures (`study.Panel`), as SVG text: kept apart from the report's
-rendering, which embeds or links them as it likes."""
+"""Plots of the source document's study figures (`study.Panel`), as SVG text: kept apart from the
+report's rendering, which embeds or links them as it likes."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The seed's P / PI line-tracking controller (TestSensor.cc in the annex), on messages."""
+"""The source document's P / PI line-tracking controller (TestSensor.cc in the annex), on
+messages."""
 
 from __future__ import annotations
 
@@ -65,12 +66,12 @@ class LinePid:
 
 
 def widened(left: float, right: float, edge_left: float, edge_right: float) -> float:
-    """Seed 001 Sec. 6.3 (Albert Costa's logic): past +0.008 m (left brighter than the right and
-    than its own output there) y = left + right + c, past -0.008 m y = -(left + right) - c,
-    else y = left - right. The seed writes c = 2 maxdiff for its cameras' scale; here c is the
-    one value that joins the branches at +-0.008 m: maxdiff - (sum there) = -2 edge_right, so y
-    is continuous and monotonic. Symmetric cameras: the right's output at -0.008 m is the left's
-    at +0.008 m, so one threshold serves both sides."""
+    """Source document 001 Sec. 6.3 (Albert Costa's logic): past +0.008 m (left brighter than the
+    right and than its own output there) y = left + right + c, past -0.008 m y = -(left + right) -
+    c, else y = left - right. The source document writes c = 2 maxdiff for its cameras' scale; here
+    c is the one value that joins the branches at +-0.008 m: maxdiff - (sum there) = -2 edge_right,
+    so y is continuous and monotonic. Symmetric cameras: the right's output at -0.008 m is the
+    left's at +0.008 m, so one threshold serves both sides."""
     c = -2.0 * edge_right
     if left > right and left > edge_left:
         return left + right + c

@@ -1,4 +1,5 @@
-"""The line tracker's parameters and sensors (seed 001, annex model.sdf); units in the key names."""
+"""The line tracker's parameters and sensors (source document 001, annex model.sdf); units in the
+key names."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from kartci.worlds.line_lab import LineLabWorld
 
 
 class LineTrackerModel(RobotParams):
-    """Differential-drive line tracker of seed 001 (annex model.sdf, Sec. 5.4)."""
+    """Differential-drive line tracker of source document 001 (annex model.sdf, Sec. 5.4)."""
 
     kind: Literal["line_tracker"] = Field("line_tracker", description="robot kind: the "
                                           "line tracker")
@@ -78,7 +79,7 @@ class LineSensorSpec(Frozen):
 
 
 class SonarSpec(Frozen):
-    """HC-SR04 ultrasonic range finder (seed 001, Sec. 5.3)."""
+    """HC-SR04 ultrasonic range finder (source document 001, Sec. 5.3)."""
 
     enabled: bool = Field(True, description="simulate the sonar (`sonar`, sensor_msgs/Range)")
     min_range_m: Length_m = Field(0.02, description="minimum range, m (Sec. 5.3)")

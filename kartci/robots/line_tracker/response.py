@@ -1,6 +1,6 @@
-"""The line tracker's response shape (seed 001 Sec. 7.1-7.3): overshoot of the straight-line
-release, and the oscillation amplitude on a circle. Opt-in (`metrics: {line_response: {}}`), so
-scenarios that do not ask keep their metrics unchanged."""
+"""The line tracker's response shape (source document 001 Sec. 7.1-7.3): overshoot of the
+straight-line release, and the oscillation amplitude on a circle. Opt-in (`metrics: {line_response:
+{}}`), so scenarios that do not ask keep their metrics unchanged."""
 
 from __future__ import annotations
 

@@ -85,7 +85,7 @@ class LineTrackerRobot(RobotBase):
         if self._camera_due(k):
             self._frame(t_ns, put)
         if k % self.ctrl_every:
-            return  # the sonar runs with the controller (seed Sec. 6.6)
+            return  # the sonar runs with the controller (source document, Sec. 6.6)
         if self.sonar is not None:
             s = self.sonar.spec
             put("sonar", msg("sensor_msgs/msg/Range", header=header(t_ns, f"{self.name}/sonar"),

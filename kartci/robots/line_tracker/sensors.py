@@ -14,7 +14,7 @@ from kartci.sim.world import SENSED_GROUPS
 from kartci.worlds.line_lab import LineLabWorld
 from kartci.worlds.line_lab.world import LineLab
 
-# Eq. 5.1 of the line-tracker seed (ITU-R BT.709 luma weights).
+# Eq. 5.1 of the line-tracker source document (ITU-R BT.709 luma weights).
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 NEAR_M, FAR_M = 0.001, 0.05
 # Pixels the geometric mode samples per image side. Each sample's ink is anti-aliased (exact for

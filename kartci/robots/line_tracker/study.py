@@ -1,5 +1,5 @@
-"""The seed's study (Sec. 7.1-7.2) read back from a grid's runs: one response curve per sweep
-point, grouped as the seed's figures group them. Data only; `figures` draws it."""
+"""The source document's study (Sec. 7.1-7.2) read back from a grid's runs: one response curve per
+sweep point, grouped as the source document's figures group them. Data only; `figures` draws it."""
 
 from __future__ import annotations
 
@@ -34,7 +34,8 @@ class Curve:
 
 @dataclass(frozen=True)
 class Panel:
-    """One figure's worth of curves: the seed's figure it mirrors and what varies in it."""
+    """One figure's worth of curves: the source document's figure it mirrors and what varies in
+    it."""
 
     figure: str  # e.g. "Fig. 7.1.3"
     title: str

@@ -1,5 +1,5 @@
 """`kartci map`: the point-cloud map of a world from a mapping run of the simulated lidar, as
-the real team built theirs from Velodyne data (seed 000, Sec. 5.2).
+the real team built theirs from Velodyne data (source document 000, Sec. 5.2).
 
 The mapping run places the lidar at the kart's sensor height every `step_m` along the track's
 centreline, heading along the track, and once more offset to each side (so walls behind pillars

@@ -15,11 +15,17 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
+from kartci.core import (
+    AgentContext,
+    Controller,
+    ControllerParams,
+    Direction,
+    Metric,
+    MetricDef,
+    MetricSet,
+)
 from kartci.logs import header, msg
-from kartci.metrics import Metric, ScoreContext
-from kartci.metrics.base import Direction, MetricDef
-from kartci.plugins import AgentContext, Controller, MetricSet
-from kartci.spec.models import ControllerParams
+from kartci.metrics import ScoreContext
 
 TRACK = "/kartci/track"
 

@@ -1,6 +1,6 @@
 """The MPCC agent: reads its state from an odometry topic (ground truth by default, so a
 localisation estimate can replace it by configuration), sees static obstacles from the
-scenario and other karts from their odometry, and publishes kart commands in the seed's
+scenario and other karts from their odometry, and publishes kart commands in the source document's
 format, its predicted horizon (nav_msgs/Path) and solver statistics every step."""
 
 from __future__ import annotations

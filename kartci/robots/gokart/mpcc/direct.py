@@ -8,7 +8,7 @@ worked out once from the sparsity, and HPIPM is called through `d_ocp_qp_set_all
 `d_ocp_qp_ipm_solve` of the library CasADi ships (its headers are in the same wheel). The data
 are what CasADi's interface hands HPIPM, operation for operation (the Hessian and gradient
 halved, the dynamics' right-hand sides negated, infinite bounds clipped to +-1e8, the solution
-added to zeros), so the iterates are bit-identical to `ca.conic`'s (tests/mpcc)."""
+added to zeros), so the iterates are bit-identical to `ca.conic`'s (tests/robots/gokart/mpcc)."""
 
 from __future__ import annotations
 

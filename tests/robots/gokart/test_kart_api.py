@@ -21,7 +21,7 @@ def test_the_documented_kart_api_is_exported() -> None:
     assert set(kart.__all__) >= DOCUMENTED
     assert all(hasattr(kart, name) for name in kart.__all__)
     assert {"outline", "half_width_m", "footprint_m"} <= set(dir(outline))
-    assert outline.footprint_m(kart.GokartModel()) == kart.FOOTPRINT_M  # the deprecated name
+    assert not hasattr(kart, "FOOTPRINT_M")  # the old constant: `outline.footprint_m(model)`
 
 
 @pytest.mark.parametrize("wheel_rad", [-0.4, -0.1, 0.0, 0.2, 0.4])

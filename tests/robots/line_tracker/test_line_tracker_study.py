@@ -1,7 +1,8 @@
-"""The seed's study (Sec. 7.1-7.3) in kartci: the trends of its straight-line figures, what its
-circle result depends on, and the Gazebo effects modelled to find out (docs/line_tracker_study.md).
-Each test runs the fewest, shortest runs that show its point; the full grids are their own suite
-(`kartci run line_straight_grid line_circle_grid line_circle_edge_fast line_circle_edge_slow`)."""
+"""The source document's study (Sec. 7.1-7.3) in kartci: the trends of its straight-line figures,
+what its circle result depends on, and the Gazebo effects modelled to find out
+(docs/line_tracker_study.md). Each test runs the fewest, shortest runs that show its point; the full
+grids are their own suite (`kartci run line_straight_grid line_circle_grid line_circle_edge_fast
+line_circle_edge_slow`)."""
 
 from __future__ import annotations
 
@@ -77,10 +78,10 @@ def test_pi_with_ki_0_001_oscillates_like_p_with_a_lower_amplitude(tmp_path: Pat
 @pytest.mark.long(reason="several robot runs")
 def test_away_from_the_sensor_edge_the_step_time_does_not_matter_on_the_circle(
         tmp_path: Path) -> None:
-    """kartci's circle result, unlike the seed's: at r = 0.45 m (steady offset about 5.3 mm)
-    ts 0.1 s keeps the sensor within 8 mm like 0.01 s does, with the seed's ideal wheels and even
-    with the seed's Gazebo robot and a frame of camera latency. The loop's delay margin (about
-    0.3 s at Kp 50) is three times the longest step time."""
+    """kartci's circle result, unlike the source document's: at r = 0.45 m (steady offset about 5.3
+    mm) ts 0.1 s keeps the sensor within 8 mm like 0.01 s does, with the source document's ideal
+    wheels and even with the source document's Gazebo robot and a frame of camera latency. The
+    loop's delay margin (about 0.3 s at Kp 50) is three times the longest step time."""
     for extra in ([f"{MODEL}.wheel_time_constant_s=0"],
                   [*SEED_GAZEBO, "agents.lt0.sensors.line_sensor.latency_frames=1"]):
         for ts in (0.01, 0.1):
@@ -90,9 +91,9 @@ def test_away_from_the_sensor_edge_the_step_time_does_not_matter_on_the_circle(
 
 
 @pytest.mark.long(reason="several robot runs")
-def test_at_the_sensor_edge_the_seeds_circle_result_appears(tmp_path: Path) -> None:
-    """r = 0.36 m, the seed's Gazebo robot: the steady offset sits at 7.5 mm, on the edge of the
-    8 mm range, and there ts 0.01 s stays within while ts 0.04 s loses the line."""
+def test_at_the_sensor_edge_the_source_documents_circle_result_appears(tmp_path: Path) -> None:
+    """r = 0.36 m, the source document's Gazebo robot: the steady offset sits at 7.5 mm, on the edge
+    of the 8 mm range, and there ts 0.01 s stays within while ts 0.04 s loses the line."""
     fast = _run(tmp_path, "line_circle_edge_fast", "world.course.radius_m=0.36")
     slow = _run(tmp_path, "line_circle_edge_slow", "world.course.radius_m=0.36",
                 f"{CTRL}.period_s=0.04")
@@ -101,13 +102,13 @@ def test_at_the_sensor_edge_the_seeds_circle_result_appears(tmp_path: Path) -> N
 
 
 @pytest.mark.parametrize("wheels", ["30 g (URDF)", "1 kg, 1 kg m^2 (SDF default)"])
-def test_the_annex_set_velocity_drive_contradicts_the_seeds_straight_line(
+def test_the_annex_set_velocity_drive_contradicts_the_source_documents_straight_line(
         tmp_path: Path, wheels: str) -> None:
     """Gazebo's Joint::SetVelocity once per tick (annex TestSensor.cc) sets the wheels' spin and
     leaves them free until the next tick. Modelled literally, with either wheel mass, the robot
-    loses the straight line at Kp 100, ts 0.06 s, v1 0.1 m/s: the seed's own example of a settled
-    second-order response (Fig. 7.1.1), which the ideal wheels of Sec. 6.5 give (the Fig. 7.1.3
-    test). So the seed's robot drove as if its wheels were ideal."""
+    loses the straight line at Kp 100, ts 0.06 s, v1 0.1 m/s: the source document's own example of a
+    settled second-order response (Fig. 7.1.1), which the ideal wheels of Sec. 6.5 give (the Fig.
+    7.1.3 test). So the source document's robot drove as if its wheels were ideal."""
     mass = ["1", "1"] if wheels.startswith("1 kg") else ["0.03", "1.84e-05"]
     m = _run(tmp_path, "line_straight_grid", "duration_s=10", f"{MODEL}.wheel_drive=set_velocity",
              f"{MODEL}.wheel_mass_kg={mass[0]}", f"{MODEL}.wheel_inertia_kgm2={mass[1]}")

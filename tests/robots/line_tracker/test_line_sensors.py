@@ -1,4 +1,4 @@
-"""The line sensor against the seed's characterisation, and its two implementations."""
+"""The line sensor against the source document's characterisation, and its two implementations."""
 
 from __future__ import annotations
 
@@ -34,15 +34,15 @@ def test_rendered_and_geometric_sensors_agree(geometric_and_rendered: tuple[Swee
 Pair = tuple[Sweep, Sweep]
 
 
-def test_characterisation_matches_seed_slope_and_linear_range(geometric_and_rendered: Pair
-                                                              ) -> None:
+def test_characterisation_matches_the_source_documents_slope_and_linear_range(
+        geometric_and_rendered: Pair) -> None:
     geo, ren = geometric_and_rendered
     for s in (geo, ren):
         slope, intercept, r2 = s.fit(0.008)
-        assert slope == pytest.approx(39.4022, rel=0.15)  # seed Eq. 6.12
+        assert slope == pytest.approx(39.4022, rel=0.15)  # source document Eq. 6.12
         assert abs(intercept) < 0.02
         assert r2 > 0.97  # quasi-linear within +-8 mm
-    # beyond +-8 mm the difference stops growing (the seed's plateau), then falls to zero
+    # beyond +-8 mm the difference stops growing (the source document's plateau), then falls to zero
     d = geo.difference
     inside = np.abs(OFFSETS) <= 0.008
     assert np.abs(d[~inside]).max() <= np.abs(d[inside]).max() + 1e-9

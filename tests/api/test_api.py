@@ -48,9 +48,9 @@ def test_public_names_resolve_and_are_documented() -> None:
     for name in kartci.__all__:
         obj = getattr(kartci, name)
         assert (obj.__doc__ or "").strip(), f"kartci.{name} has no docstring"
-    for name in kartci.plugins.__all__:
-        assert getattr(kartci.plugins, name) is not None
-    assert {"Controller", "MetricSet", "register"} <= set(kartci.plugins.__all__)
+    for name in kartci.core.__all__:
+        assert getattr(kartci.core, name) is not None
+    assert {"Controller", "MetricSet", "register"} <= set(kartci.core.__all__)
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         kartci.nope  # noqa: B018
 

@@ -11,11 +11,10 @@ from pathlib import Path
 import pytest
 from pydantic import BaseModel
 
-from kartci import plugins
+from kartci import core
+from kartci.core import Controller, MetricDef, MetricSet
 from kartci.errors import SpecError
 from kartci.metrics import compute, definitions
-from kartci.metrics.base import MetricDef
-from kartci.plugins import Controller, MetricSet
 from kartci.project import BUILTIN_SCENARIOS
 from kartci.scenario import load_scenario
 from kartci.scenario.models import ControllerParams
@@ -25,37 +24,37 @@ from kartci.verdict import check_criteria
 ROOT = Path(__file__).resolve().parents[2]
 
 
-@pytest.mark.parametrize("name", plugins.CONTROLLERS.names())
+@pytest.mark.parametrize("name", core.CONTROLLERS.names())
 def test_every_controller_has_typed_parameters_with_a_schema(name: str) -> None:
-    ctl = plugins.CONTROLLERS.get(name)
+    ctl = core.CONTROLLERS.get(name)
     assert ctl.name == name
     assert issubclass(ctl.params, ControllerParams)
     schema = ctl.params.model_json_schema()
     assert schema["properties"]["type"].get("const", name) == name
     assert ctl.params.model_fields["period_s"].default > 0
-    assert all(r in plugins.ROBOTS.names() for r in ctl.robots)
+    assert all(r in core.ROBOTS.names() for r in ctl.robots)
 
 
-@pytest.mark.parametrize("name", plugins.ROBOTS.names())
+@pytest.mark.parametrize("name", core.ROBOTS.names())
 def test_every_robot_kind_names_registered_metric_sets(name: str) -> None:
-    kind = plugins.ROBOTS.get(name)
+    kind = core.ROBOTS.get(name)
     assert issubclass(kind.params, BaseModel)
     for mset in kind.metrics:
-        assert name in (plugins.METRICS.get(mset).robots or (name,))
+        assert name in (core.METRICS.get(mset).robots or (name,))
 
 
-@pytest.mark.parametrize("name", plugins.METRICS.names())
+@pytest.mark.parametrize("name", core.METRICS.names())
 def test_every_metric_set_defines_units_and_directions(name: str) -> None:
-    mset = plugins.METRICS.get(name)
+    mset = core.METRICS.get(name)
     assert mset.defs
     for metric, d in mset.defs.items():
         assert isinstance(d, MetricDef) and d.unit and d.description, metric
         assert definitions()[metric] == d  # one meaning per metric name across sets
 
 
-@pytest.mark.parametrize("name", plugins.WORLDS.names())
+@pytest.mark.parametrize("name", core.WORLDS.names())
 def test_every_world_kind_validates_its_own_parameters(name: str) -> None:
-    kind = plugins.WORLDS.get(name)
+    kind = core.WORLDS.get(name)
     assert kind.params.model_json_schema()["properties"]["kind"].get("const", name) == name
 
 
@@ -79,9 +78,9 @@ def test_a_controller_registered_from_python_drives_a_kart(tmp_path: Path) -> No
     """A team's controller, registered at run time, runs in the loop with no kartci change."""
     from typing import Any, Literal
 
-    from kartci.agents.joy import kart_command
-    from kartci.plugins import AgentContext
-    from kartci.vehicle import KartInput
+    from kartci.core import AgentContext
+    from kartci.robots.gokart import KartInput
+    from kartci.robots.gokart.joy import kart_command
 
     class Params(ControllerParams):
         type: Literal["test_throttle"] = "test_throttle"
@@ -99,7 +98,7 @@ def test_a_controller_registered_from_python_drives_a_kart(tmp_path: Path) -> No
         def step(self, t_ns: int) -> list[tuple[str, Any]]:
             return [("cmd", kart_command(KartInput(0.0, self.accel, 0.0), t_ns, "base_link"))]
 
-    plugins.register(Controller("test_throttle", Params, Throttle, ("gokart",)))
+    core.register(Controller("test_throttle", Params, Throttle, ("gokart",)))
     try:
         spec = load_scenario("kart_wall", ["agents.kart0.controller={type: test_throttle, "
                                            "accel_mps2: 2.0}", "duration_s=2"])
@@ -107,21 +106,21 @@ def test_a_controller_registered_from_python_drives_a_kart(tmp_path: Path) -> No
         m = compute(tmp_path / "run.mcap")[1]
         assert m["max_speed_mps"].value == pytest.approx(4.0, abs=0.4)  # 2 m/s^2 for 2 s
     finally:
-        plugins.CONTROLLERS.items.pop("test_throttle")
+        core.CONTROLLERS.items.pop("test_throttle")
     with pytest.raises(SpecError, match="unknown controller 'test_throttle'"):
         load_scenario("kart_wall", ["agents.kart0.controller={type: test_throttle}"])
 
 
 def test_a_metric_set_registered_from_python_is_computed(tmp_path: Path) -> None:
+    from kartci.core import Direction
     from kartci.metrics import Metric, ScoreContext
-    from kartci.metrics.base import Direction
 
     def top_x(ctx: ScoreContext, params: Any) -> list[Metric]:
         return [Metric("max_x_m", float(ctx.odom["x"].max()), "m")]
 
     from typing import Any
 
-    plugins.register(MetricSet("test_extent", {"max_x_m": MetricDef(
+    core.register(MetricSet("test_extent", {"max_x_m": MetricDef(
         "m", Direction.EQUAL, 0.01, 0.0, "largest x reached")}, top_x))
     try:
         spec = load_scenario("line_straight", ["duration_s=3", "metrics.test_extent={}",
@@ -131,7 +130,7 @@ def test_a_metric_set_registered_from_python_is_computed(tmp_path: Path) -> None
         odom_x = m["max_x_m"].value
         assert 0.2 < odom_x < 0.5 and "line_lost" in m  # the robot's own sets still run
     finally:
-        plugins.METRICS.items.pop("test_extent")
+        core.METRICS.items.pop("test_extent")
 
 
 SHIPPED = sorted(p.stem for p in BUILTIN_SCENARIOS.glob("*.yaml")
@@ -164,8 +163,8 @@ def test_karts_take_standard_ackermann_and_twist_commands(topic: str, tmp_path: 
     """A team's controller need not speak kartci_msgs: 3 m/s straight ahead, either way."""
     from typing import Any, Literal
 
+    from kartci.core import AgentContext
     from kartci.logs import header, msg
-    from kartci.plugins import AgentContext
 
     class Params(ControllerParams):
         type: Literal["test_standard"] = "test_standard"
@@ -190,13 +189,13 @@ def test_karts_take_standard_ackermann_and_twist_commands(topic: str, tmp_path: 
             return [(topic, msg("geometry_msgs/msg/Twist", linear=msg(v3, x=3.0, y=0.0, z=0.0),
                                 angular=msg(v3, x=0.0, y=0.0, z=0.0)))]
 
-    plugins.register(Controller("test_standard", Params, Cruise, ("gokart",)))
+    core.register(Controller("test_standard", Params, Cruise, ("gokart",)))
     try:
         spec = load_scenario("kart_wall", ["agents.kart0.controller={type: test_standard}",
                                            "duration_s=5"])
         simulate(spec, tmp_path / "run.mcap")
         m = compute(tmp_path / "run.mcap")[1]
     finally:
-        plugins.CONTROLLERS.items.pop("test_standard")
+        core.CONTROLLERS.items.pop("test_standard")
     assert m["max_speed_mps"].value == pytest.approx(3.0, abs=0.15)
     assert m["collisions"].value == 0

@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 from kartci._bullet import pb
+from kartci.robots.gokart import KartInput, wheel_angles
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, discrete
 from kartci.robots.gokart.mpcc.params import MpccVehicle
 from kartci.robots.gokart.params import GokartModel, air_drag_per_m, rolling_decel_mps2
 from kartci.scenario import load_scenario, project_root
-from kartci.vehicle import KartInput, wheel_angles
 from kartci.worlds.circuit.world import Circuit
 
 MODELS = project_root() / "models" / "gokart"

@@ -1,4 +1,5 @@
-"""The go-kart against the seed's tables, its lidar against PyBullet's rays, and its runs."""
+"""The go-kart against the source document's tables, its lidar against PyBullet's rays, and its
+runs."""
 
 from __future__ import annotations
 
@@ -10,11 +11,11 @@ import pytest
 
 from kartci._bullet import pb
 from kartci.metrics import compute
+from kartci.robots.gokart import KartInput, wheel_angles
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel
 from kartci.scenario import load_scenario, project_root
 from kartci.sim import lidar, simulate
-from kartci.vehicle import KartInput, wheel_angles
 from kartci.worlds.hall import HallWorld
 from kartci.worlds.hall.world import Hall as World
 from kartci.worlds.hall.world import blocks
@@ -109,8 +110,8 @@ def test_steering_wheel_angles_of_table_3_3_give_eq_3_4_and_3_5(steering: str) -
             assert (left, right) == pytest.approx((exp_left, exp_right), abs=2e-3), beta
     finally:
         world.close()
-    # by hand, mirrored left-right to kartci's left-positive column (vehicle.wheel_angles): the
-    # seed's right wheel (Eq. 3.2, 3.4) is the inner, left wheel of a left turn
+    # by hand, mirrored left-right to kartci's left-positive column (gokart.wheel_angles): the
+    # source document's right wheel (Eq. 3.2, 3.4) is the inner, left wheel of a left turn
     if steering == "measured":  # Eq. 3.4 at beta_C = 1.0
         assert wheel_angles(model, 1.0)[0] == pytest.approx(-0.0355 + 0.0455 + 0.36)
     else:  # Eq. 3.2, l = 1.27, w = 0.94, centre wheel 0.36 x 1.0 rad
@@ -256,7 +257,7 @@ def test_reverse_and_emergency_stop() -> None:
 
 @pytest.mark.parametrize("mapping", ["ps4", "g29"])
 def test_joystick_mappings_round_trip(mapping: str) -> None:
-    from kartci.agents.joy import load_mapping, to_command, to_joy
+    from kartci.robots.gokart.joy import load_mapping, to_command, to_joy
 
     m = load_mapping(mapping)
     model = load_scenario("kart_replay").agents["kart0"].model

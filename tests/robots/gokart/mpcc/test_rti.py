@@ -28,7 +28,7 @@ from kartci.scenario import load_scenario
 from kartci.sim import simulate
 from kartci.worlds.track import load_track
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[4]
 RTI = "agents.kart0.controller.method=rti"
 
 
@@ -177,7 +177,7 @@ def test_each_method_has_its_own_compiled_code_and_the_qp_solver_compiles_nothin
 @pytest.mark.parametrize("name", sorted(IPOPT))
 def test_the_committed_rti_baselines_lap_within_2_percent_of_ipopt(name: str) -> None:
     """RTI is the default because it laps as Ipopt does: the committed baselines, which the
-    exact-baseline test (tests/plugins) reproduces run by run with RTI, hold that."""
+    exact-baseline test (tests/core/test_contract.py) reproduces run by run with RTI, hold that."""
     base = json.loads((ROOT / "baselines" / f"{name}.json").read_text())["metrics"]
     for metric, ipopt in IPOPT[name].items():
         if metric == "laps_completed":

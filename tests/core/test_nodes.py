@@ -8,10 +8,10 @@ from typing import Any
 import pytest
 from helpers import kartci
 
-from kartci import plugins
+from kartci import core
+from kartci.core import AgentContext, Node, NodeParams
 from kartci.errors import SpecError
 from kartci.logs import msg
-from kartci.plugins import AgentContext, Node, NodeParams
 from kartci.scenario import load_scenario
 from kartci.sim.session import Session
 
@@ -56,9 +56,9 @@ class Reader:
 
 @pytest.fixture()
 def counter() -> Any:
-    plugins.register(Node("test_counter", CountParams, Counter, (), "counts ticks"))
+    core.register(Node("test_counter", CountParams, Counter, (), "counts ticks"))
     yield
-    plugins.NODES.items.pop("test_counter")
+    core.NODES.items.pop("test_counter")
 
 
 def test_a_node_runs_before_the_controller_of_its_robot(counter: Any) -> None:
@@ -96,7 +96,7 @@ def test_a_node_for_another_robot_kind_is_refused() -> None:
 
 
 def test_cli_lists_nodes_and_names_a_bad_one_in_one_line() -> None:
-    assert ("node", "localization") in {(p.kind, p.name) for p in plugins.catalogue()}
+    assert ("node", "localization") in {(p.kind, p.name) for p in core.catalogue()}
     bad = kartci("show", "localization_lap", "--set",
                  "agents.kart0.nodes={localisation: {}}")
     assert bad.returncode == 2

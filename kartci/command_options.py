@@ -1,8 +1,7 @@
-"""What every `kartci` command is built from, kartci's own (`kartci.cli`) and those a robot
-kind or plugin brings (entry points `kartci.commands`): the consoles, the options they share,
-the default output folder.
-the default output folder.
-Below every package that brings commands, so a kind's commands import nothing above it."""
+"""The consoles, shared options and default output folder every `kartci` command is built
+from: kartci's own (`kartci.cli`) and those a robot kind or plugin brings (entry points
+`kartci.commands`). Below every package that brings commands, so a kind's commands import
+nothing above it (`kartci.cli` is above them all)."""
 
 from __future__ import annotations
 

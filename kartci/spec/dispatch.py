@@ -1,3 +1,0 @@
-"""Deprecated: `kartci.scenario.dispatch`."""
-
-from kartci.scenario.dispatch import *  # noqa: F403

@@ -1,3 +1,0 @@
-"""Deprecated: `kartci.scenario.load`."""
-
-from kartci.scenario.load import *  # noqa: F403

@@ -1,3 +1,0 @@
-"""Deprecated: `kartci.scenario.models`."""
-
-from kartci.scenario.models import *  # noqa: F403

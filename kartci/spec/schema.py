@@ -1,3 +1,0 @@
-"""Deprecated: `kartci.scenario.schema`."""
-
-from kartci.scenario.schema import *  # noqa: F403

@@ -1,3 +1,0 @@
-"""Deprecated: `kartci.scenario.yamlio`."""
-
-from kartci.scenario.yamlio import *  # noqa: F403
