@@ -127,6 +127,14 @@ class SimReal:
     wheel_speeds: bool = False  # Twist commands become wheel speeds (a differential drive's base)
 
 
+Flattener = Callable[[Any], dict[str, Any]]  # a decoded message -> its columns in a log table
+
+
+def fields(*names: str) -> Flattener:
+    """The flattener that copies these fields of a message into its row."""
+    return lambda m: {n: getattr(m, n) for n in names}
+
+
 # (sensor_msgs/Joy, frame to stamp with) -> the (topic, message) that commands the robot
 JoyCommand = Callable[[Any, str], tuple[str, Any]]
 
@@ -158,6 +166,15 @@ class RobotKind:
     simreal: SimReal | None = None
     # (params) -> its command and observation as vectors, for a learning loop (kartci.gym)
     control: Callable[[Any], ControlSpace] | None = None
+    # what only this kind knows of its own messages: how a log's tables flatten them (message
+    # type -> message -> named columns; kartci.logs.tables), their fields measured on the wall
+    # clock (kartci.logs.wallclock), and the command types an external stack may answer with
+    # (message type -> the robot topic it is applied on; kartci.bridge)
+    flatteners: Mapping[str, Flattener] = field(default_factory=dict)
+    wall_clock: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    commands: Mapping[str, str] = field(default_factory=dict)
+    # (FigureContext) -> the kind's figures of one scenario, in reading order (kartci.plotting)
+    figures: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True)

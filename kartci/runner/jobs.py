@@ -25,7 +25,7 @@ from typing import Any
 
 from kartci import project
 from kartci.errors import PluginError, RunError, SpecError
-from kartci.figures import Plots
+from kartci.plotting import Plots
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
     check_criteria_names,

@@ -17,7 +17,7 @@ from kartci.verdict.baseline import CriterionResult, MetricVerdict, Status, wors
 from kartci.verdict.criteria import CriterionChange
 
 if TYPE_CHECKING:  # a result only carries its plots: judging needs neither pandas nor the figures
-    from kartci.figures import Plots
+    from kartci.plotting import Plots
     from kartci.scenario.models import Scenario
 
 

@@ -9,12 +9,25 @@ import numpy as np
 import pandas as pd
 
 from kartci import geometry
-from kartci.core import Metric, MetricSet
+from kartci.core import Direction, Metric, MetricDef, MetricSet
 from kartci.errors import SpecError
 from kartci.metrics import ScoreContext
-from kartci.metrics.defs import DEFS, defs_of
+from kartci.metrics.defs import defs_of
 from kartci.robots.line_tracker.params import line_parts
 from kartci.scenario.models import LineMetricsParams, Scenario, StraightCourse
+
+# the line tracker's own metrics; the shared ones (speed, RMS distance) are in kartci.metrics.defs
+LINE_DEFS: dict[str, MetricDef] = {
+    "cross_track_max_m": MetricDef("m", Direction.LOWER, 0.0005, 0.10,
+                                   "largest such distance after the transient"),
+    "line_lost": MetricDef("bool", Direction.EQUAL, 0.0, 0.0,
+                           "1 if the sensor point ever left the sensor's range of the line"),
+    "completion": MetricDef("fraction", Direction.HIGHER, 0.01, 0.0,
+                            "fraction of the course covered while on the line"),
+    "settle_time_s": MetricDef("s", Direction.LOWER, 0.5, 0.10,
+                               "time after which the cross-track error stays in the settle band"),
+}
+DEFS = {**defs_of("cross_track_rms_m", "mean_speed_mps"), **LINE_DEFS}
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:
@@ -93,7 +106,7 @@ def _line(ctx: ScoreContext, params: LineMetricsParams) -> list[Metric]:
 
 LINE_TRACKING = MetricSet(
     "line_tracking",
-    defs_of("cross_track_rms_m", "cross_track_max_m", "line_lost", "completion",
-            "mean_speed_mps", "settle_time_s"),
+    {n: DEFS[n] for n in ("cross_track_rms_m", "cross_track_max_m", "line_lost", "completion",
+                          "mean_speed_mps", "settle_time_s")},
     _line, LineMetricsParams, ("line_tracker",),
     "distance of the line sensor from the line, line lost, completion, settling")
