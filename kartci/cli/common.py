@@ -20,7 +20,7 @@ from kartci.commandline import SetOpt as SetOpt
 from kartci.commandline import err_console as err_console
 from kartci.commandline import out_console as out_console
 from kartci.commandline import out_dir as out_dir
-from kartci.core.registry import plugin_failure, stdout_to_stderr
+from kartci.core.loading import plugin_failure, stdout_to_stderr
 from kartci.errors import KartciError, RunError, SpecError
 from kartci.report import write_all
 from kartci.report.ci import (

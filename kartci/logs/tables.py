@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from kartci.core.registry import ROBOTS, Flattener, fields
+from kartci.core import ROBOTS, Flattener, fields
 from kartci.errors import LogError
 from kartci.logs.bulk import bulk_table, standard
 from kartci.logs.reader import LogReader, Raw, open_log

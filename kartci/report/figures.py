@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import contextlib
 
-from kartci.core.registry import ROBOTS
+from kartci.core import ROBOTS, FiguresFn
 from kartci.errors import KartciError
 from kartci.plotting import Figure, FigureContext, Plots
 from kartci.plotting.builders import events, standard_figures
@@ -15,7 +15,7 @@ from kartci.plotting.builders import events, standard_figures
 def scenario_figures(p: Plots) -> list[Figure]:
     """Every figure of one scenario, in reading order."""
     ctx = FigureContext(p, events(p))
-    draw = standard_figures
+    draw: FiguresFn = standard_figures
     if p.robot:
         # a report of a run whose kind is not installed here: the kind-neutral figures
         with contextlib.suppress(KartciError):

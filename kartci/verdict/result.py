@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from kartci.core import Metric, RunFolder
-from kartci.project import did_you_mean
+from kartci.errors import did_you_mean
 from kartci.verdict.baseline import CriterionResult, MetricVerdict, Status, worst
 from kartci.verdict.criteria import CriterionChange
 
