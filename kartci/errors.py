@@ -1,5 +1,10 @@
 """One error base class; the CLI turns any of these into one line on stderr and exit code 2."""
 
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
 
 def one_line(text: str, limit: int = 500) -> str:
     """User text for a one-line message: control characters and newlines become spaces."""
@@ -35,3 +40,14 @@ class PluginError(SpecError):
     def __init__(self, message: str, trace: str = "") -> None:
         super().__init__(message)
         self.trace = trace
+
+
+def did_you_mean(name: str, known: Iterable[object]) -> str:
+    """' (did you mean 'x'?)' for a near miss, else the list of known names: the end of an
+    error message about an unknown name."""
+    names = sorted(str(k) for k in known)
+    close = difflib.get_close_matches(name, names, n=1)
+    if close:
+        return f" (did you mean '{close[0]}'?)"
+    listed = ", ".join(names[:20]) + (", ..." if len(names) > 20 else "")
+    return f" (known: {listed or 'none'})"

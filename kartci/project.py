@@ -18,7 +18,6 @@ project can still run the built-in line tracker and go-kart.
 
 from __future__ import annotations
 
-import difflib
 import grp
 import os
 import pwd
@@ -35,7 +34,8 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from kartci.boundedio import RefusedFileError, read_bytes
-from kartci.errors import SpecError
+from kartci.core.loading import set_default_source
+from kartci.errors import SpecError, did_you_mean
 
 BUILTIN = Path(__file__).resolve().parent / "data"  # kartci's own files: init templates, report
 PACKAGED = BUILTIN / "builtin"  # where the wheel carries the built-in folders (pyproject.toml)
@@ -279,16 +279,6 @@ def _yaml_files(folders: tuple[Path, ...]) -> dict[str, Path]:
     return dict(sorted(out.items()))
 
 
-def did_you_mean(name: str, known: object) -> str:
-    """' (did you mean 'x'?)' for a near miss, else the list of known names."""
-    names = sorted(str(k) for k in known)  # type: ignore[attr-defined]
-    close = difflib.get_close_matches(name, names, n=1)
-    if close:
-        return f" (did you mean '{close[0]}'?)"
-    listed = ", ".join(names[:20]) + (", ..." if len(names) > 20 else "")
-    return f" (known: {listed or 'none'})"
-
-
 def user_config_file() -> Path:
     """The user's own kartci configuration: `$XDG_CONFIG_HOME/kartci/config.toml`, else
     `~/.config/kartci/config.toml`. It holds what a project must not decide for itself
@@ -449,6 +439,9 @@ def activate(project: Project | None) -> None:
     """Make `project` the active one in this process (None: find it from the working dir)."""
     global _CURRENT
     _CURRENT = project
+
+
+set_default_source(current)  # what plugin loading asks when no project is handed in
 
 
 @contextmanager

@@ -25,6 +25,13 @@ def test_the_metric_engine_imports_no_robot_kind() -> None:
                                                                  "kartci.robots")] == []
 
 
+def test_the_contracts_do_not_import_the_project() -> None:
+    """`kartci.core` is handed a project (`kartci.core.loading.PluginSource`) by its callers;
+    it never looks one up from the working directory itself (issue 41)."""
+    assert [e.where for e in edges()
+            if (e.source, e.target) == ("kartci.core", "kartci.project")] == []
+
+
 ROOT = Path(__file__).resolve().parents[1] / "kartci"
 KINDS = ROOT / "robots"
 

@@ -12,7 +12,8 @@ from kartci.perception.params import DetectorParams
 
 def commandable(kind: RobotKind) -> bool:
     """The bridge drives a kind that applies one of its command topics or reads a joystick."""
-    return kind.joystick is not None or bool(set(COMMAND_TYPES.values()) & set(kind.accepts))
+    topics = {*COMMAND_TYPES.values(), *kind.commands.values()}
+    return kind.joystick is not None or bool(topics & set(kind.accepts))
 
 
 def localizable(kind: RobotKind) -> bool:

@@ -14,7 +14,7 @@ from typing import Any
 from kartci import project
 from kartci.core import RunFolder
 from kartci.errors import SpecError
-from kartci.figures import Plots
+from kartci.plotting import Plots
 from kartci.runner import conditioning
 from kartci.runner.executors import execute
 from kartci.runner.jobs import MAX_RUNS, Context, Job, check_count

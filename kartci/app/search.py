@@ -26,8 +26,7 @@ import yaml
 from kartci import metrics, project
 from kartci.atomic import write_text_atomic
 from kartci.core import Direction
-from kartci.errors import SpecError
-from kartci.project import did_you_mean
+from kartci.errors import SpecError, did_you_mean
 from kartci.runner.events import Listener
 from kartci.runner.executors import Warm
 from kartci.runner.jobs import MAX_RUNS, Job, point_label

@@ -45,7 +45,7 @@ from kartci.bridge.lockstep import (
     plan,
     unpublished,
 )
-from kartci.bridge.params import COMMAND_TYPES, ExternalController, Mode
+from kartci.bridge.params import ExternalController, Mode, command_types
 from kartci.core import ROBOTS, AgentContext, JoyCommand, Outbox, RobotParams
 from kartci.errors import RunError, SpecError
 from kartci.logs.types import base_link, msg, stamp_ns
@@ -122,6 +122,7 @@ class ExternalAgent:
         self.joystick = joystick(ctx.name, ctx.model, spec.mapping) if any(
             c.type == "sensor_msgs/msg/Joy" for c in spec.commands) else None
         self.commands = {self._full(c.topic): c.type for c in spec.commands}
+        self.applied_on = command_types()  # command type -> the robot topic it is applied on
         self.stamped = self._stamped()
         self.late = self._late_in_row = 0
         self._pending = []
@@ -443,7 +444,7 @@ class ExternalAgent:
         out: Outbox = []
         for topic in sorted(got):
             m = got[topic]
-            target = COMMAND_TYPES[self.commands[topic]]
+            target = self.applied_on[self.commands[topic]]
             out.append((target, m))
             if target == "joy" and self.joystick is not None:
                 out.append(self.joystick(m, self.frame))

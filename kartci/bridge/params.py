@@ -5,11 +5,11 @@ from __future__ import annotations
 from enum import Enum
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from kartci.bridge.lockstep import Phase
 from kartci.bridge.ros2 import DEFAULT_DISTRO, Distro
-from kartci.core import ControllerParams, Frozen
+from kartci.core import ROBOTS, ControllerParams, Frozen, Registry, RobotKind
 from kartci.core.params import Count, Period_s
 
 COMMAND_TYPES = {  # what the bridge takes back, and the robot topic each is applied on
@@ -17,11 +17,17 @@ COMMAND_TYPES = {  # what the bridge takes back, and the robot topic each is app
     "geometry_msgs/msg/Twist": "cmd_vel",
     "geometry_msgs/msg/TwistStamped": "cmd_vel",
     "sensor_msgs/msg/Joy": "joy",
-    "kartci_msgs/msg/KartCommand": "cmd",
 }
-CommandType = Literal["ackermann_msgs/msg/AckermannDriveStamped", "geometry_msgs/msg/Twist",
-                      "geometry_msgs/msg/TwistStamped", "sensor_msgs/msg/Joy",
-                      "kartci_msgs/msg/KartCommand"]
+
+
+def command_types(robots: Registry[RobotKind] = ROBOTS) -> dict[str, str]:
+    """Every command type the bridge takes back, and the robot topic it is applied on: the
+    standard ones above and each registered kind's own (`RobotKind.commands`)."""
+    out = dict(COMMAND_TYPES)
+    for kind in robots.all():
+        for msgtype, topic in kind.commands.items():
+            out.setdefault(msgtype, topic)
+    return out
 
 
 class Mode(Enum):
@@ -36,7 +42,19 @@ class CommandTopic(Frozen):
 
     topic: str = Field(description="topic the stack publishes on; relative names are in the "
                        "agent's namespace (`ackermann_cmd` is `/<agent>/ackermann_cmd`)")
-    type: CommandType = Field(description="its message type")
+    type: str = Field(description="its message type: a standard command "
+                      f"({', '.join(COMMAND_TYPES)}) or one a robot kind declares")
+
+    @field_validator("type")
+    @classmethod
+    def _known(cls, value: str) -> str:
+        if value in COMMAND_TYPES:  # standard: no need to load every kind to know it
+            return value
+        known = command_types()
+        if value not in known:
+            raise ValueError(f"'{value}' is no command type the bridge takes back; expected "
+                             f"one of {', '.join(sorted(known))}")
+        return value
 
 
 class WaitFor(Frozen):

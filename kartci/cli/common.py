@@ -21,7 +21,7 @@ from kartci.command_options import SetOpt as SetOpt
 from kartci.command_options import err_console as err_console
 from kartci.command_options import out_console as out_console
 from kartci.command_options import out_dir as out_dir
-from kartci.core.registry import plugin_failure, stdout_to_stderr
+from kartci.core.loading import plugin_failure, stdout_to_stderr
 from kartci.errors import KartciError, SpecError
 from kartci.report.ci import (
     annotation_lines,

@@ -198,7 +198,8 @@ def diff_cmd(
         "'/kart0/mpcc/horizon:poses.pose.position.x'.")] = None,
     wall_clock: Annotated[bool, typer.Option(
         "--wall-clock", help="Also compare the fields measured on the wall clock (the MPCC's "
-        "solve_ms; listed in kartci/logs/wallclock.py), which differ between any two runs.")]
+        "solve_ms; declared by the robot kinds, see kartci/logs/wallclock.py), which differ "
+        "between any two runs.")]
     = False,
     tolerance: Annotated[float, typer.Option(
         help="Absolute tolerance of float fields, in each field's own unit [default: 0: "

@@ -21,7 +21,7 @@ from kartci.cli.common import (
     out_console,
 )
 from kartci.core import broken, catalogue
-from kartci.core.registry import stdout_to_stderr
+from kartci.core.loading import stdout_to_stderr
 from kartci.errors import SpecError
 from kartci.scenario import load_scenario, scenario_catalogue
 from kartci.scenario.schema import scenario_schema, write_schema

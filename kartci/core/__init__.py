@@ -7,15 +7,47 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
   `WorldParams`, `MetricParams`) that each plugin's own pydantic model extends.
 - `Controller`, `Node`, `RobotKind` (with what kind-neutral code asks of a kind:
   `WheelOdometry`, `JoyCommand`, `SimReal`; `Outline`, a robot seen from above, convex `Polygon`
-  parts), `WorldKind`, `MetricSet` and their registries; `Registries`, the five passed explicitly
-  to what validates a scenario (`DEFAULT_REGISTRIES`: the process-wide ones); `broken()`: the
-  plugins that failed to load.
+  parts; how its messages flatten into log tables: `Flattener`), `WorldKind`, `MetricSet`, with
+  a `Protocol` for every function they hold (`RobotFactory`, `ComputeFn`, ...): the contracts,
+  `kartci.core.kinds`.
+- Their registries (`kartci.core.registry`); `Registries`, the five passed explicitly to what
+  validates a scenario (`DEFAULT_REGISTRIES`: the process-wide ones); `broken()`: the plugins
+  that failed to load; loading them (`kartci.core.loading`: `load(project)`, a `PluginSource`).
 - `Channel`, `ControlSpace`: a robot kind's command and observation as vectors (`kartci.gym`).
 - `RunFolder`: the one owner of a run folder's file names.
 """
 
 from kartci.core.agent import Agent, Outbox
 from kartci.core.control import Channel, ControlSpace, odometry_channels, odometry_values
+from kartci.core.kinds import (
+    AgentContext,
+    AgentFactory,
+    ComputeFn,
+    ControlFn,
+    Controller,
+    FiguresFn,
+    FitModel,
+    Flattener,
+    JoyCommand,
+    JoystickFn,
+    MetricSet,
+    Node,
+    OdometryFn,
+    Outline,
+    OutlineFn,
+    PlotsFn,
+    Polygon,
+    ReplayFn,
+    RobotFactory,
+    RobotKind,
+    SimReal,
+    WheelOdometry,
+    WorldFactory,
+    WorldKind,
+    fields,
+    lazy,
+)
+from kartci.core.loading import BrokenPlugin, PluginSource, load
 from kartci.core.metric import Direction, Metric, MetricDef
 from kartci.core.params import (
     ControllerParams,
@@ -33,27 +65,13 @@ from kartci.core.registry import (
     REGISTRIES,
     ROBOTS,
     WORLDS,
-    AgentContext,
-    BrokenPlugin,
-    Controller,
-    JoyCommand,
-    MetricSet,
-    Node,
-    Outline,
     PluginInfo,
-    Polygon,
     Registries,
     Registry,
-    RobotKind,
-    SimReal,
-    WheelOdometry,
-    WorldKind,
     broken,
     catalogue,
     definition,
     definitions,
-    lazy,
-    load,
     register,
 )
 from kartci.core.runfolder import UNFINISHED, RunFolder
@@ -69,37 +87,52 @@ __all__ = [
     "WORLDS",
     "Agent",
     "AgentContext",
+    "AgentFactory",
     "BrokenPlugin",
     "Channel",
+    "ComputeFn",
+    "ControlFn",
     "ControlSpace",
     "Controller",
     "ControllerParams",
     "Direction",
+    "FiguresFn",
+    "FitModel",
+    "Flattener",
     "Frozen",
     "JoyCommand",
+    "JoystickFn",
     "Metric",
     "MetricDef",
     "MetricParams",
     "MetricSet",
     "Node",
     "NodeParams",
+    "OdometryFn",
     "Outbox",
     "Outline",
+    "OutlineFn",
+    "PlotsFn",
     "PluginInfo",
+    "PluginSource",
     "Polygon",
     "Registries",
     "Registry",
+    "ReplayFn",
+    "RobotFactory",
     "RobotKind",
     "RobotParams",
     "RunFolder",
     "SimReal",
     "WheelOdometry",
+    "WorldFactory",
     "WorldKind",
     "WorldParams",
     "broken",
     "catalogue",
     "definition",
     "definitions",
+    "fields",
     "lazy",
     "load",
     "odometry_channels",

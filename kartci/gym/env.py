@@ -16,8 +16,7 @@ from gymnasium import spaces
 
 from kartci import core, metrics
 from kartci.core import ControlSpace, Metric
-from kartci.errors import SpecError
-from kartci.project import did_you_mean
+from kartci.errors import SpecError, did_you_mean
 from kartci.scenario import Scenario
 from kartci.scenario.load import load_scenario
 from kartci.sim.session import Session, StepResult

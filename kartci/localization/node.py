@@ -44,7 +44,8 @@ class LocalizationNode:
         self.spec, self.ns, self.period_s = spec, ctx.name, spec.period_s
         wheels = odometry(ctx.model)
         self.wheels, self.wheel_radius_m = wheels.joints, wheels.radius_m
-        self.inputs = (TRACK_TOPIC, "/tf_static", "imu", "joint_states", "velodyne_points")
+        self.inputs: tuple[str, ...] = (TRACK_TOPIC, "/tf_static", "imu", "joint_states",
+                                        "velodyne_points")
         self.mount = np.array([0.0, 0.0, spec.sensor_height_m])  # velodyne_link in base_link
         self.imu_xy = np.zeros(2)  # imu_link in base_link, from /tf_static (lever arm)
         self.z_m = 0.0  # base_link's height, from registration

@@ -5,13 +5,14 @@ from __future__ import annotations
 import math
 import stat
 from collections import defaultdict
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from kartci.core import ROBOTS, Flattener, fields
 from kartci.errors import LogError
 from kartci.logs.bulk import bulk_table, standard
 from kartci.logs.reader import LogReader, Raw, open_log
@@ -55,42 +56,43 @@ def _listed(values: list[Any]) -> Any:
     return out
 
 
-def _fields(*names: str) -> Callable[[Any], Row]:
-    return lambda m: {n: getattr(m, n) for n in names}
-
-
-FLATTENERS: dict[str, Callable[[Any], Row]] = {
+FLATTENERS: dict[str, Flattener] = {
     "nav_msgs/msg/Odometry": _odometry,
     "sensor_msgs/msg/JointState": _joint_state,
-    "sensor_msgs/msg/Range": _fields("range"),
-    "kartci_msgs/msg/LineSensor": _fields("left", "right"),
-    "kartci_msgs/msg/LineControllerState": _fields("distance_estimate_m", "u2", "integral",
-                                                   "sonar_stop"),
-    "std_msgs/msg/String": _fields("data"),
-    "std_msgs/msg/UInt32": _fields("data"),  # counters (the bridge's late_commands)
+    "sensor_msgs/msg/Range": fields("range"),
+    "std_msgs/msg/String": fields("data"),
+    "std_msgs/msg/UInt32": fields("data"),  # counters (the bridge's late_commands)
     "sensor_msgs/msg/Joy": lambda m: {"axes": m.axes.tolist(), "buttons": m.buttons.tolist()},
     "kartci_msgs/msg/Collision": lambda m: {"other": m.other, "impulse_ns": m.impulse_ns,
                                             "duration_s": m.duration_s, "x": m.position.x,
                                             "y": m.position.y},
-    "kartci_msgs/msg/KartCommand": _fields("steering_wheel_angle_rad", "acceleration_mps2",
-                                           "brake_mps2", "reverse", "emergency_stop"),
-    "kartci_msgs/msg/SolverStats": _fields("success", "status", "solve_ms", "iterations",
-                                           "cost", "failures", "max_slack_m"),
-    "kartci_msgs/msg/TyreForces": lambda m: {
-        f"{w}.{k}": getattr(m, k)[i] for i, w in enumerate(m.wheel)
-        for k in ("fx_n", "fy_n", "grip_n")},
     "nav_msgs/msg/Path": lambda m: {"xs": _listed([p.pose.position.x for p in m.poses]),
                                     "ys": _listed([p.pose.position.y for p in m.poses])},
     "sensor_msgs/msg/Imu": lambda m: {"ax": m.linear_acceleration.x,
                                       "ay": m.linear_acceleration.y,
                                       "az": m.linear_acceleration.z, "wz": m.angular_velocity.z},
 }
-# decoded in bulk (kartci.logs.bulk); the others are few, or strings that change from message
-# to message
-BULK = frozenset(FLATTENERS) - {"sensor_msgs/msg/Joy", "std_msgs/msg/String"}
+# not decoded in bulk (kartci.logs.bulk): few, or strings that change from message to message
+NOT_BULK = frozenset({"sensor_msgs/msg/Joy", "std_msgs/msg/String"})
 
 
-def _row(path: Path, topic: str, t_ns: int, m: Any, flat: Callable[[Any], Row]) -> Row:
+def flatteners() -> dict[str, Flattener]:
+    """The flattener of every message type a table is made of: the standard types above and
+    each registered robot kind's own messages (`RobotKind.flatteners`), as rosbags' typestore
+    takes types: they register, the reader stays generic."""
+    out = dict(FLATTENERS)
+    for kind in ROBOTS.all():
+        for msgtype, flat in kind.flatteners.items():
+            out.setdefault(msgtype, flat)
+    return out
+
+
+def bulk_types(flat: Mapping[str, Flattener]) -> frozenset[str]:
+    """The types of `flat` decoded in bulk (kartci.logs.bulk)."""
+    return frozenset(flat) - NOT_BULK
+
+
+def _row(path: Path, topic: str, t_ns: int, m: Any, flat: Flattener) -> Row:
     """A foreign log may define a type of the same name with other fields; say so in one line
     instead of failing in a flattener."""
     try:
@@ -108,7 +110,7 @@ _LAST: dict[_File, tuple[frozenset[str] | None, dict[str, pd.DataFrame]]] = {}
 
 def tables(path: Path, wanted: Sequence[str] | None = None) -> dict[str, pd.DataFrame]:
     """`t` (s, from the header stamp when there is one, else log time) plus flattened fields,
-    for the wanted topics (default: every topic of a type in FLATTENERS; the others, tf and
+    for the wanted topics (default: every topic of a type in `flatteners()`; the others, tf and
     point clouds, are not decoded at all).
 
     A run is scored, then judged and drawn, each reading its log: the last log file read in
@@ -140,42 +142,43 @@ def _identity(path: Path) -> _File | None:
 
 
 def _read(path: Path, wanted: Sequence[str] | None) -> dict[str, pd.DataFrame]:
-    """tables_of(log.messages(wanted)), with the topics of BULK types that the log defines as
+    """tables_of(log.messages(wanted)), with the topics of `bulk_types` that the log defines as
     kartci does held back and decoded in bulk (message by message where that fails)."""
+    flat_of = flatteners()
+    bulk_of = bulk_types(flat_of)
     with open_log(path) as log:
         if wanted is None:
-            wanted = [t.topic for t in log.topics() if t.msgtype in FLATTENERS]
+            wanted = [t.topic for t in log.topics() if t.msgtype in flat_of]
         rows: dict[str, list[Row]] = defaultdict(list)
         first: dict[str, int] = {}  # a topic's first row: the tables' order
         held: dict[str, list[tuple[int, Raw]]] = defaultdict(list)
         bulk: dict[str, bool] = {}
         for k, raw in enumerate(log.raw(wanted)):
             msgtype = raw[1]
-            if msgtype in BULK and msgtype not in bulk:
+            if msgtype in bulk_of and msgtype not in bulk:
                 bulk[msgtype] = standard(log.typestore, msgtype)
             if not raw[2] and bulk.get(msgtype, False):
                 held[raw[0]].append((k, raw))
                 continue
             m = log.decode(raw)
-            flat = None if m is None else FLATTENERS.get(m.__msgtype__)
+            flat = None if m is None else flat_of.get(m.__msgtype__)
             if flat is not None:
                 first.setdefault(raw[0], k)
                 rows[raw[0]].append(_row(path, raw[0], raw[3], m, flat))
         read = {topic: pd.DataFrame(r) for topic, r in rows.items()}
         for topic, raws in held.items():
-            table, k = _held(path, log, raws)
+            table, k = _held(path, log, raws, flat_of[raws[0][1][1]])
             if table is not None:
                 read[topic], first[topic] = table, k
         log.report_undecodable()
     return {topic: read[topic] for topic in sorted(read, key=first.__getitem__)}
 
 
-def _held(path: Path, log: LogReader, held: list[tuple[int, Raw]]
+def _held(path: Path, log: LogReader, held: list[tuple[int, Raw]], flat: Flattener
           ) -> tuple[pd.DataFrame | None, int]:
     """One held topic's table (None: none of its messages decodes) and its first row's index
     in the log."""
     topic, msgtype = held[0][1][0], held[0][1][1]
-    flat = FLATTENERS[msgtype]
     decoded: dict[int, Any] = {}
 
     def message(i: int) -> Any:
@@ -202,8 +205,9 @@ def _held(path: Path, log: LogReader, held: list[tuple[int, Raw]]
 def tables_of(path: Path, messages: Iterable[tuple[str, int, Any]]) -> dict[str, pd.DataFrame]:
     """The tables of (topic, log time ns, message) in log order, as tables() makes them."""
     rows: dict[str, list[Row]] = defaultdict(list)
+    flat_of = flatteners()
     for topic, t_ns, m in messages:
-        flat = FLATTENERS.get(m.__msgtype__)
+        flat = flat_of.get(m.__msgtype__)
         if flat is not None:
             rows[topic].append(_row(path, topic, t_ns, m, flat))
     return {topic: pd.DataFrame(r) for topic, r in rows.items()}

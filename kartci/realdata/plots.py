@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from kartci.figures import PlotContext, Plots
 from kartci.metrics.progress import kart_track
+from kartci.plotting import PlotContext, Plots
 from kartci.realdata.divergence import SIM_WHOLE, SIM_WINDOWS
 from kartci.worlds.track import TRACK_TOPIC, track_from_text
 

@@ -14,7 +14,7 @@ import numpy as np
 from kartci.atomic import check_target, write_text_atomic
 from kartci.boundedio import JSON_MAX_BYTES, RefusedFileError, out_of_range, read_bytes
 from kartci.errors import SpecError
-from kartci.report.figures import Axis, Figure, Series
+from kartci.plotting import Axis, Figure, Series
 from kartci.report.interactive import body_assets, figures_block, head_assets
 from kartci.report.tables import CSS
 from kartci.scenario.yamlio import clip

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from kartci.report.figures import Event, Figure, Series
+from kartci.plotting import Event, Figure, Series
 
 SIGNIFICANT = 5  # digits kept per value: enough for a cursor read-out, small in the file
 

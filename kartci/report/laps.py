@@ -7,7 +7,7 @@ import html
 
 import pandas as pd
 
-from kartci.figures import Plots
+from kartci.plotting import Plots
 
 
 def _s(x: float) -> str:

@@ -13,9 +13,9 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.ticker import LogFormatter
 
-from kartci.figures import Plots
 from kartci.plotstyle import svg  # also sets Agg, the SVG settings and the mathtext guard
-from kartci.report.figures import Axis, Figure, Role, Series, scenario_figures, thin
+from kartci.plotting import Axis, Figure, Plots, Role, Series, thin
+from kartci.report.figures import scenario_figures
 
 STYLE: dict[Role, dict[str, Any]] = {Role.REFERENCE: {"color": "grey", "ls": "--", "lw": 1.0},
          Role.COMMAND: {"ls": ":", "lw": 0.8}, Role.OUTLINE: {"color": "black", "lw": 0.8},

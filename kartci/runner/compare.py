@@ -9,7 +9,7 @@ from pathlib import Path
 
 from kartci.core import RunFolder
 from kartci.errors import SpecError
-from kartci.figures import overlay
+from kartci.plotting import overlay
 from kartci.runner.jobs import REPEAT_PREFIX
 from kartci.runner.outdir import check_inside
 from kartci.runner.run import evaluate, scenario_folders

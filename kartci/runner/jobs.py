@@ -26,7 +26,7 @@ from typing import Any
 from kartci import project
 from kartci.core import RunFolder
 from kartci.errors import PluginError, RunError, SpecError, one_line
-from kartci.figures import Plots
+from kartci.plotting import Plots
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
     check_criteria_names,

@@ -21,11 +21,10 @@ import pandas as pd
 
 from kartci import core, metrics, portable, project
 from kartci.core import UNFINISHED, RunFolder
-from kartci.errors import KartciError, LogError, SpecError, one_line
-from kartci.figures import PlotContext, Plots
+from kartci.errors import KartciError, LogError, SpecError, did_you_mean, one_line
 from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.logs.recorded import COMMANDS, JOY, Recorded
-from kartci.project import did_you_mean
+from kartci.plotting import PlotContext, Plots
 from kartci.runner.outdir import check_inside, manifest_labels
 from kartci.runner.pinned import NotPortable, call_pinned
 from kartci.scenario import Scenario

@@ -15,8 +15,8 @@ from typing import Annotated, Any
 from pydantic import BaseModel, ValidationError
 
 from kartci import core, project
-from kartci.errors import KartciError, SpecError
-from kartci.project import Origin, did_you_mean
+from kartci.errors import KartciError, SpecError, did_you_mean
+from kartci.project import Origin
 from kartci.scenario.dispatch import ParamsError, context, dispatch, with_allowed_keys
 from kartci.scenario.models import Scenario, WorldParams, unit_of
 from kartci.scenario.schema import scenario_schema

@@ -32,9 +32,9 @@ import numpy as np
 
 from kartci import core, portable
 from kartci.core import Agent, AgentContext
-from kartci.errors import KartciError, SpecError
+from kartci.errors import KartciError, SpecError, did_you_mean
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, msg
-from kartci.project import did_you_mean, held
+from kartci.project import held
 from kartci.scenario import Scenario
 from kartci.scenario.models import Carry
 from kartci.sim.messages import tf_message

@@ -11,8 +11,7 @@ from typing import Any
 
 from kartci import portable, project
 from kartci.core import Metric, RunFolder, definitions
-from kartci.errors import SpecError, one_line
-from kartci.project import did_you_mean
+from kartci.errors import SpecError, did_you_mean, one_line
 from kartci.scenario.models import Scenario
 from kartci.verdict import criteria, fingerprint
 from kartci.verdict.baseline import (

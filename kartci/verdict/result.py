@@ -12,12 +12,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from kartci.core import Metric, RunFolder
-from kartci.project import did_you_mean
+from kartci.errors import did_you_mean
 from kartci.verdict.baseline import CriterionResult, MetricVerdict, Status, worst
 from kartci.verdict.criteria import CriterionChange
 
 if TYPE_CHECKING:  # a result only carries its plots: judging needs neither pandas nor the figures
-    from kartci.figures import Plots
+    from kartci.plotting import Plots
     from kartci.scenario.models import Scenario
 
 

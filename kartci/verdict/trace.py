@@ -16,7 +16,7 @@ import pandas as pd
 from kartci.atomic import write_text_atomic
 from kartci.boundedio import JSON_MAX_BYTES, read_bytes
 from kartci.errors import BaselineError
-from kartci.figures import Plots
+from kartci.plotting import Plots
 
 STEP_S = 0.2  # one sample per 0.2 s of sim time: a 50 s lap run is ~250 rows, ~15 kB
 COLUMNS = {"t": 3, "x": 3, "y": 3, "speed": 3, "offset": 5, "s_total": 2}  # name -> decimals

@@ -13,7 +13,7 @@ import yaml
 from helpers import QUICK, kartci
 
 from kartci.core import Controller, Registry
-from kartci.core.registry import _load_entry_point
+from kartci.core.loading import load_entry_point
 from kartci.errors import PluginError
 from kartci.project import BUILTIN_SCENARIOS
 
@@ -41,7 +41,7 @@ def scenario_with_controller(path: Path, controller: str) -> None:
 
 def test_a_broken_entry_point_is_recorded_under_its_name_not_raised() -> None:
     reg: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
-    _load_entry_point(reg, EntryPoint("stanley", "no_such_module_kartci_test:STANLEY",
+    load_entry_point(reg, EntryPoint("stanley", "no_such_module_kartci_test:STANLEY",
                                       "kartci.controllers"))
     assert reg.items == {}
     with pytest.raises(PluginError) as err:
@@ -105,7 +105,7 @@ def test_a_plugin_that_calls_sys_exit_while_loading_is_recorded_as_broken_by_nam
     (tmp_path / "kartci_test_quitter.py").write_text("import sys\nsys.exit(0)\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     reg: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
-    _load_entry_point(reg, EntryPoint("quitter", "kartci_test_quitter:QUITTER",
+    load_entry_point(reg, EntryPoint("quitter", "kartci_test_quitter:QUITTER",
                                       "kartci.controllers"))
     assert reg.broken["quitter"].error == "SystemExit: 0"
     with pytest.raises(PluginError, match=r"plugin 'quitter' .* failed to load: SystemExit: 0"):
@@ -120,7 +120,7 @@ def test_a_keyboard_interrupt_while_a_plugin_loads_still_stops_kartci(
     monkeypatch.syspath_prepend(str(tmp_path))
     reg: Registry[Controller] = Registry("kartci.controllers", "controller", Controller)
     with pytest.raises(KeyboardInterrupt):
-        _load_entry_point(reg, EntryPoint("interrupted", "kartci_test_interrupted:X",
+        load_entry_point(reg, EntryPoint("interrupted", "kartci_test_interrupted:X",
                                           "kartci.controllers"))
 
 

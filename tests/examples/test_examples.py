@@ -58,3 +58,8 @@ def test_the_pure_pursuit_package_runs_everywhere(tmp_path: Path, fresh_venv: Pa
     p = sh(str(fresh_venv / "python"), "-m", "pytest", "-q", "-p", "no:cacheprovider",
            "scenarios/")
     assert p.returncode == 0 and "1 passed" in p.stdout, p.stdout[-3000:] + p.stderr[-2000:]
+
+    # the example's own tests: its plugins pass kartci.testing.check_kind
+    p = sh(str(fresh_venv / "python"), "-m", "pytest", "-q", "-p", "no:cacheprovider",
+           "tests/")
+    assert p.returncode == 0 and "1 passed" in p.stdout, p.stdout[-3000:] + p.stderr[-2000:]

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from kartci.report.figures import Axis, Figure, Series
+from kartci.plotting import Axis, Figure, Series
 from kartci.report.static import figure_svg
 
 

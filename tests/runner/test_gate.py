@@ -26,8 +26,8 @@ from kartci import metrics
 from kartci.cli.common import finish
 from kartci.core import Outbox
 from kartci.errors import BaselineError, RunError
-from kartci.figures import Plots
 from kartci.logs import McapLogWriter, messages, msg
+from kartci.plotting import Plots
 from kartci.project import BUILTIN_SCENARIOS
 from kartci.report import write_all
 from kartci.robots.line_tracker.line_pid import LinePid

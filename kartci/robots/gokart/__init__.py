@@ -6,6 +6,7 @@ Public for a team's own kart controller: the command (`KartInput`), the steering
 """
 
 from kartci.core import RobotKind, SimReal, WheelOdometry, lazy
+from kartci.robots.gokart import messages
 from kartci.robots.gokart.params import GokartModel, KartSensors, axle_distance_m
 from kartci.robots.gokart.steering import (
     STEERING_RATIO,
@@ -35,7 +36,10 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                   simreal=SimReal("kart_simreal", (
                       "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped",
                       "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")),
-                  control=lazy("kartci.robots.gokart.control:control"))
+                  control=lazy("kartci.robots.gokart.control:control"),
+                  flatteners=messages.FLATTENERS, wall_clock=messages.WALL_CLOCK,
+                  commands=messages.COMMANDS,
+                  figures=lazy("kartci.robots.gokart.plots:kart_figures"))
 
 
 __all__ = ["ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",

@@ -14,10 +14,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from kartci import project
 from kartci.core import JoyCommand, RobotParams
-from kartci.errors import SpecError
+from kartci.errors import SpecError, did_you_mean
 from kartci.logs import messages
 from kartci.logs.types import header, msg, stamp_ns, typestore
-from kartci.project import did_you_mean
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput
 from kartci.scenario.yamlio import read_yaml

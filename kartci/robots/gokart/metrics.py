@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from kartci.core import Metric, MetricSet
+from kartci.core import Direction, Metric, MetricDef, MetricSet
 from kartci.metrics import ScoreContext, outline_of, recorded_track
-from kartci.metrics.defs import DEFS, defs_of
+from kartci.metrics.defs import defs_of
 from kartci.metrics.outline import placed
 from kartci.metrics.progress import kart_track, lap_crossings
 from kartci.robots.gokart.handling import HANDLING_DEFS, HandlingParams, handling_metrics
@@ -20,6 +20,31 @@ from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.race import SLACK_DEF, race_metrics
 from kartci.scenario.models import Scenario
 from kartci.worlds.track import Track
+
+# the kart's own metrics; the shared ones (laps, speeds, collisions, clearance) are in
+# kartci.metrics.defs
+KART_DEFS: dict[str, MetricDef] = {
+    "off_track_s": MetricDef("s", Direction.LOWER, 0.1, 0.10,
+                             "time with any wheel outside the track bounds"),
+    "overtakes": MetricDef("count", Direction.HIGHER, 0.0, 0.0,
+                           "net passes of other karts (passes minus times passed; lapping a "
+                           "kart is a pass)"),
+    "solver_failures": MetricDef("count", Direction.LOWER, 0.0, 0.0,
+                                 "MPCC solves that failed or hit the iteration cap (the kart "
+                                 "braked)"),
+    "solve_ms_median": MetricDef("ms", Direction.LOWER, 5.0, 1.0, "median MPCC solve time",
+                                 timing=True),
+    "solve_ms_p95": MetricDef("ms", Direction.LOWER, 5.0, 1.0, "95th percentile solve time",
+                              timing=True),
+    "solve_ms_max": MetricDef("ms", Direction.LOWER, 20.0, 2.0, "slowest solve", timing=True),
+}
+DEFS = {**defs_of("laps_completed", "lap_times_s", "best_lap_s", "collisions", "max_speed_mps",
+                  "mean_speed_mps", "progress_m", "cross_track_rms_m", "min_clearance_m"),
+        **KART_DEFS}
+
+
+def _of(*names: str) -> dict[str, MetricDef]:
+    return {n: DEFS[n] for n in names}
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:
@@ -101,15 +126,15 @@ def _handling(ctx: ScoreContext, params: HandlingParams) -> list[Metric]:
 
 LAPS = MetricSet(
     "laps",
-    defs_of("laps_completed", "lap_times_s", "best_lap_s", "collisions", "off_track_s",
-            "max_speed_mps", "mean_speed_mps", "progress_m", "cross_track_rms_m"),
+    _of("laps_completed", "lap_times_s", "best_lap_s", "collisions", "off_track_s",
+        "max_speed_mps", "mean_speed_mps", "progress_m", "cross_track_rms_m"),
     _laps, None, ("gokart",),
     "laps and lap times, collisions, time off track, speed, progress, distance from the "
     "centreline")
 RACE = MetricSet(
     "race",
-    {**defs_of("min_clearance_m", "overtakes", "solver_failures", "solve_ms_median",
-               "solve_ms_p95", "solve_ms_max"), "max_slack_m": SLACK_DEF},
+    {**_of("min_clearance_m", "overtakes", "solver_failures", "solve_ms_median",
+           "solve_ms_p95", "solve_ms_max"), "max_slack_m": SLACK_DEF},
     _race, None, ("gokart",),
     "clearance to obstacles and other karts (outline to outline), overtakes (lapping passes "
     "included), MPCC solver statistics and slack")

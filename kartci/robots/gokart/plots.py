@@ -7,13 +7,34 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from kartci.figures import PlotContext, Plots, wheel_series
 from kartci.logs.reader import messages
 from kartci.logs.types import yaw_of
 from kartci.metrics import recorded_track
 from kartci.metrics.outline import box
 from kartci.metrics.progress import crossing_time, kart_track, wheel_margins_m
 from kartci.metrics.trajectory import Trajectory, TrajectoryError, ape_errors, associate
+from kartci.plotting import (
+    Axis,
+    Figure,
+    FigureContext,
+    PlotContext,
+    Plots,
+    Role,
+    Series,
+    wheel_series,
+)
+from kartci.plotting.builders import (
+    col,
+    controls,
+    event_at,
+    lap_overlays,
+    localization_error,
+    margins,
+    plane,
+    speed_time,
+    time_series,
+    wheel_speeds,
+)
 from kartci.robots.gokart.params import GokartModel
 from kartci.worlds.track import Track
 
@@ -71,9 +92,30 @@ def kart_plots(ctx: PlotContext) -> Plots:
             margins[agent] = pd.DataFrame({"t": tr["t"], "margin_m": wheel_margins_m(
                 track, tr, np.asarray(model.wheel_xy_m))})
     return Plots("track", track.xy, list(track.bounds()), tracks, wheels, commands, collisions,
-                 obstacles=obstacles, horizons=horizons, solves=solves, laps=laps,
-                 track_length_m=track.length_m, margins=margins, controls=controls,
-                 estimates=estimates(ctx), detections=detections(ctx))
+                 obstacles=obstacles, laps=laps, track_length_m=track.length_m,
+                 margins=margins, controls=controls, estimates=estimates(ctx),
+                 detections=detections(ctx), robot="gokart",
+                 own={"horizons": horizons, "solves": solves})
+
+
+def kart_figures(ctx: FigureContext) -> list[Figure]:
+    """A kart run's figures: the track seen from above with a few MPCC horizons, laps
+    overlaid, speed, commands, margins, localization error, wheel speeds and MPCC solve times;
+    failed solves marked on each after the collisions."""
+    p = ctx.plots
+    solves: dict[str, pd.DataFrame] = p.own.get("solves", {})
+    ev = [*ctx.events, *(event_at(p, agent, float(t), "solver failure")
+                         for agent, st in sorted(solves.items())
+                         for t in col(st[~st["success"].astype(bool)], "t"))]
+    horizons: dict[str, list[np.ndarray]] = p.own.get("horizons", {})
+    plans = [Series(f"{agent} MPCC horizon {i + 1}", plan[:, 0], plan[:, 1], Role.COMMAND)
+             for agent, agent_plans in sorted(horizons.items())
+             for i, plan in enumerate(agent_plans)]
+    return [plane(p, ev, plans), *lap_overlays(p, ev), speed_time(p, ev), controls(p, ev),
+            margins(p, ev), localization_error(p, ev), wheel_speeds(p, ev),
+            Figure("solves", "MPCC solve time (wall clock)", "sim time [s]", "solve time [ms]",
+                   Axis.TIME, [time_series(a, st, "solve_ms") for a, st in solves.items()], ev,
+                   log_y=True)]
 
 
 def estimates(ctx: PlotContext) -> dict[str, pd.DataFrame]:

@@ -1,6 +1,7 @@
 """The line tracker (seed 001) as a robot kind: registered as `line_tracker` (entry point)."""
 
 from kartci.core import RobotKind, SimReal, lazy
+from kartci.robots.line_tracker import messages
 from kartci.robots.line_tracker.params import LineTrackerModel, LineTrackerSensors
 
 ROBOT = RobotKind("line_tracker", LineTrackerModel,
@@ -12,4 +13,6 @@ ROBOT = RobotKind("line_tracker", LineTrackerModel,
                   simreal=SimReal("diffdrive_simreal", ("geometry_msgs/msg/Twist",
                                                         "geometry_msgs/msg/TwistStamped"),
                                   wheel_speeds=True),
-                  control=lazy("kartci.robots.line_tracker.control:control"))
+                  control=lazy("kartci.robots.line_tracker.control:control"),
+                  flatteners=messages.FLATTENERS,
+                  figures=lazy("kartci.robots.line_tracker.plots:line_figures"))

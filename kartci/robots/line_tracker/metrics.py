@@ -9,11 +9,11 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
-from kartci.core import Metric, MetricParams, MetricSet
+from kartci.core import Direction, Metric, MetricDef, MetricParams, MetricSet
 from kartci.core.params import Duration_s, Size_m
 from kartci.errors import SpecError
 from kartci.metrics import ScoreContext
-from kartci.metrics.defs import DEFS, defs_of
+from kartci.metrics.defs import defs_of
 from kartci.robots.line_tracker.params import line_parts
 from kartci.scenario.models import Scenario
 
@@ -28,6 +28,19 @@ class LineMetricsParams(MetricParams):
                                      "+-0.021 m)")
     settle_band_m: Size_m = Field(0.002, description="the cross-track error band that "
                                   "ends settling (settle_time_s), m")
+
+# the line tracker's own metrics; the shared ones (speed, RMS distance) are in kartci.metrics.defs
+LINE_DEFS: dict[str, MetricDef] = {
+    "cross_track_max_m": MetricDef("m", Direction.LOWER, 0.0005, 0.10,
+                                   "largest such distance after the transient"),
+    "line_lost": MetricDef("bool", Direction.EQUAL, 0.0, 0.0,
+                           "1 if the sensor point ever left the sensor's range of the line"),
+    "completion": MetricDef("fraction", Direction.HIGHER, 0.01, 0.0,
+                            "fraction of the course covered while on the line"),
+    "settle_time_s": MetricDef("s", Direction.LOWER, 0.5, 0.10,
+                               "time after which the cross-track error stays in the settle band"),
+}
+DEFS = {**defs_of("cross_track_rms_m", "mean_speed_mps"), **LINE_DEFS}
 
 
 def _m(name: str, value: float, **extra: object) -> Metric:
@@ -106,7 +119,7 @@ def _line(ctx: ScoreContext, params: LineMetricsParams) -> list[Metric]:
 
 LINE_TRACKING = MetricSet(
     "line_tracking",
-    defs_of("cross_track_rms_m", "cross_track_max_m", "line_lost", "completion",
-            "mean_speed_mps", "settle_time_s"),
+    {n: DEFS[n] for n in ("cross_track_rms_m", "cross_track_max_m", "line_lost", "completion",
+                          "mean_speed_mps", "settle_time_s")},
     _line, LineMetricsParams, ("line_tracker",),
     "distance of the line sensor from the line, line lost, completion, settling")

@@ -110,7 +110,7 @@ class Mpcc:
             sol, status, ok, more = self._attempt(x0, obstacles,
                                                   self.built.rti or self.built.cold)
             iters += more
-        # wall clock: recorded as SolverStats.solve_ms, listed in kartci.logs.wallclock
+        # wall clock: recorded as SolverStats.solve_ms, declared in ..messages.WALL_CLOCK
         solve_ms = (time.perf_counter() - t0) * 1e3
         w = np.asarray(sol["x"]).ravel()
         if not ok:

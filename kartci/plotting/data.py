@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # field types only: a PlotContext carries a scenario, nothing
 class Plots:
     """Time series and geometry a report draws; all read back from the run log."""
 
-    kind: str  # "line" (a line lab) or "track" (a race track)
+    kind: str  # the course: "line" (a line lab) or "track" (a race track)
     course: np.ndarray  # (n, 2) line axis or track centreline, m
     edges: list[np.ndarray]  # track bounds (left, right), empty for a line
     tracks: dict[str, pd.DataFrame]  # agent -> t, x, y, offset, speed (+ line: progress)
@@ -32,8 +32,6 @@ class Plots:
     collisions: dict[str, pd.DataFrame]  # agent -> t, x, y, other, impulse_ns
     transient_s: float = 0.0  # start-up transient the metrics leave out
     obstacles: list[np.ndarray] = field(default_factory=list)  # (4, 2) box footprints, m
-    horizons: dict[str, list[np.ndarray]] = field(default_factory=dict)  # agent -> MPCC plans
-    solves: dict[str, pd.DataFrame] = field(default_factory=dict)  # agent -> t, solve_ms
     # agent -> t, x, y (localization estimate), error_m (APE translation against the truth)
     estimates: dict[str, pd.DataFrame] = field(default_factory=dict)
     # agent -> detected boxes at a few moments: (4, 2) footprint, m, and whether dynamic
@@ -46,6 +44,10 @@ class Plots:
     controls: dict[str, pd.DataFrame] = field(default_factory=dict)  # agent -> t, named columns
     # the baseline's decimated reference trace (kartci.verdict.trace): agent -> t, x, y, speed...
     reference: dict[str, pd.DataFrame] = field(default_factory=dict)
+    # the robot kind whose `figures` draw these (empty: the kind-neutral figures)
+    robot: str = ""
+    # what only that kind's figures read, by name: each an agent -> data mapping
+    own: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -95,7 +97,10 @@ def overlay(base: Plots | None, head: Plots | None) -> Plots | None:
         return {f"{who} {agent}": frame for who, p in (("base", base), ("head", head))
                 for agent, frame in getattr(p, field_name).items()}
 
+    own = {name: {f"{who} {agent}": data for who, p in (("base", base), ("head", head))
+                  for agent, data in p.own.get(name, {}).items()}
+           for name in dict.fromkeys([*base.own, *head.own])}
     return replace(head, tracks=both("tracks"), wheels=both("wheels"),
                    commands=both("commands"), collisions=both("collisions"),
-                   solves=both("solves"), horizons={}, laps=both("laps"), margins=both("margins"),
-                   controls=both("controls"), reference={})
+                   laps=both("laps"), margins=both("margins"), controls=both("controls"),
+                   reference={}, own=own)
