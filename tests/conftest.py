@@ -7,6 +7,7 @@ from __future__ import annotations
 import fcntl
 import os
 import sys
+import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -168,11 +169,10 @@ def shipped_run(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Pat
 
 @pytest.fixture
 def dds_alone(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
-    """One DDS test at a time across xdist workers: the tests that check a run leaves no Fast
-    DDS shared memory compare /dev/shm before and after, which another worker's DDS processes
-    would fill meanwhile (each run has its own domain, but /dev/shm is the machine's)."""
-    base = tmp_path_factory.getbasetemp()
-    folder = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
-    with (folder / "dds.lock").open("w") as lock:
+    """One DDS test at a time on this machine, across xdist workers and test runs: the tests
+    that check a run leaves no Fast DDS shared memory compare /dev/shm before and after, which
+    another worker's or another run's DDS processes would fill meanwhile (each run has its own
+    domain, but /dev/shm is the machine's; two checkouts tested at once on one host failed so)."""
+    with (Path(tempfile.gettempdir()) / "kartci-dds-tests.lock").open("w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         yield

@@ -117,6 +117,9 @@ class _BoundedStreamReader(StreamReader):
         return record
 
 
+KNOWN_COMPRESSIONS = ("", "none", "zstd", "lz4", "bz2")  # what a chunk may name
+
+
 def _inflate(compression: str, data: bytes, size: int) -> bytes:
     """Decompress a chunk, never to more than its declared size (a damaged size or frame header
     must not make us allocate gigabytes)."""
@@ -129,7 +132,7 @@ def _inflate(compression: str, data: bytes, size: int) -> bytes:
     elif compression == "bz2":
         raw = bz2.BZ2Decompressor().decompress(data, max_length=size + 1)
     else:
-        raise _DamagedError(f"unknown chunk compression {compression!r}")
+        raise _DamagedError("a chunk names a compression that is not zstd, lz4, bz2 or none")
     if len(raw) != size:
         raise _DamagedError(f"a chunk decompresses to {len(raw)} bytes, not {size}")
     return bytes(raw)
@@ -183,7 +186,8 @@ def _stream_inflate(compression: str, data: bytes, size: int) -> bytes:
         return bytes(zstd.ZstdDecompressor().decompress(data, max_length=size))
     if compression == "lz4":
         return bytes(lz4.frame.LZ4FrameDecompressor().decompress(data, max_length=size))
-    raise _DamagedError(f"unknown chunk compression {compression!r}")
+    raise _DamagedError("a chunk names a compression stream decompression cannot read (not "
+                        "zstd, lz4 or none)")
 
 
 def _cut_chunk(f: BinaryIO, at: int, size: int, state: _McapState) -> str | None:
@@ -209,7 +213,9 @@ def _cut_chunk(f: BinaryIO, at: int, size: int, state: _McapState) -> str | None
     used = sum(len(d) + 31 for _, _, d in state.into.found[before:])  # message records' bytes
     where = f"the file ends inside a chunk at byte {size}"
     if got == 0:
-        return (f"{where} ({compression or 'uncompressed'}, {full} bytes unpacked): none of "
+        shown = (compression or "uncompressed") if compression in KNOWN_COMPRESSIONS else (
+            "an unknown compression")  # a damaged name is bytes of the file: never quoted
+        return (f"{where} ({shown}, {full} bytes unpacked): none of "
                 "its messages could be recovered (the cut falls in its first block)")
     lost = round(max(0, full - used) / (used / got))
     return (f"{where}: {count_of(got, 'message')} recovered from it by stream "

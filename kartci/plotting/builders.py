@@ -23,9 +23,9 @@ def col(frame: pd.DataFrame, name: str) -> np.ndarray:
 def events(p: Plots) -> list[Event]:
     """Collisions of every agent, placed in time, on the plane and along the lap."""
     out: list[Event] = []
-    for agent, col in sorted(p.collisions.items()):
-        for t, x, y, other in zip(col(col, "t"), col(col, "x"), col(col, "y"),
-                                  col["other"].astype(str), strict=True):
+    for agent, hits in sorted(p.collisions.items()):
+        for t, x, y, other in zip(col(hits, "t"), col(hits, "x"), col(hits, "y"),
+                                  hits["other"].astype(str), strict=True):
             out.append(Event(f"{agent} collision with {other}", float(t), float(x), float(y),
                              lap_position(p, agent, float(t))))
     return out
