@@ -461,8 +461,9 @@ def _closure(names: set[str], extras: tuple[str, ...] = ()) -> set[str]:
 def test_the_docs_extra_alone_imports_everything_the_site_documents() -> None:
     """`pip install 'kartci[docs]'` must build the site on its own: autodoc and the site's own
     directives import these modules, so with every distribution only [dev] brings made
-    unimportable, each must still import (kartci.pytest_plugin needs pytest: [docs] has it).
-    The cheap proof; the strict build itself runs in the full tier."""
+    unimportable, each must still import (kartci.pytest_plugin needs pytest, a base
+    dependency; kartci.gym needs Gymnasium: [docs] has it). The cheap proof; the strict build
+    itself runs in the full tier."""
     from importlib import metadata
 
     from packaging.utils import canonicalize_name
