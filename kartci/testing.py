@@ -63,6 +63,16 @@ def _fail(what: str, fault: str) -> KindCheckError:
     return KindCheckError(f"{what}: {fault}")
 
 
+def _is_a(what: str, item: object, contract: type) -> None:
+    if not isinstance(item, contract):
+        raise _fail(what, f"is a {type(item).__name__}, not a kartci.core.{contract.__name__}")
+
+
+def _extends(what: str, params: type, base: type) -> None:
+    if not issubclass(params, base):
+        raise _fail(what, f"params {params.__name__} does not extend kartci.core.{base.__name__}")
+
+
 def _tag_of(params: type[BaseModel], key: str) -> Any:
     prop = params.model_json_schema().get("properties", {}).get(key, {})
     return prop.get("const", prop.get("default"))
@@ -72,11 +82,8 @@ def check_robot(kind: RobotKind, checked: Checked | None = None) -> Checked:
     """A robot kind's contract, without running it."""
     out = checked or Checked()
     what = f"robot kind '{getattr(kind, 'name', kind)}'"
-    if not isinstance(kind, RobotKind):
-        raise _fail(what, f"is a {type(kind).__name__}, not a kartci.core.RobotKind")
-    if not issubclass(kind.params, core.RobotParams):
-        raise _fail(what, f"params {kind.params.__name__} does not extend "
-                    "kartci.core.RobotParams")
+    _is_a(what, kind, RobotKind)
+    _extends(what, kind.params, core.RobotParams)
     if _tag_of(kind.params, "kind") not in (kind.name, None):
         raise _fail(what, f"params {kind.params.__name__}.kind is "
                     f"{_tag_of(kind.params, 'kind')!r}, not the kind's name {kind.name!r}")
@@ -141,11 +148,8 @@ def check_world(kind: WorldKind, checked: Checked | None = None) -> Checked:
     """A world kind's contract, without building it."""
     out = checked or Checked()
     what = f"world kind '{getattr(kind, 'name', kind)}'"
-    if not isinstance(kind, WorldKind):
-        raise _fail(what, f"is a {type(kind).__name__}, not a kartci.core.WorldKind")
-    if not issubclass(kind.params, core.WorldParams):
-        raise _fail(what, f"params {kind.params.__name__} does not extend "
-                    "kartci.core.WorldParams")
+    _is_a(what, kind, WorldKind)
+    _extends(what, kind.params, core.WorldParams)
     if _tag_of(kind.params, "kind") not in (kind.name, None):
         raise _fail(what, f"params {kind.params.__name__}.kind is not the kind's name")
     if not callable(kind.factory):
@@ -158,11 +162,8 @@ def check_controller(ctl: Controller, checked: Checked | None = None) -> Checked
     """A controller type's contract, without building one."""
     out = checked or Checked()
     what = f"controller '{getattr(ctl, 'name', ctl)}'"
-    if not isinstance(ctl, Controller):
-        raise _fail(what, f"is a {type(ctl).__name__}, not a kartci.core.Controller")
-    if not issubclass(ctl.params, core.ControllerParams):
-        raise _fail(what, f"params {ctl.params.__name__} does not extend "
-                    "kartci.core.ControllerParams")
+    _is_a(what, ctl, Controller)
+    _extends(what, ctl.params, core.ControllerParams)
     if _tag_of(ctl.params, "type") not in (ctl.name, None):
         raise _fail(what, f"params {ctl.params.__name__}.type is not the controller's name")
     period = ctl.params.model_fields["period_s"].default
@@ -179,8 +180,7 @@ def check_metric_set(mset: MetricSet, checked: Checked | None = None) -> Checked
     """A metric set's contract, without computing it."""
     out = checked or Checked()
     what = f"metric set '{getattr(mset, 'name', mset)}'"
-    if not isinstance(mset, MetricSet):
-        raise _fail(what, f"is a {type(mset).__name__}, not a kartci.core.MetricSet")
+    _is_a(what, mset, MetricSet)
     if not mset.defs:
         raise _fail(what, "defines no metric")
     shared = core.definitions()
@@ -192,9 +192,7 @@ def check_metric_set(mset: MetricSet, checked: Checked | None = None) -> Checked
             raise _fail(what, f"metric '{name}' is defined differently by another set: one "
                         "name, one meaning")
     if mset.params is not None:
-        if not issubclass(mset.params, core.MetricParams):
-            raise _fail(what, f"params {mset.params.__name__} does not extend "
-                        "kartci.core.MetricParams")
+        _extends(what, mset.params, core.MetricParams)
         try:
             mset.params()
         except ValidationError as err:

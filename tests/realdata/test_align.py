@@ -162,24 +162,30 @@ def _write_log(path: Path, ref: Trajectory, est: Trajectory) -> None:
                 w.write(conn, ns, store.serialize_cdr(m, m.__msgtype__))
 
 
-@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
-def test_score_aligns_a_log_and_warns_when_frames_differ(tmp_path: Path) -> None:
+def _nav2_case(tmp_path: Path) -> tuple[Path, Path]:
+    """The noisy pair as a Nav2-like log with its profile, and as TUM files for evo (stamps as
+    the log holds them: ref.txt, est.txt); skips where evo is absent."""
     evo_exe("evo_ape")  # skips, saying how to install it, where evo is absent
     ref, est = _noisy_pair()
     log = tmp_path / "nav2"
     _write_log(log, ref, est)
     profile = tmp_path / "nav2.yaml"
     profile.write_text("name: nav2\npose: {topic: /amcl_pose}\nestimate: {topic: /odom}\n")
+    shift = 100.0
+    Trajectory(ref.t_s + shift, ref.xyz_m, ref.quat_xyzw).to_tum(tmp_path / "ref.txt")
+    Trajectory(est.t_s + shift, est.xyz_m, est.quat_xyzw).to_tum(tmp_path / "est.txt")
+    return log, profile
+
+
+@pytest.mark.long(reason="end-to-end scoring, calibration or simulation of logs")
+def test_score_aligns_a_log_and_warns_when_frames_differ(tmp_path: Path) -> None:
+    log, profile = _nav2_case(tmp_path)
     out = tmp_path / "out"
     plain = kartci("score", log, "--profile", profile, "--out", out)
     assert plain.returncode == 0, plain.stderr
     warning = ("warning: nav2: the reference /amcl_pose is in frame 'map' and the estimate "
                "/odom in 'odom', compared without alignment")
     assert warning in " ".join(plain.stderr.split())
-    # the same data as TUM files, for evo (stamps as the log holds them)
-    shift = 100.0
-    Trajectory(ref.t_s + shift, ref.xyz_m, ref.quat_xyzw).to_tum(tmp_path / "ref.txt")
-    Trajectory(est.t_s + shift, est.xyz_m, est.quat_xyzw).to_tum(tmp_path / "est.txt")
     for flag, tool_args in (("se3", ("-a",)), ("sim3", ("-as",)), ("origin", ("--align_origin",))):
         r = kartci("score", log, "--profile", profile, "--out", out, "--align", flag)
         assert r.returncode == 0, r.stderr
@@ -195,15 +201,7 @@ def test_score_pairs_poses_within_t_max_diff_as_evo_does(tmp_path: Path) -> None
     """`--t-max-diff` (and a profile's `t_max_diff_s`) is evo's `--t_max_diff`: the same pairs,
     so the same APE at 0.01 s (both defaults) and at 0.002 s, where the estimate's stamps
     (jittered by 2 ms) lose about a third of their pairs."""
-    evo_exe("evo_ape")  # skips, saying how to install it, where evo is absent
-    ref, est = _noisy_pair()
-    log = tmp_path / "nav2"
-    _write_log(log, ref, est)
-    profile = tmp_path / "nav2.yaml"
-    profile.write_text("name: nav2\npose: {topic: /amcl_pose}\nestimate: {topic: /odom}\n")
-    shift = 100.0
-    Trajectory(ref.t_s + shift, ref.xyz_m, ref.quat_xyzw).to_tum(tmp_path / "ref.txt")
-    Trajectory(est.t_s + shift, est.xyz_m, est.quat_xyzw).to_tum(tmp_path / "est.txt")
+    log, profile = _nav2_case(tmp_path)
     seen = []
     for diff, args in ((None, ()), ("0.002", ("--t-max-diff", "0.002"))):
         out = tmp_path / f"out{diff}"
