@@ -318,7 +318,8 @@ class Relay:
 
 
 def main() -> int:
-    """Serve kartci until it closes the socket (a frame other than `tick` also ends it)."""
+    """Serve kartci until it closes the socket (a frame other than `tick` or `restart` also
+    ends it)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--socket", required=True, help="kartci's Unix socket to connect to")
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -332,8 +333,15 @@ def main() -> int:
         send(sock, relay.lock, {"op": "publishing"})  # kartci starts the stack now
         if not relay.wait_ready():
             return 0
-        while (frame := receive(sock)) is not None and frame[0]["op"] == "tick":
-            relay.tick(*frame)
+        while (frame := receive(sock)) is not None:
+            if frame[0]["op"] == "tick":
+                relay.tick(*frame)
+            elif frame[0]["op"] == "restart":  # kartci started the stack again
+                relay.settle_s = float(frame[0]["settle_s"])
+                if not relay.wait_ready():
+                    return 0
+            else:
+                break
     except Exception as err:  # any failure goes to kartci as one line, then exit 1
         lock = relay.lock if relay is not None else threading.Lock()
         with contextlib.suppress(OSError):  # kartci is gone
