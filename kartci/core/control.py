@@ -45,6 +45,11 @@ class ControlSpace:
         inputs: Topics an observation is read from, relative to the robot's namespace.
         observation: The observation's numbers, in order.
         read: Turns the latest message of each input topic into values, one per channel.
+        preview_m: Distances ahead along the world's course, m, at which a learning loop
+            shows the course's curvature (what a driver of this robot's size looks ahead).
+        lost: Whether the robot has lost control, from the observation's values by name
+            (the course's among them where the world has one, `kartci.gym.course_channels`):
+            a kart spinning, a line tracker whose sensor is off the line; None: never.
     """
 
     topic: str
@@ -53,6 +58,8 @@ class ControlSpace:
     inputs: tuple[str, ...]
     observation: tuple[Channel, ...]
     read: ReadObservation
+    preview_m: tuple[float, ...] = ()
+    lost: Callable[[Mapping[str, float]], bool] | None = None
 
 
 def odometry_channels(speed_mps: float, yaw_rate_radps: float) -> tuple[Channel, ...]:

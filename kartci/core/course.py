@@ -43,3 +43,12 @@ class Course(Protocol):
     def polyline(self, n: int = 400) -> Array:
         """Points (k, 2) along the course, for drawing; a loop closed, with at most `n`."""
         ...
+
+    def curvature_at(self, along_m: float) -> float:
+        """Curvature of the course `along_m` down it, 1/m, left turns positive."""
+        ...
+
+    def room_m(self, along_m: float) -> tuple[float, float]:
+        """How far right and left of the course a robot may be `along_m` down it before it
+        has left it, m (inf: an open floor)."""
+        ...

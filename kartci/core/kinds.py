@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Generic, Protocol, TypeVar
 
 from kartci.core.agent import Agent
 from kartci.core.control import ControlSpace
+from kartci.core.course import Course
 from kartci.core.metric import Metric, MetricDef
 from kartci.core.params import (
     ControllerParams,
@@ -234,6 +235,15 @@ class WorldFactory(Protocol):
         ...
 
 
+class CourseFn(Protocol):
+    """A world kind's course (`WorldKind.course`)."""
+
+    def __call__(self, params: Any, /) -> Course:
+        """`(params) -> Course`: the course robots follow, read from the world's parameters
+        without a simulator (kartci.gym's course-relative observation)."""
+        ...
+
+
 class ComputeFn(Protocol):
     """A metric set's computation (`MetricSet.compute`)."""
 
@@ -283,6 +293,7 @@ class WorldKind:
     params: type[WorldParams]
     factory: WorldFactory
     description: str = ""
+    course: CourseFn | None = None  # the course robots follow; None: the world has none
 
 
 @dataclass(frozen=True)

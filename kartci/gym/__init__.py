@@ -15,13 +15,14 @@ Importing `kartci.gym` registers `kartci/<scenario>-v0` for every scenario reach
 imports it on the way. (Gymnasium 1.0 dropped loading environments from entry points, so the
 import is what registers them.) The action and observation are the controlled robot kind's
 (`RobotKind.control`: a kart's steering, acceleration and brake; a line tracker's wheel speeds),
-one `step` is one control period, and each episode may be logged and scored (`log_dir`). See
-`KartciEnv`.
+one `step` is one control period, and each episode may be logged and scored (`log_dir`). Where
+the world has a course the robot also observes its place on it, is rewarded for progress along
+it, and an episode ends on a collision, off the course or on loss of control. See `KartciEnv`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +31,16 @@ try:
 except ImportError as err:  # the optional extra is not installed
     raise ImportError("kartci.gym needs Gymnasium: pip install 'kartci[gym]'") from err
 
-from kartci.gym.env import KartciEnv, Reward, driven_m, score
+from kartci.gym.env import (
+    TERMINAL,
+    Ending,
+    KartciEnv,
+    Reward,
+    course_channels,
+    driven_m,
+    progress_m,
+    score,
+)
 from kartci.scenario import Scenario
 from kartci.scenario.load import scenario_names
 
@@ -57,14 +67,16 @@ def register_scenarios() -> list[str]:
 
 def make(scenario: str | Path | Scenario, overrides: Sequence[str] = (), *,
          agent: str | None = None, log_dir: str | Path | None = None,
-         reward: Reward | None = None, **values: Any) -> KartciEnv:
+         reward: Reward | None = None, end_on: Iterable[Ending | str] = TERMINAL,
+         **values: Any) -> KartciEnv:
     """The env of a scenario name, YAML path or `Scenario`, with `--set`-style overrides
     (`["agents.lt0.controller.period_s=0.02"]`) and top-level values as keywords
     (`duration_s=5`); see `KartciEnv`."""
     return KartciEnv(scenario, agent=agent, log_dir=log_dir, reward=reward,
-                     overrides=overrides, **values)
+                     overrides=overrides, end_on=end_on, **values)
 
 
 register_scenarios()
 
-__all__ = ["KartciEnv", "Reward", "driven_m", "env_id", "make", "register_scenarios", "score"]
+__all__ = ["Ending", "KartciEnv", "Reward", "course_channels", "driven_m", "env_id", "make",
+           "progress_m", "register_scenarios", "score"]

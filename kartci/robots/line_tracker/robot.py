@@ -39,6 +39,7 @@ class LineTrackerRobot(RobotBase):
         self.body = LineTracker(world.client, spec, world.spec, urdf_path(spec.model).parent,
                                 dt_s)
         super().__init__(ctx.name, ctx.agent, every(ctx.agent.period_s, dt_s), self.body.frames)
+        world.names[self.body.body] = ctx.name  # what others touch (a kart, kartci.gym)
         sensors = spec.sensors
         assert isinstance(sensors, LineTrackerSensors)  # validated by the robot kind
         self.camera = LineCamera(world.client, sensors.line_sensor, world.spec, world)

@@ -5,6 +5,7 @@ from kartci.core import WorldKind, lazy
 from kartci.worlds.circuit.params import CircuitWorld
 
 WORLD = WorldKind("circuit", CircuitWorld, lazy("kartci.worlds.circuit.world:Circuit"),
-                  "an outdoor race circuit from a TUMFTM track, with optional barriers")
+                  "an outdoor race circuit from a TUMFTM track, with optional barriers",
+                  course=lazy("kartci.worlds.track.model:track_course"))
 
 __all__ = ["WORLD", "CircuitWorld"]

@@ -10,6 +10,7 @@ from kartci.worlds.line_lab.course import CircleCourse, LineCourse, StraightCour
 from kartci.worlds.line_lab.params import LineLabWorld
 
 WORLD = WorldKind("line_lab", LineLabWorld, lazy("kartci.worlds.line_lab.world:LineLab"),
-                  "a white floor with one black line (straight or circle)")
+                  "a white floor with one black line (straight or circle)",
+                  course=lazy("kartci.worlds.line_lab.params:line_course"))
 
 __all__ = ["WORLD", "CircleCourse", "LineCourse", "LineLabWorld", "StraightCourse"]

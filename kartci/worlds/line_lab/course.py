@@ -8,6 +8,7 @@ to the left of the direction of travel (REP 103). Each course answers the questi
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 import numpy as np
@@ -103,6 +104,14 @@ class StraightCourse(Frozen):
         """The line axis's two end points, for drawing (`n` is for closed courses)."""
         return np.linspace(self.start_m, self.end_m, 2)
 
+    def curvature_at(self, along_m: float) -> float:
+        """A straight line does not turn."""
+        return 0.0
+
+    def room_m(self, along_m: float) -> tuple[float, float]:
+        """The lab's floor is open on both sides (a robot loses the line, not the floor)."""
+        return math.inf, math.inf
+
 
 class CircleCourse(Frozen):
     """A closed circular black line, driven counter-clockwise from angle `start_rad`."""
@@ -171,6 +180,14 @@ class CircleCourse(Frozen):
         a = self.start_rad + np.linspace(0, 2 * np.pi, n)
         return np.column_stack([self.center_m[0] + self.radius_m * np.cos(a),
                                 self.center_m[1] + self.radius_m * np.sin(a)])
+
+    def curvature_at(self, along_m: float) -> float:
+        """Driven counter-clockwise: a left turn of radius `radius_m` everywhere, 1/m."""
+        return 1.0 / self.radius_m
+
+    def room_m(self, along_m: float) -> tuple[float, float]:
+        """The lab's floor is open on both sides (a robot loses the line, not the floor)."""
+        return math.inf, math.inf
 
 
 LineCourse = Annotated[StraightCourse | CircleCourse, Field(discriminator="type")]

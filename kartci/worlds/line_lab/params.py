@@ -30,3 +30,8 @@ class LineLabWorld(WorldParams):
                                "`{type: circle, ...}`")
     obstacles: tuple[Box, ...] = Field((), description="static boxes on the floor (the sonar "
                                        "sees them, seed 001 Sec. 5.3)")
+
+
+def line_course(params: LineLabWorld) -> LineCourse:
+    """The line lab's course (`WorldKind.course`): its line."""
+    return params.course

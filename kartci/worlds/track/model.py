@@ -22,6 +22,8 @@ from kartci.scenario.yamlio import TRACK_MAX_BYTES, read_text_bounded
 if TYPE_CHECKING:
     from scipy.spatial import cKDTree
 
+    from kartci.worlds.track.params import TrackWorldParams
+
 Array = NDArray[np.float64]
 SAMPLE_M = 0.05  # spacing of the dense centreline samples
 
@@ -49,6 +51,10 @@ class Track:
         i = self._index(s_m)
         return float(self.w_right[i]), float(self.w_left[i])
 
+    def curvature_at(self, s_m: float) -> float:
+        """The centreline's curvature at arc length `s_m`, 1/m, left turns positive."""
+        return float(self.curvature[self._index(s_m)])
+
     def pose_at(self, s_m: float, lateral_m: float = 0.0) -> tuple[float, float, float]:
         """Point `lateral_m` left of the centreline at arc length `s_m`, and the heading there."""
         i = self._index(s_m)
@@ -71,6 +77,61 @@ class Track:
         """Left and right edges as (n, 2) polylines."""
         n = np.column_stack([-np.sin(self.heading), np.cos(self.heading)])
         return self.xy + n * self.w_left[:, None], self.xy - n * self.w_right[:, None]
+
+
+@dataclass(frozen=True)
+class TrackCourse:
+    """A track's centreline as the course kind-neutral code asks about
+    (`kartci.core.course.Course`): a loop, unwrapped over laps, its free widths the room a
+    robot has before it is off the track."""
+
+    track: Track
+
+    @property
+    def closed(self) -> bool:
+        """A track is a loop."""
+        return True
+
+    def length_m(self) -> float:
+        """One lap of the centreline, m."""
+        return self.track.length_m
+
+    def pose_at(self, along_m: float, lateral_m: float) -> tuple[float, float, float]:
+        """A point `along_m` down the centreline and `lateral_m` left of it, and the heading."""
+        return self.track.pose_at(along_m, lateral_m)
+
+    def offset_m(self, xy: Array) -> Array:
+        """Signed distance of points (..., 2) from the centreline, left positive, m."""
+        xy = np.asarray(xy, dtype=float)
+        out: Array = self.track.project(xy)[1].reshape(xy.shape[:-1])
+        return out
+
+    def progress_m(self, xy: Array) -> Array:
+        """Arc length of each point of a time-ordered track (..., 2), unwrapped over laps, m
+        (from the first point's lap)."""
+        xy = np.asarray(xy, dtype=float)
+        s = self.track.project(xy)[0]
+        length = self.track.length_m
+        out: Array = np.unwrap(s, period=length).reshape(xy.shape[:-1])
+        return out
+
+    def polyline(self, n: int = 400) -> Array:
+        """At most `n` centreline points, closed (the first repeated)."""
+        xy = self.track.xy[::-(-len(self.track.xy) // max(n - 1, 1))]  # ceil: <= n - 1
+        return np.vstack([xy, xy[:1]])
+
+    def curvature_at(self, along_m: float) -> float:
+        """The centreline's curvature at `along_m`, 1/m, left positive."""
+        return self.track.curvature_at(along_m)
+
+    def room_m(self, along_m: float) -> tuple[float, float]:
+        """The track's free width right and left of the centreline there, m."""
+        return self.track.widths_at(along_m)
+
+
+def track_course(params: TrackWorldParams) -> TrackCourse:
+    """A track world's course (`WorldKind.course`): its track's centreline."""
+    return TrackCourse(load_track(Path(params.track)))
 
 
 def parse_csv(path: Path, text: str) -> Array:

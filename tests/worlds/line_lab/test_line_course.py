@@ -50,3 +50,11 @@ def test_both_shapes_answer_what_shared_code_asks_of_a_course() -> None:
     ring = circle.polyline(50)
     assert ring.shape == (50, 2) and ring[0] == pytest.approx(ring[-1])
     assert straight.pose_at(0.0, 0.0) == pytest.approx(straight.start_pose())
+
+
+def test_the_lines_curve_and_leave_the_floor_open() -> None:
+    """A straight does not turn; the circle, driven counter-clockwise, turns left at 1/r;
+    the lab's floor has no edge (a robot loses the line, not the floor)."""
+    straight, circle = StraightCourse(), CircleCourse(radius_m=0.4)
+    assert (straight.curvature_at(1.0), circle.curvature_at(1.0)) == (0.0, 2.5)
+    assert straight.room_m(0.5) == circle.room_m(0.5) == (np.inf, np.inf)
