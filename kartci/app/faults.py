@@ -27,14 +27,18 @@ from kartci import core, project
 from kartci.atomic import write_text_atomic
 from kartci.core import Acts, Fault, RunFolder, unknown_keys
 from kartci.errors import SpecError, did_you_mean
+from kartci.runner.compare import samples
+from kartci.runner.jobs import Job, check_count, default_suite, point_label, shard_labels
 from kartci.runner.kinds import ExecutorKind
 from kartci.runner.outdir import check_inside, locked, write_manifest
+from kartci.runner.suite import run_jobs
+from kartci.scenario.load import scenario_loader
 from kartci.scenario.models import Scenario
-from kartci.verdict import write_json_atomic
+from kartci.verdict import load, write_json_atomic
+from kartci.verdict.runs import compare_runs
 
 if TYPE_CHECKING:
     from kartci.runner.events import Listener
-    from kartci.runner.jobs import Job
     from kartci.verdict.baseline import MetricVerdict
     from kartci.verdict.result import ScenarioResult
 
@@ -254,7 +258,7 @@ def _no_events(jobs: list[Job]) -> AbstractContextManager[Listener]:
     return ignored()
 
 
-Running = Callable[[list["Job"]], AbstractContextManager["Listener"]]
+Running = Callable[[list[Job]], AbstractContextManager["Listener"]]
 
 
 @dataclass(frozen=True)
@@ -285,12 +289,10 @@ def _describe(r: Request) -> str:
     return " ".join(parts)
 
 
-Plan = tuple[str, list["Job"], list[Judgement]]  # a scenario, its runs, its cells (unjudged)
+Plan = tuple[str, list[Job], list[Judgement]]  # a scenario, its runs, its cells (unjudged)
 
 
 def _check(r: Request) -> None:
-    from kartci.runner.jobs import check_count
-
     if r.jobs < 1:
         raise SpecError(f"--jobs {r.jobs}: expected 1 or more")
     check_count("--jobs", r.jobs)
@@ -308,9 +310,6 @@ def plan(names: Sequence[str], entries: list[Entry], allow_outside_paths: bool =
          ) -> list[Plan]:
     """Each scenario's runs (its nominal run first; none when no fault acts on it) and its
     cells, every faulted scenario validated before anything runs."""
-    from kartci.runner.jobs import Job, point_label
-    from kartci.scenario.load import scenario_loader
-
     plans: list[Plan] = []
     for name in dict.fromkeys(names):
         load = scenario_loader(name, allow_outside_paths=allow_outside_paths)
@@ -345,9 +344,6 @@ def run_faults(request: Request, running: Running | None = None) -> FaultsResult
     """Check the request, run every scenario nominal and under each fault that acts on it,
     judge, and write OUT/summary.json and OUT/faults.html. Bad input (an unknown scenario,
     fault or catalogue) is a SpecError before anything runs or is written."""
-    from kartci.runner.jobs import default_suite, shard_labels
-    from kartci.runner.suite import run_jobs
-
     r = request
     _check(r)
     proj = project.current()
@@ -391,10 +387,6 @@ def run_faults(request: Request, running: Running | None = None) -> FaultsResult
 def judge(cell: Judgement, nominal: ScenarioResult | None, faulted: ScenarioResult | None,
           out: Path, baselines: Path) -> Judgement:
     """A faulted run against its nominal run, as `kartci compare` judges head against base."""
-    from kartci.runner.compare import samples
-    from kartci.verdict import load
-    from kartci.verdict.runs import compare_runs
-
     if cell.cell is Cell.NOT_APPLICABLE:
         return cell
     for side, res in (("nominal", nominal), ("faulted", faulted)):

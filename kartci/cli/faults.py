@@ -104,7 +104,8 @@ def faults(
     (the detection matrix and scores) and OUT/faults.html (the matrix as a heat map).
     Exit 0 when the matrix was computed (1 below --min-score), 2 on bad input.
     """
-    from kartci.app.faults import Request, run_faults  # the runner: +0.9 s
+    # CLI start-up: the runner and the simulator (+0.9 s), for this command only
+    from kartci.app.faults import Request, run_faults
     from kartci.runner.jobs import parse_shard
 
     target = out_dir(out, "faults")
