@@ -12,6 +12,7 @@ from typing import NoReturn
 from kartci.cli import (  # noqa: F401  (importing a command module registers its commands)
     baseline,
     bench,
+    faults,
     init,
     logs,
     maps,

@@ -15,10 +15,12 @@ that names them: the bottom of the package graph, importing nothing of kartci's 
   that failed to load; loading them (`kartci.core.loading`: `load(project)`, a `PluginSource`).
 - `Channel`, `ControlSpace`: a robot kind's command and observation as vectors (`kartci.gym`).
 - `RunFolder`: the one owner of a run folder's file names.
+- `Fault`, `Change`: a fault a kind declares on its own parameters (`kartci faults`).
 """
 
 from kartci.core.agent import Agent, Outbox
 from kartci.core.control import Channel, ControlSpace, odometry_channels, odometry_values
+from kartci.core.faults import Acts, Change, Fault, Op, unknown_keys
 from kartci.core.kinds import (
     AgentContext,
     AgentFactory,
@@ -85,10 +87,12 @@ __all__ = [
     "ROBOTS",
     "UNFINISHED",
     "WORLDS",
+    "Acts",
     "Agent",
     "AgentContext",
     "AgentFactory",
     "BrokenPlugin",
+    "Change",
     "Channel",
     "ComputeFn",
     "ControlFn",
@@ -96,6 +100,7 @@ __all__ = [
     "Controller",
     "ControllerParams",
     "Direction",
+    "Fault",
     "FiguresFn",
     "FitModel",
     "Flattener",
@@ -109,6 +114,7 @@ __all__ = [
     "Node",
     "NodeParams",
     "OdometryFn",
+    "Op",
     "Outbox",
     "Outline",
     "OutlineFn",
@@ -138,4 +144,5 @@ __all__ = [
     "odometry_channels",
     "odometry_values",
     "register",
+    "unknown_keys",
 ]

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Generic, Protocol, TypeVar
 from kartci.core.agent import Agent
 from kartci.core.control import ControlSpace
 from kartci.core.course import Course
+from kartci.core.faults import Fault
 from kartci.core.metric import Metric, MetricDef
 from kartci.core.params import (
     ControllerParams,
@@ -61,6 +62,7 @@ class _AgentType(Generic[P]):
     # instead of naming kinds: it works with every registered kind this is true of (a kind-
     # neutral agent states what it needs of a robot: the topics it reads, its wheel odometry)
     fits: Callable[[RobotKind], bool] | None = None
+    faults: tuple[Fault, ...] = ()  # faults of its own parameters (`kartci faults`)
     works_on: ClassVar[str] = "works with"  # the verb of the wrong-robot error
 
     def kinds(self, robots: Iterable[RobotKind] | None = None) -> tuple[str, ...]:
@@ -283,6 +285,8 @@ class RobotKind:
     wall_clock: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     commands: Mapping[str, str] = field(default_factory=dict)
     figures: FiguresFn | None = None  # None: the kind-neutral figures (kartci.plotting)
+    # faults of its model and sensors (`model.KEY`, `sensors.KEY`) that `kartci faults` injects
+    faults: tuple[Fault, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -294,6 +298,7 @@ class WorldKind:
     factory: WorldFactory
     description: str = ""
     course: CourseFn | None = None  # the course robots follow; None: the world has none
+    faults: tuple[Fault, ...] = ()  # faults of its parameters (`kartci faults`)
 
 
 @dataclass(frozen=True)

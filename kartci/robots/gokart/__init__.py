@@ -7,6 +7,7 @@ Public for a team's own kart controller: the command (`KartInput`), the steering
 
 from kartci.core import RobotKind, SimReal, WheelOdometry, lazy
 from kartci.robots.gokart import messages
+from kartci.robots.gokart.faults import FAULTS
 from kartci.robots.gokart.params import GokartModel, KartSensors, axle_distance_m
 from kartci.robots.gokart.steering import (
     STEERING_RATIO,
@@ -39,7 +40,7 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                   control=lazy("kartci.robots.gokart.control:control"),
                   flatteners=messages.FLATTENERS, wall_clock=messages.WALL_CLOCK,
                   commands=messages.COMMANDS,
-                  figures=lazy("kartci.robots.gokart.plots:kart_figures"))
+                  figures=lazy("kartci.robots.gokart.plots:kart_figures"), faults=FAULTS)
 
 
 __all__ = ["ROBOT", "STEERING_RATIO", "GokartModel", "KartInput", "KartSensors",

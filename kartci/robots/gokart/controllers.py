@@ -8,7 +8,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.core import Controller, ControllerParams, Frozen, lazy
+from kartci.core import Change, Controller, ControllerParams, Fault, Frozen, lazy
 from kartci.core.params import Angle_rad, Duration_s, Length_m, Period_s
 from kartci.robots.gokart.mpcc.params import MpccController
 from kartci.scenario.models import LogSource
@@ -96,4 +96,7 @@ JOY_DRIVER = Controller("joy_driver", JoyDriverController,
                         "a scripted human: pure pursuit expressed as joystick messages")
 MPCC = Controller("mpcc", MpccController, lazy("kartci.robots.gokart.mpcc.agent:MpccAgent"),
                   KART, "model predictive contouring control (CasADi / Ipopt)",
-                  fit=lazy("kartci.robots.gokart.mpcc.fit:fit_log"))
+                  fit=lazy("kartci.robots.gokart.mpcc.fit:fit_log"),
+                  faults=(Fault("progress_weight_x0.7", "the progress reward at 70 % (a "
+                                "mistuned cost: a slower line)",
+                                (Change.scale("weights.progress", 0.7),)),))

@@ -2,6 +2,7 @@
 
 from kartci.core import RobotKind, SimReal, lazy
 from kartci.robots.line_tracker import messages
+from kartci.robots.line_tracker.faults import FAULTS
 from kartci.robots.line_tracker.params import LineTrackerModel, LineTrackerSensors
 
 ROBOT = RobotKind("line_tracker", LineTrackerModel,
@@ -15,4 +16,5 @@ ROBOT = RobotKind("line_tracker", LineTrackerModel,
                                   wheel_speeds=True),
                   control=lazy("kartci.robots.line_tracker.control:control"),
                   flatteners=messages.FLATTENERS,
-                  figures=lazy("kartci.robots.line_tracker.plots:line_figures"))
+                  figures=lazy("kartci.robots.line_tracker.plots:line_figures"),
+                  faults=FAULTS)

@@ -7,7 +7,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from kartci.core import Controller, ControllerParams, lazy
+from kartci.core import Change, Controller, ControllerParams, Fault, lazy
 from kartci.core.params import Gain, Length_m, Period_s
 
 
@@ -53,4 +53,8 @@ class LinePidController(ControllerParams):
 
 LINE_PID = Controller("line_pid", LinePidController,
                       lazy("kartci.robots.line_tracker.line_pid:LinePid"), ("line_tracker",),
-                      "the source document's P / PI line-tracking controller")
+                      "the source document's P / PI line-tracking controller",
+                      faults=(Fault("kp_x0.7", "proportional gain at 70 % (a mistuned loop)",
+                                    (Change.scale("kp", 0.7),)),
+                              Fault("ki_x0.7", "integral gain at 70 % (PI only)",
+                                    (Change.scale("ki", 0.7),))))

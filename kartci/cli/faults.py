@@ -1,0 +1,125 @@
+"""`kartci faults`: inject a catalogue of faults into scenarios and show which the gate catches."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+from rich.table import Table
+from rich.text import Text
+
+from kartci.cli.common import (
+    AllowOutsideOpt,
+    BaselinesOpt,
+    OutOpt,
+    app,
+    complete_scenario,
+    err_console,
+    out_console,
+    out_dir,
+)
+from kartci.runner.kinds import ExecutorKind
+
+if TYPE_CHECKING:
+    from kartci.app.faults import Matrix
+    from kartci.runner.events import Listener
+    from kartci.runner.jobs import Job
+
+# a cell of the terminal matrix: the same words as summary.json and the page, short
+_CELL = {"caught": ("caught", "green"), "missed": ("MISSED", "bold red"),
+         "not applicable": ("·", "dim"), "error": ("ERROR", "magenta")}
+
+
+@contextmanager
+def _running(todo: list[Job], live: bool) -> Iterator[Listener]:
+    from kartci.report.progress import ProgressView  # CLI start-up: rich's live table
+
+    with ProgressView(todo, err_console, live) as view:
+        yield view
+
+
+def print_matrix(matrix: Matrix) -> None:
+    """Faults (rows) x scenarios (columns) on the terminal, the scores in the margins, then
+    each caught cell's metrics and each missed cell's nearest metric."""
+    table = Table("fault", *matrix.scenarios, "caught",
+                  title=Text("detection matrix"), title_justify="left")
+    for e in matrix.faults:
+        row = []
+        for s in matrix.scenarios:
+            word, style = _CELL[matrix.cell(e.name, s).cell.value]
+            row.append(Text(word, style=style))
+        table.add_row(Text(e.name), *row, matrix.fault_score(e.name).text() or "-")
+    table.add_row(Text("score", style="bold"),
+                  *(Text(matrix.scenario_score(s).text()) for s in matrix.scenarios),
+                  Text(matrix.score.text(), style="bold"))
+    out_console.print(table)
+    for c in matrix.cells:
+        if c.cell.value == "caught":
+            out_console.print(Text(f"{c.fault} on {c.scenario}: caught by "
+                                   f"{'; '.join(c.caught_by)}"), highlight=False)
+        elif c.cell.value in ("missed", "error"):
+            out_console.print(Text(f"{c.fault} on {c.scenario}: {c.cell.value.upper()}"
+                                   + (f": {c.why}" if c.why else "")), highlight=False)
+
+
+@app.command()
+def faults(
+    names: Annotated[list[str] | None, typer.Argument(
+        help="Scenario names or YAML paths (default: the default suite, as `kartci run`).",
+        autocompletion=complete_scenario)] = None,
+    catalogue: Annotated[str, typer.Option(
+        help="The fault catalogue: the faults robot kinds, controllers, nodes and worlds "
+             "declare in it.")] = "standard",
+    only: Annotated[list[str] | None, typer.Option(
+        help="Only this fault (OWNER.FAULT, e.g. line_pid.kp_x0.7; repeatable).")] = None,
+    jobs: Annotated[int, typer.Option(
+        "--jobs", "-j", help="Runs at once (as kartci run -j).")] = 1,
+    shard: Annotated[str | None, typer.Option(
+        help="I/N: only share I of N of the scenarios (each with all its faults); "
+             "OUT then holds that share's matrix.")] = None,
+    executor: Annotated[ExecutorKind, typer.Option(
+        help="local: this process, or a process pool with -j N; ray: Ray tasks.")
+    ] = ExecutorKind.LOCAL,
+    ray_address: Annotated[str | None, typer.Option(
+        help="Ray cluster to use (default: start a local Ray instance).")] = None,
+    timeout_s: Annotated[float | None, typer.Option(
+        "--timeout-s", help="Wall-clock limit per run, s: a slower run is an error.")] = None,
+    min_score: Annotated[float | None, typer.Option(
+        help="Exit 1 when the suite catches less than this fraction (0-1) of the faults "
+             "judged.")] = None,
+    out: OutOpt = None,
+    baselines: BaselinesOpt = None,
+    allow_outside_paths: AllowOutsideOpt = False,
+) -> None:
+    """Run each scenario as written and under each fault of a catalogue that acts on it, and
+    judge every faulted run against the scenario's own run with its baseline's tolerances
+    (as `kartci compare` does): caught (a metric fails the gate), missed (all within
+    tolerance) or not applicable (nothing in the scenario for the fault to act on).
+
+    Writes OUT/<scenario>/ and OUT/<scenario>@fault=<fault>/ (run folders), OUT/summary.json
+    (the detection matrix and scores) and OUT/faults.html (the matrix as a heat map).
+    Exit 0 when the matrix was computed (1 below --min-score), 2 on bad input.
+    """
+    # CLI start-up: the runner and the simulator (+0.9 s), for this command only
+    from kartci.app.faults import Request, run_faults
+    from kartci.runner.jobs import parse_shard
+
+    target = out_dir(out, "faults")
+    live = err_console.is_terminal and not os.environ.get("CI")
+    request = Request(target, tuple(names or ()), catalogue, tuple(only or ()),
+                      Path(baselines) if baselines is not None else None, jobs,
+                      parse_shard(shard) if shard else None, executor, ray_address, timeout_s,
+                      min_score, allow_outside_paths)
+    result = run_faults(request, lambda todo: _running(todo, live))
+    print_matrix(result.matrix)
+    code = result.exit_code
+    if code and min_score is not None:
+        out_console.print(Text(f"score {result.matrix.score.text()} is below --min-score "
+                               f"{min_score:g}"), highlight=False)
+    out_console.print(Text(f"matrix: {result.summary}  report: {result.page}  (exit {code})"),
+                      highlight=False)
+    raise typer.Exit(code)
