@@ -69,7 +69,9 @@ Read = Callable[[str], Any]  # a full dotted key -> the scenario's validated val
 @dataclass(frozen=True)
 class Fault:
     """A named fault. `when`: keys (in the same scope) that must be true for it to act (a
-    sensor's `enabled`); `catalogues`: the catalogues that list it (`kartci faults
+    sensor's `enabled`); `read_by`: for a robot's sensor, the node types that read it (the
+    fault acts only on an agent that runs one: a controller that drives from ground truth
+    never sees a noisy IMU); `catalogues`: the catalogues that list it (`kartci faults
     --catalogue NAME`)."""
 
     name: str  # unique within its owner; `kartci faults` names it `<owner>.<name>`
@@ -77,6 +79,7 @@ class Fault:
     changes: tuple[Change, ...]
     when: tuple[str, ...] = ()
     catalogues: tuple[str, ...] = ("standard",)
+    read_by: tuple[str, ...] = ()
 
     def acts(self, read: Read, prefix: str) -> Acts:
         """The assignments that inject it into one target, whose keys start with `prefix`
@@ -84,6 +87,9 @@ class Fault:
         for key in self.when:
             if not read(prefix + key):
                 return Acts(why_not=f"{prefix}{key} is off")
+        if self.read_by and all(read(f"{prefix}nodes.{n}") is None for n in self.read_by):
+            return Acts(why_not=f"nothing reads it: {prefix}nodes has no "
+                                f"{' or '.join(self.read_by)}")
         out = []
         for c in self.changes:
             full = prefix + c.key

@@ -55,8 +55,7 @@ def test_every_fault_key_exists_in_its_owners_parameters() -> None:
 def test_a_fault_changes_the_scenario_as_declared(entry: Entry) -> None:
     """Injected into a scenario of its owner, every fault validates (the `--set` machinery)
     and leaves each key at the declared value, everything else as it was."""
-    lidar = "lidar" in entry.fault.name
-    name = LIDAR_HOST if lidar else HOST[entry.owner]
+    name = LIDAR_HOST if entry.fault.read_by else HOST[entry.owner]  # a sensor: its reader
     load = scenario_loader(name)
     nominal = load([])
     acts = injection(nominal, entry)
@@ -98,6 +97,9 @@ def _flat(doc: object, skip: set[str], prefix: str = "") -> dict[str, object]:
     ("line_pid.ki_x0.7", "line_straight", r"agents.lt0.controller.ki is already 0"),
     ("mpcc.progress_weight_x0.7", "kart_manual", "no agent has the controller mpcc"),
     ("gokart.lidar_dropout_0.3", "mpcc_lap", r"agents.kart0.sensors.lidar.enabled is off"),
+    ("gokart.imu_noise_x10", "mpcc_lap", r"nothing reads it: agents.kart0.nodes has no "
+                                         r"localization or obstacle_detector"),
+    ("gokart.wheel_slip_0.05", "kart_manual", r"nothing reads it"),
     ("hall.floor_friction_x0.8", "line_straight", "the world is a line_lab, not a hall"),
     ("circuit.floor_friction_x0.8", "mpcc_lap", "the world is a hall, not a circuit"),
 ])

@@ -1,5 +1,7 @@
 """The kart's faults (`kartci faults`): what a regression in its drivetrain, steering, brakes,
-tyres or sensors looks like, each through a parameter the simulation reads (params.py).
+tyres or sensors looks like, each through a parameter the simulation reads (params.py). The
+sensor faults act where a node reads the sensor (the kart's own controllers drive from its
+ground-truth odometry); an external stack that reads the IMU is not seen as a reader.
 
 Not declared, for want of a parameter the simulation reads: a steering offset, a command
 dead-time, sensor delays and mount offsets (the mounts are the URDF's frames)."""
@@ -7,6 +9,8 @@ dead-time, sensor delays and mount offsets (the mounts are the URDF's frames).""
 from __future__ import annotations
 
 from kartci.core import Change, Fault
+
+SENSOR_READERS = ("localization", "obstacle_detector")  # the node types that read the sensors
 
 FAULTS = (
     Fault("motor_power_x0.5", "both rear motors give half their power (a derated inverter)",
@@ -24,12 +28,13 @@ FAULTS = (
     Fault("imu_noise_x10", "IMU noise of a poorly mounted, vibrating unit: 0.5 m/s^2 and "
           "0.05 rad/s, 1 sigma", (Change.to("sensors.imu.accel_noise_std_mps2", 0.5),
                                   Change.to("sensors.imu.gyro_noise_std_radps", 0.05)),
-          when=("sensors.imu.enabled",)),
+          when=("sensors.imu.enabled",), read_by=SENSOR_READERS),
     Fault("gyro_bias", "a constant gyro bias of 0.02 rad/s, 1 sigma per axis (uncalibrated)",
           (Change.to("sensors.imu.gyro_bias_std_radps", 0.02),),
-          when=("sensors.imu.enabled",)),
+          when=("sensors.imu.enabled",), read_by=SENSOR_READERS),
     Fault("lidar_dropout_0.3", "30 % of the lidar's returns lost (a dirty window)",
-          (Change.to("sensors.lidar.dropout_prob", 0.3),), when=("sensors.lidar.enabled",)),
+          (Change.to("sensors.lidar.dropout_prob", 0.3),), when=("sensors.lidar.enabled",),
+          read_by=SENSOR_READERS),
     Fault("wheel_slip_0.05", "wheel odometry off by 5 %, 1 sigma (worn tyres, spin-up)",
-          (Change.to("sensors.wheels.slip_std", 0.05),)),
+          (Change.to("sensors.wheels.slip_std", 0.05),), read_by=SENSOR_READERS),
 )
