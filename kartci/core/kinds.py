@@ -152,6 +152,16 @@ class FitModel(Protocol):
         ...
 
 
+class WarningsFn(Protocol):
+    """A robot kind's warnings about one agent of a scenario (`RobotKind.warnings`)."""
+
+    def __call__(self, model: RobotParams, controller: object, world: object, /) -> list[str]:
+        """`(the robot's parameters, its controller's, the world's) -> warnings`: what would
+        make a run misleading though valid (a speed the robot's model cannot keep stable), one
+        line each; the caller names the scenario and the agent."""
+        ...
+
+
 class RobotFactory(Protocol):
     """A robot kind's factory."""
 
@@ -273,6 +283,7 @@ class RobotKind:
     wall_clock: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     commands: Mapping[str, str] = field(default_factory=dict)
     figures: FiguresFn | None = None  # None: the kind-neutral figures (kartci.plotting)
+    warnings: WarningsFn | None = None  # what it warns of an agent before a run
 
 
 @dataclass(frozen=True)
