@@ -173,7 +173,7 @@ def test_step_steer_yaw_rate_against_the_linear_single_track_model() -> None:
     assert t90[0] == pytest.approx(t90[1], abs=0.04)
     # never turning the wrong way, and an overshoot no larger than the ideal step's plus 2
     # points: the linear model's is 0 (the oversteering kart's yaw mode is overdamped below
-    # its critical speed sqrt(L / -K) = 12.9 m/s at mu 0.9), and a slewed step, a moving average of the
-    # step response, cannot peak higher
+    # its critical speed sqrt(L / -K) = 12.9 m/s at mu 0.9), and a slewed step, a moving
+    # average of the step response, cannot peak higher
     assert yaw.min() > -0.01 * steady
     assert yaw.max() / steady - 1.0 <= linear.max() / steady - 1.0 + 0.02
