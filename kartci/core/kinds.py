@@ -155,6 +155,16 @@ class FitModel(Protocol):
         ...
 
 
+class WarningsFn(Protocol):
+    """A robot kind's warnings about one agent of a scenario (`RobotKind.warnings`)."""
+
+    def __call__(self, model: RobotParams, controller: object, world: object, /) -> list[str]:
+        """`(the robot's parameters, its controller's, the world's) -> warnings`: what would
+        make a run misleading though valid (a speed the robot's model cannot keep stable), one
+        line each; the caller names the scenario and the agent."""
+        ...
+
+
 class RobotFactory(Protocol):
     """A robot kind's factory."""
 
@@ -287,6 +297,7 @@ class RobotKind:
     figures: FiguresFn | None = None  # None: the kind-neutral figures (kartci.plotting)
     # faults of its model and sensors (`model.KEY`, `sensors.KEY`) that `kartci faults` injects
     faults: tuple[Fault, ...] = ()
+    warnings: WarningsFn | None = None  # what it warns of an agent before a run
 
 
 @dataclass(frozen=True)

@@ -140,9 +140,12 @@ def keep_outputs(stage: RunFolder, folder: RunFolder) -> None:
 
 def input_warnings(scenario: Scenario) -> list[str]:
     """Recorded inputs longer than the scenario: the rest is not replayed, which a user must be
-    told (not silently cut)."""
+    told (not silently cut); and what each agent's robot kind warns of (`RobotKind.warnings`)."""
     out = []
     for name, agent in scenario.agents.items():
+        warn = core.ROBOTS.get(agent.model.kind).warnings
+        if warn is not None:
+            out += [f"{name}: {w}" for w in warn(agent.model, agent.controller, scenario.world)]
         source = getattr(agent.controller, "source", None)
         if not isinstance(source, LogSource):
             continue

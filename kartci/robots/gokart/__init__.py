@@ -39,6 +39,7 @@ ROBOT = RobotKind("gokart", GokartModel, lazy("kartci.robots.gokart.robot:KartRo
                       "ackermann_msgs/msg/AckermannDriveStamped", "kartci_msgs/msg/KartCommand")),
                   control=lazy("kartci.robots.gokart.control:control"),
                   flatteners=messages.FLATTENERS, wall_clock=messages.WALL_CLOCK,
+                  warnings=lazy("kartci.robots.gokart.stability:speed_warnings"),
                   commands=messages.COMMANDS,
                   figures=lazy("kartci.robots.gokart.plots:kart_figures"), faults=FAULTS)
 

@@ -77,9 +77,9 @@ class Gokart(Base):
                                cmd.reverse, cmd.estop)
 
     def set_wheel_friction(self, mu: list[float]) -> None:
-        """Per-wheel floor friction: scales each tyre's D by mu / the reference friction."""
-        ref = self.model.tyre_reference_friction
-        self.mu_scale = [f * self.model.tire_friction / ref for f in mu]
+        """Per-wheel floor friction: each tyre's peak force is this mu (times the kart's
+        `tire_friction`) times its load, less for a loaded tyre (tyres.py)."""
+        self.mu_scale = [f * self.model.tire_friction for f in mu]
 
     def pre_step(self) -> None:
         """Turn the steering column towards its target at the steering rate, and apply the four

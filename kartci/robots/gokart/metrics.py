@@ -31,7 +31,16 @@ KART_DEFS: dict[str, MetricDef] = {
                            "kart is a pass)"),
     "solver_failures": MetricDef("count", Direction.LOWER, 0.0, 0.0,
                                  "MPCC solves that failed or hit the iteration cap (the kart "
-                                 "braked)"),
+                                 "braked); the watchdog's steps are counted apart "
+                                 "(`loss_of_control_s`, `recovering_s`)"),
+    "loss_of_control_s": MetricDef("s", Direction.LOWER, 0.1, 0.10,
+                                   "sim time of the MPCC's control steps that found the kart "
+                                   "out of control (sideslip or yaw rate beyond the "
+                                   "watchdog's limits: it brakes straight from there), from "
+                                   "mpcc/stats"),
+    "recovering_s": MetricDef("s", Direction.LOWER, 0.1, 0.10,
+                              "sim time the MPCC spent braking straight after a loss of "
+                              "control, until the kart no longer slid, from mpcc/stats"),
     "solve_ms_median": MetricDef("ms", Direction.LOWER, 5.0, 1.0, "median MPCC solve time",
                                  timing=True),
     "solve_ms_p95": MetricDef("ms", Direction.LOWER, 5.0, 1.0, "95th percentile solve time",
@@ -133,11 +142,13 @@ LAPS = MetricSet(
     "centreline")
 RACE = MetricSet(
     "race",
-    {**_of("min_clearance_m", "overtakes", "solver_failures", "solve_ms_median",
-           "solve_ms_p95", "solve_ms_max"), "max_slack_m": SLACK_DEF},
+    {**_of("min_clearance_m", "overtakes", "solver_failures", "loss_of_control_s",
+           "recovering_s", "solve_ms_median", "solve_ms_p95", "solve_ms_max"),
+     "max_slack_m": SLACK_DEF},
     _race, None, ("gokart",),
     "clearance to obstacles and other karts (outline to outline), overtakes (lapping passes "
-    "included), MPCC solver statistics and slack")
+    "included), MPCC solver statistics and slack, time in the MPCC watchdog's loss of control "
+    "and recovery")
 HANDLING = MetricSet(
     "handling", HANDLING_DEFS, _handling, HandlingParams, ("gokart",),
     "how the kart drove: sideslip (max, RMS), time spinning, time with a tyre at its grip, "

@@ -13,16 +13,27 @@ from kartci.scenario.models import Angle_rad, Length_m
 
 
 class Tyre(Frozen):
-    """One axle's tyres: Pacejka's magic formula for the lateral force, mass-normalised as in the
-    ETH kart's MPC (Liniger et al. 2015; REFERENCE.md): F_y = m_axle D sin(C atan(B alpha)),
-    m_axle the static load on the axle in kg, alpha the slip angle in rad."""
+    """One axle's tyres: Pacejka's magic formula for the lateral force (Pacejka, "Tire and
+    Vehicle Dynamics"; the ETH kart's MPC, Liniger et al. 2015; REFERENCE.md),
+    F_y = N g mu_peak sin(C atan(B alpha)), N the wheel's load in kg, alpha the slip angle in rad.
+
+    The peak friction coefficient falls with load (Pacejka's load sensitivity, REFERENCE.md
+    "Tyre load sensitivity"): mu_peak = mu (pDy1 + pDy2 dfz), dfz = (N - N0) / N0, N0 the wheel's
+    static load and mu the floor's friction. pDy1 is 1 (`PDY1`): a wheel at its static load has
+    the floor's mu exactly, a more loaded one less. B and C are ETH's; their D (10 m/s^2 on any
+    load) is replaced by mu_peak g, so no axle's grip exceeds mu times its load."""
 
     b: float = Field(gt=0.0, le=1e6, description="stiffness factor B, 1/rad")
     c: float = Field(gt=0.0, le=1e6, description="shape factor C (dimensionless)")
-    d_mps2: float = Field(le=100.0, gt=0.0,
-                          description="peak factor D, m/s^2: the largest force per kg "
-                          "of axle load, on a floor of `tyre_reference_friction`; also the "
-                          "radius of the axle's friction circle (longitudinal and lateral)")
+    p_dy2: float = Field(-0.1, gt=-1.0, le=0.0,
+                         description="load sensitivity pDy2 of the peak friction coefficient "
+                         "(dimensionless, per unit dfz): mu_peak = mu (1 + pDy2 dfz). An "
+                         "assumption: no Magic Formula fit of the kart's tyres is published; "
+                         "-0.1 (10 % less mu at twice the static load) is of the order of "
+                         "published passenger-car fits")
+
+
+PDY1 = 1.0  # pDy1, dimensionless: a wheel at its static load has exactly the floor's mu
 
 
 class GokartModel(RobotParams):
@@ -72,7 +83,8 @@ class GokartModel(RobotParams):
                            description="w of Eq. 3.1/3.2, m (Ackermann option)")
     tire_friction: float = Field(1.0, ge=0.0, le=10.0,
                                  description="tyre friction factor (dimensionless): "
-                                 "scales the tyres' D on top of the floor's or zone's friction")
+                                 "scales the floor's or zone's friction coefficient mu that "
+                                 "bounds the tyres' peak force")
     mass_kg: float = Field(283.4, gt=0.0, le=1e5, description="total mass, kg (source document "
                            "000 Table 3.1, Bumblebee); the URDF's link masses add up to it")
     cog_to_rear_axle_m: float = Field(0.46, gt=0.0, le=1e4,
@@ -84,15 +96,12 @@ class GokartModel(RobotParams):
     yaw_inertia_kgm2: float = Field(20.0, gt=0.0, le=1e5, description="yaw moment of inertia about "
                                     "the centre of mass, kg m^2 (REFERENCE.md: ETH kart, about "
                                     "20 kg m^2)")
-    front_tyre: Tyre = Field(Tyre(b=9.0, c=1.0, d_mps2=10.0), description="front tyres "
-                             "(REFERENCE.md: ETH B 9, C 1, D 10 m/s^2)")
-    rear_tyre: Tyre = Field(Tyre(b=5.2, c=1.1, d_mps2=10.0), description="rear tyres "
-                            "(REFERENCE.md: ETH B 5.2, C 1.1, D 10 m/s^2)")
-    tyre_reference_friction: float = Field(0.9, gt=0.0, le=10.0,
-                                           description="floor friction at which "
-                                           "the tyres' D applies (concrete, REFERENCE.md); a "
-                                           "floor or zone of friction mu scales D by "
-                                           "mu / this")
+    front_tyre: Tyre = Field(Tyre(b=9.0, c=1.0), description="front tyres "
+                             "(REFERENCE.md: ETH B 9, C 1; pDy2 an assumption)")
+    rear_tyre: Tyre = Field(Tyre(b=5.2, c=1.1), description="rear tyres "
+                            "(REFERENCE.md: ETH B 5.2, C 1.1, the only rear-tyre figures "
+                            "published for the kart; pDy2 an assumption). With these the kart "
+                            "oversteers: `critical_speed_mps`")
     rolling_resistance_coeff: float = Field(0.015, ge=0.0, le=1.0,
                                             description="rolling resistance per unit normal "
                                             "load (dimensionless), drivetrain drag included: "
@@ -235,3 +244,4 @@ def cog_x_m(model: GokartModel) -> float:
     """The centre of mass ahead of base_link, m: the rear axle (Table 3.2) plus
     `cog_to_rear_axle_m`."""
     return model.wheel_xy_m[0][0] + model.cog_to_rear_axle_m
+

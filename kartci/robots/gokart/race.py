@@ -1,5 +1,6 @@
 """Racing metrics from a run log: clearance to obstacles and other karts (outline to outline),
-overtakes (lapping passes included), and the MPCC's solver statistics."""
+overtakes (lapping passes included), the MPCC's solver statistics, and the time its watchdog
+held the kart (a loss of control is the kart's fault, not the solver's: counted apart)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import pandas as pd
 
 from kartci.core import Direction, Metric, MetricDef
 from kartci.metrics.outline import Placed, box, fixed, outline_gap_m
+from kartci.robots.gokart.mpcc.recovery import MpccStatus
 from kartci.worlds.parts import Box
 
 SLACK_DEF = MetricDef("m", Direction.LOWER, 0.05, 0.2, "largest slack the MPCC applied (its "
@@ -47,10 +49,26 @@ def overtakes(mine: np.ndarray, others: list[np.ndarray], lap_m: float) -> int:
     return count
 
 
+WATCHDOG = {MpccStatus.LOSS_OF_CONTROL.value: "loss_of_control_s",
+            MpccStatus.RECOVERING.value: "recovering_s"}  # status -> metric (time in it)
+
+
+def watchdog_seconds(stats: pd.DataFrame) -> dict[str, float]:
+    """Sim time the watchdog held the kart in each of its states, s: the steps logged with
+    that status times the control period (the median step of the stats' stamps)."""
+    t = stats["t"].to_numpy(dtype=float)
+    period = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    status = stats["status"].astype(str)
+    return {name: float((status == value).sum()) * period for value, name in WATCHDOG.items()}
+
+
 def solver_values(stats: pd.DataFrame) -> tuple[int, dict[str, float]]:
-    """(failed solves, wall-clock solve-time statistics in ms)."""
+    """(failed solves, wall-clock solve-time statistics in ms). A failed solve is an
+    unsuccessful step the watchdog did not make: its braking steps (no solve) and a stall's
+    successful fresh plan (`Stalled`) are not the solver's failures."""
     ms = stats["solve_ms"].to_numpy(dtype=float)
-    failures = int((~stats["success"].astype(bool)).sum())
+    watchdog = stats["status"].astype(str).isin([*WATCHDOG, MpccStatus.STALLED.value])
+    failures = int((~stats["success"].astype(bool) & ~watchdog).sum())
     return failures, {"solve_ms_median": float(np.median(ms)),
                       "solve_ms_p95": float(np.percentile(ms, 95)),
                       "solve_ms_max": float(ms.max())}
@@ -75,6 +93,7 @@ def race_metrics(scenario: Any, agent: str, paths: Mapping[str, pd.DataFrame], l
     if stats is not None and not stats.empty:
         failures, timing = solver_values(stats)
         out.append(Metric("solver_failures", float(failures), "count"))
+        out += [Metric(name, value, "s") for name, value in watchdog_seconds(stats).items()]
         if "max_slack_m" in stats:
             out.append(Metric("max_slack_m", float(stats["max_slack_m"].max()), "m"))
         out += [Metric(name, value, "ms") for name, value in timing.items()]

@@ -9,6 +9,11 @@ MPC for the lateral curve, REFERENCE.md), loads mass-normalised as there (kg, fo
   (h the CoM height, a_x and a_y the body's acceleration from the previous step's forces). The
   kart has no suspension, so how the roll moment splits between the axles is an assumption: in
   proportion to their static loads. A wheel never pulls the ground (N >= 0);
+- peak force: at most the floor's mu times the load, falling with load (Pacejka's load
+  sensitivity): D = mu g (pDy1 + pDy2 dfz) per kg of load, dfz = (N - N0) / N0 against the
+  wheel's static load N0, pDy1 = 1 and pDy2 < 0 (`Tyre`, `peak_mps2`). An axle's two wheels
+  together never exceed mu times their load: sum N_i (1 + pDy2 dfz_i) = sum N_i + pDy2
+  sum (N_i - N0_i)^2 / N0_i whenever the loads sum to the static ones;
 - lateral: the magic formula N D sin(C atan(B alpha)), alpha the slip angle of the contact's
   velocity in the wheel's frame;
 - longitudinal: each rear motor's drive force on its own wheel (the command's m a_cmd / 2) within
@@ -20,7 +25,7 @@ MPC for the lateral curve, REFERENCE.md), loads mass-normalised as there (kg, fo
   physics step): within the grip the slip ratio is F_x / (k N g), k the slip stiffness; a
   demand beyond it spins a driven wheel (+1) or locks a braked one (-1). It sets the wheel speeds
   that odometry reads;
-- the floor's friction mu scales D by mu / `tyre_reference_friction`;
+- mu: the floor's or zone's friction coefficient times the kart's `tire_friction`;
 - aerodynamic drag rho Cd A v |v| / 2 at the centre of mass.
 """
 
@@ -32,6 +37,7 @@ from typing import NamedTuple
 
 from kartci.robots.gokart.params import (
     GRAVITY_MPS2,
+    PDY1,
     GokartModel,
     Tyre,
     axle_distance_m,
@@ -43,9 +49,16 @@ STOP_SPEED_MPS = 0.3  # brakes and rolling resistance fade out linearly below th
 SPEED_LIMIT_BAND_MPS = 0.5  # the drive force fades out over this band below the top speed
 
 
-def pacejka(tyre: Tyre, alpha_rad: float) -> float:
-    """Lateral force per kg of load, m/s^2, at slip angle `alpha_rad` (magic formula)."""
-    return tyre.d_mps2 * math.sin(tyre.c * math.atan(tyre.b * alpha_rad))
+def peak_mps2(tyre: Tyre, load_kg: float, static_kg: float) -> float:
+    """Peak force per kg of load on a floor of friction 1, m/s^2: g (pDy1 + pDy2 dfz),
+    dfz = (load - static) / static (Pacejka's load-dependent peak friction)."""
+    return GRAVITY_MPS2 * (PDY1 + tyre.p_dy2 * ((load_kg - static_kg) / static_kg))
+
+
+def pacejka(tyre: Tyre, alpha_rad: float, d_mps2: float) -> float:
+    """Lateral force per kg of load, m/s^2, at slip angle `alpha_rad` (magic formula) with
+    peak `d_mps2`."""
+    return d_mps2 * math.sin(tyre.c * math.atan(tyre.b * alpha_rad))
 
 
 @dataclass(frozen=True)
@@ -123,16 +136,18 @@ def wheel_force(model: GokartModel, wheel: Wheel, load_kg: float, demand: Demand
                 steer_rad: float, v_contact: tuple[float, float], mu_scale: float,
                 ) -> TyreForce:
     """One wheel's force at normal load `load_kg`, its contact point moving at `v_contact`
-    (body frame, m/s)."""
+    (body frame, m/s), on a floor of friction `mu_scale` (the floor's mu times the kart's
+    `tire_friction`)."""
     c, s = math.cos(steer_rad), math.sin(steer_rad)
     v_long, v_lat = c * v_contact[0] + s * v_contact[1], -s * v_contact[0] + c * v_contact[1]
     alpha = -math.atan2(v_lat, max(abs(v_long), SLIP_SPEED_FLOOR_MPS))
-    f_lat = load_kg * mu_scale * pacejka(wheel.tyre, alpha)
+    d = peak_mps2(wheel.tyre, load_kg, wheel.static_kg)
+    f_lat = load_kg * mu_scale * pacejka(wheel.tyre, alpha, d)
     want = -load_kg * (demand.brake_mps2 + rolling_decel_mps2(model)) * _fade(v_long)
     if wheel.driven:  # each rear motor drives its own wheel, within its torque-speed curve
         cap = motor_force_n(model, wheel, v_long)
         want += max(-cap, min(cap, model.mass_kg * demand.drive_mps2 / 2))
-    f_max = load_kg * wheel.tyre.d_mps2 * model.long_grip_ratio * mu_scale
+    f_max = load_kg * d * model.long_grip_ratio * mu_scale
     f_long = max(-f_max, min(f_max, want))
     f_lat *= math.sqrt(max(0.0, 1.0 - (f_long / f_max) ** 2)) if f_max > 0 else 0.0
     stiffness = model.long_slip_stiffness * load_kg * GRAVITY_MPS2
@@ -184,7 +199,7 @@ class FourTyres:
         ox, oy, _ = com_offset_m
         self.wheels = tuple(
             (2 * w.static_kg, w.driven, w.y_m, 2 * abs(w.y_m), w.x_m - ox, w.y_m - oy,
-             w.tyre.d_mps2, w.tyre.b, w.tyre.c, w.radius_m,
+             w.static_kg, w.tyre.p_dy2, w.tyre.b, w.tyre.c, w.radius_m,
              model.wheel_torque_limit_nm / w.radius_m)
             for w in wheels(model))
 
@@ -211,7 +226,8 @@ class FourTyres:
         left, right = steer_rad  # cos and sin of each wheel's steer angle (rear: exactly 1, 0)
         turns = ((1.0, 0.0), (1.0, 0.0), (math.cos(left), sin(left)),
                  (math.cos(right), sin(right)))
-        for (two_static, driven, y, two_y, dx, dy, d, b, c, radius, torque_cap), (cs, sn), mu in (
+        for (two_static, driven, y, two_y, dx, dy, static, p_dy2, b, c, radius, torque_cap), (
+                cs, sn), mu in (
                 zip(self.wheels, turns, mu_scale, strict=True)):
             a = two_static + (to_rear if driven else -to_rear)
             axle = a if a > 0.0 else 0.0
@@ -223,6 +239,7 @@ class FourTyres:
             speed = abs(v_long)
             alpha = -atan2(v_lat, SLIP_SPEED_FLOOR_MPS if speed < SLIP_SPEED_FLOOR_MPS
                            else speed)
+            d = GRAVITY_MPS2 * (PDY1 + p_dy2 * ((load - static) / static))
             f_lat = load * mu * (d * sin(c * atan(b * alpha)))
             q = v_long / STOP_SPEED_MPS
             q = q if q < 1.0 else 1.0

@@ -1,6 +1,6 @@
 """The kart's racing and handling metrics on a synthetic log whose answers are known in closed
 form: two karts on a circular track, one sliding, stopping, saturating a tyre and lapping the
-other."""
+other, its MPCC losing control once, recovering, stalling and failing two solves."""
 
 from __future__ import annotations
 
@@ -21,6 +21,12 @@ from kartci.worlds.track import TRACK_TOPIC
 
 R_M = 8.0  # the track: a circle, 2.5 m either side of its centreline
 DT_S, SAMPLES = 0.02, 1000  # 20 s of odometry at 50 Hz
+STATS_DT_S = 0.05  # the MPCC's control period: 20 Hz
+# its steps' (success, status): 10 solved, one loss of control and 6 recovering steps (the
+# watchdog's: no solve), a stall whose fresh plan solved, two failed solves, 20 solved
+STEPS = ([(True, "Solved")] * 10 + [(False, "Loss_of_control")] + [(False, "Recovering")] * 6
+         + [(False, "Stalled"), (False, "Infeasible_Problem_Detected"),
+            (False, "Maximum_Iterations_Exceeded")] + [(True, "Solved")] * 20)
 WHEELS = ("rear_left_wheel_joint", "rear_right_wheel_joint", "front_left_wheel_joint",
           "front_right_wheel_joint")
 
@@ -80,11 +86,13 @@ def _write(path: Path) -> None:
         w.write("/kart0/odom", _odom(t_ns, "kart0", *_kart0(t)), t_ns)
         w.write("/kart1/odom", _odom(t_ns, "kart1", *_kart1(t)), t_ns)
         w.write("/kart0/tyres", _tyres(t_ns, t), t_ns)
-    for k, slack in enumerate((0.0, 0.3, 1.72, 0.1)):
+    slacks = (0.0, 0.3, 1.72, 0.1)
+    for k, (success, status) in enumerate(STEPS):
+        t_ns = round(k * STATS_DT_S * 1e9)
         w.write("/kart0/mpcc/stats", msg(
-            "kartci_msgs/msg/SolverStats", header=header(k, "map"), success=True,
-            status="Solved", solve_ms=1.0, iterations=3, cost=0.0, failures=0,
-            max_slack_m=slack), k)
+            "kartci_msgs/msg/SolverStats", header=header(t_ns, "map"), success=success,
+            status=status, solve_ms=1.0, iterations=3, cost=0.0, failures=0,
+            max_slack_m=slacks[k] if k < len(slacks) else 0.0), t_ns)
     w.close()
 
 
@@ -114,6 +122,17 @@ def test_tyre_saturation_stalled_time_and_slack(metrics: dict[str, Metric]) -> N
     assert metrics["kart1.stalled_s"].value == 0.0  # slow, but never below 0.1 m/s
     assert metrics["kart0.max_slack_m"].value == pytest.approx(1.72)
     assert "kart1.max_slack_m" not in metrics  # no MPCC
+
+
+def test_watchdog_steps_are_timed_apart_from_solver_failures(
+        metrics: dict[str, Metric]) -> None:
+    """One step found the kart out of control and six braked it straight, at 20 Hz: 0.05 s and
+    0.3 s; only the two failed solves are the solver's (the stall's fresh plan solved)."""
+    assert metrics["kart0.loss_of_control_s"].value == pytest.approx(1 * STATS_DT_S)
+    assert metrics["kart0.recovering_s"].value == pytest.approx(6 * STATS_DT_S)
+    assert metrics["kart0.solver_failures"].value == 2
+    assert metrics["kart0.loss_of_control_s"].unit == "s"
+    assert "kart1.loss_of_control_s" not in metrics  # no MPCC
 
 
 def test_overtakes_count_the_lapping_pass(metrics: dict[str, Metric]) -> None:

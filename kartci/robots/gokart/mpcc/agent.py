@@ -33,8 +33,7 @@ class MpccAgent:
         self.spec, self.model, self.period_s = spec, ctx.model, spec.period_s
         self.frame = base_link(ctx.name)
         # the world's floor and zones, as the real kart's map would hold them
-        self.friction = FrictionMap.of(ctx.world, ctx.model.tyre_reference_friction
-                                       / max(ctx.model.tire_friction, 1e-9))
+        self.friction = FrictionMap.of(ctx.world, ctx.model.tire_friction)
         _, self.kart_length_m, self.kart_width_m = footprint_m(ctx.model)  # other karts': alike
         self.watchdog = Watchdog(spec.recovery, spec.period_s, axle_distance_m(ctx.model))
         self.track: Track | None = None

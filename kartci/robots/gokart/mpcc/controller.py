@@ -34,6 +34,7 @@ from kartci.robots.gokart.mpcc.ocp import (
 )
 from kartci.robots.gokart.mpcc.params import MpccController
 from kartci.robots.gokart.mpcc.reference import (
+    DEFAULT_FLOOR_FRICTION,
     FrictionMap,
     Obstacle,
     TrackWidths,
@@ -70,8 +71,8 @@ class Mpcc:
     def __init__(self, spec: MpccController, model: GokartModel, track: Track,
                  friction: FrictionMap | None = None) -> None:
         self.spec, self.model, self.track = spec, model, track
-        # the floor the map knows; none: everywhere the tyres' reference floor
-        self.friction = friction or FrictionMap(model.tyre_reference_friction)
+        # the floor the map knows; none: everywhere concrete
+        self.friction = friction or FrictionMap(DEFAULT_FLOOR_FRICTION, (), model.tire_friction)
         self.single_track = SingleTrack.of(model)
         self.built: Built = get_solver(spec, self.single_track)
         self.lay = self.built.layout

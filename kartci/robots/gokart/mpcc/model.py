@@ -10,7 +10,8 @@ rate (rad/s), progress speed vs (m/s), slack (m)]. Tyre forces are mass-normalis
 in the ETH kart's MPC (REFERENCE.md): an axle carrying a share of the mass gives that share
 times D sin(C atan(B alpha)) per kg of the whole kart. Mirrored from the plant where it matters
 for planning: the motors' power limit (drive at most 2 x motor power / (m v)), rolling resistance
-and drag, and the floor's friction under each stage (`grip`, D scaled as the plant scales it).
+and drag, and the floor's friction mu under each stage (`grip`): D = mu g, the plant's peak at
+the static loads this model keeps (no load transfer, so the load sensitivity has no part).
 """
 
 from __future__ import annotations
@@ -18,9 +19,13 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import casadi as ca
+from pydantic import Field
 
+from kartci.core import Frozen
 from kartci.robots.gokart.mpcc.params import MpccVehicle
 from kartci.robots.gokart.params import (
+    GRAVITY_MPS2,
+    PDY1,
     GokartModel,
     Tyre,
     air_drag_per_m,
@@ -34,6 +39,21 @@ X, Y, PSI, VX, VY, R, S, DELTA, ACC = range(NX)
 JERK, DDELTA, VS, SLACK = range(NU)
 
 
+class AxleCurve(Frozen):
+    """One axle's lateral curve in the single-track model: F_y per kg of axle load =
+    grip D sin(C atan(B alpha)), grip the floor's friction coefficient."""
+
+    b: float = Field(gt=0.0, le=1e6, description="stiffness factor B, 1/rad")
+    c: float = Field(gt=0.0, le=1e6, description="shape factor C (dimensionless)")
+    d_mps2: float = Field(gt=0.0, le=100.0, description="peak force per kg of axle load on a "
+                          "floor of friction 1, m/s^2: g pDy1, the plant's at the static load")
+
+    @classmethod
+    def of(cls, tyre: Tyre) -> AxleCurve:
+        """The curve of a tyre at its static load (dfz = 0)."""
+        return cls(b=tyre.b, c=tyre.c, d_mps2=GRAVITY_MPS2 * PDY1)
+
+
 @dataclass(frozen=True)
 class SingleTrack:
     """The kart as a single-track model: geometry, mass ratio, tyres and drag, all read from
@@ -42,8 +62,8 @@ class SingleTrack:
     lf_m: float  # centre of mass to front axle
     lr_m: float  # centre of mass to rear axle
     mass_per_yaw_inertia_per_m2: float
-    front: Tyre
-    rear: Tyre
+    front: AxleCurve
+    rear: AxleCurve
     rolling_decel_mps2: float
     air_drag_per_m: float
     power_per_kg: float  # both motors' power over the mass, W/kg: the drive's power limit
@@ -52,8 +72,9 @@ class SingleTrack:
     def of(cls, model: GokartModel) -> SingleTrack:
         """The single-track model of a go-kart's parameters."""
         length, lr = axle_distance_m(model), model.cog_to_rear_axle_m
-        return cls(length - lr, lr, model.mass_kg / model.yaw_inertia_kgm2, model.front_tyre,
-                   model.rear_tyre, rolling_decel_mps2(model), air_drag_per_m(model),
+        return cls(length - lr, lr, model.mass_kg / model.yaw_inertia_kgm2,
+                   AxleCurve.of(model.front_tyre), AxleCurve.of(model.rear_tyre),
+                   rolling_decel_mps2(model), air_drag_per_m(model),
                    DRIVEN_WHEELS * model.motor_power_w / model.mass_kg)
 
     def key(self) -> str:
@@ -61,7 +82,7 @@ class SingleTrack:
         return repr(sorted(asdict(self).items()))
 
 
-def _tyre(t: Tyre, share: float, alpha: ca.SX, grip: ca.SX | float) -> ca.SX:
+def _tyre(t: AxleCurve, share: float, alpha: ca.SX, grip: ca.SX | float) -> ca.SX:
     return share * grip * t.d_mps2 * ca.sin(t.c * ca.atan(t.b * alpha))
 
 
@@ -71,8 +92,8 @@ def _smooth_min(a: ca.SX, b: ca.SX) -> ca.SX:
 
 def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle,
                grip: ca.SX | float = 1.0) -> ca.SX:
-    """dx/dt of the blended bicycle model; `grip` scales both tyres' D (the floor's friction
-    over the tyres' reference friction, as in the plant)."""
+    """dx/dt of the blended bicycle model on a floor of friction coefficient `grip` (the
+    floor's mu times the kart's `tire_friction`, as in the plant)."""
     psi, vx, vy, r, acc, delta = x[PSI], x[VX], x[VY], x[R], x[ACC], x[DELTA]
     lf, lr = m.lf_m, m.lr_m
     vx_s = ca.sqrt(vx * vx + 1.0)  # slip angles are undefined at standstill; smooth floor
@@ -114,7 +135,7 @@ def continuous(x: ca.SX, u: ca.SX, m: SingleTrack, v: MpccVehicle,
 
 def discrete(m: SingleTrack, v: MpccVehicle, step_s: float, substeps: int) -> ca.Function:
     """x_{k+1} = F(x_k, u_k, grip): `substeps` RK4 steps over one horizon step on a floor
-    whose friction scales the tyres' D by `grip`."""
+    of friction coefficient `grip`."""
     x, u, grip = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("grip")
     h = step_s / substeps
     xk = x

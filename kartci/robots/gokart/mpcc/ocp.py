@@ -36,6 +36,7 @@ from kartci.robots.gokart.mpcc.params import MpccController, MpccWeights
 
 STAGE_PARAMS = 9  # x_ref, y_ref, cos(heading), sin(heading), s_ref, lateral lo/hi, s_max, grip
 N_WEIGHTS = 6
+LIMITS_FRICTION = 0.9  # ETH's acceleration limits hold on concrete (REFERENCE.md: mu about 0.9)
 CONSTRAINTS_PER_STAGE = NX + 7
 
 
@@ -124,9 +125,9 @@ def build(spec: MpccController, model: SingleTrack) -> tuple[dict[str, ca.MX], L
             ref = stage_ref(k)
             lateral, lag = errors(xk, ref)
             lo, hi, s_max = ref[5:8]
-            # ETH's acceleration limits hold on the reference floor; a slipperier one shrinks
-            # the ellipse with the grip
-            ellipse = ca.fmin(grip, 1.0)
+            # ETH's acceleration limits hold on concrete; a slipperier floor shrinks the
+            # ellipse with its friction
+            ellipse = ca.fmin(grip / LIMITS_FRICTION, 1.0)
             lateral_front, _ = errors(xk, ref, front)
             cost += qc * lateral**2 + ql * lag**2 + qs * (slack + slack**2)
             g += [lateral - hi - slack, lo - lateral - slack, xk[S] - s_max - slack,

@@ -31,30 +31,36 @@ def obstacle_from_xy(track: Track, x: float, y: float, radius_m: float, speed_mp
     return Obstacle(float(s[0]), float(lat[0]), radius_m, speed_mps, follow_gap_m)
 
 
+DEFAULT_FLOOR_FRICTION = 0.9  # a map without a floor's friction: concrete (REFERENCE.md)
+
+
 @dataclass(frozen=True)
 class FrictionMap:
     """The floor's friction as the kart's map knows it (the world's floor and zones): the
-    plant's `friction_at`, vectorised. `grip` is what the tyres' D is scaled by."""
+    plant's `friction_at`, vectorised. `grip` is the tyres' friction coefficient mu there,
+    which bounds their peak force per unit load as in the plant (tyres.py)."""
 
     floor: float  # friction coefficient outside every zone (dimensionless)
     zones: tuple[tuple[float, float, float, float, float], ...] = ()  # x0, y0, x1, y1 m, mu
-    reference: float = 0.9  # friction at which the tyres' D applies, times 1 / tire_friction
+    tyre_factor: float = 1.0  # the kart's `tire_friction` (dimensionless)
 
     @classmethod
-    def of(cls, world: object, reference: float) -> FrictionMap:
+    def of(cls, world: object, tyre_factor: float) -> FrictionMap:
         """The map of a world's parameters (`floor_friction`, `zones`; a world without them
-        is all reference floor)."""
+        is all concrete)."""
         zones = tuple((z.min_m[0], z.min_m[1], z.max_m[0], z.max_m[1], z.friction)
                       for z in getattr(world, "zones", ()))
-        return cls(float(getattr(world, "floor_friction", reference)), zones, reference)
+        return cls(float(getattr(world, "floor_friction", DEFAULT_FLOOR_FRICTION)), zones,
+                   tyre_factor)
 
     def grip(self, xy: np.ndarray) -> np.ndarray:
-        """The tyres' D scale at points (n, 2), m: the last zone holding a point wins."""
+        """The tyres' friction coefficient at points (n, 2), m: the last zone holding a point
+        wins."""
         mu = np.full(len(xy), self.floor)
         for x0, y0, x1, y1, f in self.zones:
             inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
             mu = np.where(inside, f, mu)
-        out: np.ndarray = mu / self.reference
+        out: np.ndarray = mu * self.tyre_factor
         return out
 
 

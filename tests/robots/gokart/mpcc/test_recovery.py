@@ -66,9 +66,11 @@ def test_the_friction_map_is_the_worlds_floor_and_zones() -> None:
     hall = HallWorld(track="winti/track.csv", floor_friction=0.9,
                       zones=(FloorZone(name="coated", min_m=(24.0, 0.0), max_m=(32.0, 20.0),
                                        friction=0.3),))
-    grip = FrictionMap.of(hall, 0.9).grip(np.array([[10.0, 5.0], [25.0, 5.0]]))
-    assert grip.tolist() == pytest.approx([1.0, 0.3 / 0.9])
-    assert FrictionMap.of(None, 0.9).grip(np.zeros((1, 2))).tolist() == [1.0]
+    points = np.array([[10.0, 5.0], [25.0, 5.0]])
+    # the grip is the tyres' friction coefficient there: the floor's mu times tire_friction
+    assert FrictionMap.of(hall, 1.0).grip(points).tolist() == pytest.approx([0.9, 0.3])
+    assert FrictionMap.of(hall, 0.5).grip(points).tolist() == pytest.approx([0.45, 0.15])
+    assert FrictionMap.of(None, 1.0).grip(np.zeros((1, 2))).tolist() == [0.9]  # concrete
 
 
 def _derivative(vx: float, vy: float, r: float, delta: float, acc: float,
