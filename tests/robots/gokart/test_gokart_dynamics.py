@@ -153,14 +153,22 @@ def test_the_slippery_zone_scales_the_saturation_by_its_friction() -> None:
     assert wet <= 1.02 * 0.6 * GRAVITY_MPS2
 
 
-@pytest.mark.parametrize(("column_rad", "v_mps"), [(0.5, 6.0), (1.0, 5.0)])
+# the step steers at 0.6-0.7 of the tyres' peak lateral grip, where the single-track model is
+# meant to hold: 6 and 5 m/s when that peak was 10 m/s^2, the same fraction of mu g now (speeds
+# x sqrt(mu g / 10): the steady lateral acceleration goes as v^2 at a given column angle)
+PEAK_SCALE = math.sqrt(FLOOR_MU * GRAVITY_MPS2 / 10.0)
+
+
+@pytest.mark.parametrize(("column_rad", "v_mps"), [(0.5, 6.0 * PEAK_SCALE),
+                                                    (1.0, 5.0 * PEAK_SCALE)])
 def test_step_steer_matches_the_single_track_model(column_rad: float, v_mps: float) -> None:
     plant, model = step_steer(column_rad, v_mps)
     rise_p, over_p, final_p = response(plant)
     rise_m, over_m, final_m = response(model)
-    # the single-track model has no load transfer: at these 6-7 m/s^2 the plant's outer front
+    # the single-track model has no load transfer: at these 5-6 m/s^2 the plant's outer front
     # wheel, loaded more, steers less (Eq. 3.4/3.5), so the plant turns 6-7 % less and
-    # overshoots 3-5 points more (measured); within 10 % and 5 points
+    # overshoots 3-4 points more (measured); within 10 % and 5 points. Nearer the peak the
+    # gap grows (at 6 and 5 m/s: 10 % less, 6-7 points more)
     assert final_p == pytest.approx(final_m, rel=0.10)
     assert rise_p == pytest.approx(rise_m, abs=0.04)  # rise time within two 50 Hz samples
     assert abs(over_p - over_m) <= 0.05
