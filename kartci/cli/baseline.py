@@ -1,5 +1,6 @@
-"""`kartci baseline update`: parse, call `kartci.app.accept` (the only code that writes
-baselines), print what it did."""
+"""`kartci baseline update` and `kartci baseline tolerances`: parse, call `kartci.app.accept`
+(the only code that writes a baseline's values) or `kartci.app.tolerances` (its tolerances),
+print what they did."""
 
 from __future__ import annotations
 
@@ -46,3 +47,39 @@ def baseline_update(
             out_console.print(line, highlight=False, markup=False)
         for warning in one.warnings:
             say(f"kartci: warning: {one.label}: {warning}")
+
+
+@baseline_app.command("tolerances")
+def baseline_tolerances(
+    faults: Annotated[Path, typer.Argument(help="A folder written by `kartci faults`.")],
+    baselines: BaselinesOpt = None,
+    write: Annotated[bool, typer.Option(
+        "--write", help="Store the proposed tolerances in the baseline files.")] = False,
+) -> None:
+    """Propose each metric's tolerance from a `kartci faults` run: at least 3x its conditioning
+    spread (an ill-conditioned one is widened to that), and half the smallest change of a fault
+    it lets pass but can see beyond that floor (tightened); otherwise kept. Prints every change
+    with the faults behind it, the detection matrix's score at today's and the proposed
+    tolerances, and the faults no scenario catches even then; --write stores them."""
+    from kartci import project
+    from kartci.app.tolerances import propose
+    from kartci.app.tolerances import write as store
+
+    target = baselines or project.current().baselines
+    result = propose(faults, target)
+    for p in result.changed():
+        moved = ", ".join(f"{f} {m:+.4g}" for f, m in p.moved_by[:3]) or "no fault moves it"
+        out_console.print(f"{p.scenario}: {p.metric}: {p.tolerance:.4g} -> {p.proposed:.4g} "
+                          f"{p.unit} ({p.why.value}; floor {p.floor:.4g}; {moved})",
+                          highlight=False, markup=False)
+    now, judged = result.score(proposed=False)
+    then, _ = result.score(proposed=True)
+    out_console.print(f"detection: {now}/{judged} faults caught at today's tolerances, "
+                      f"{then}/{judged} at the proposed ones ({len(result.changed())} changed)",
+                      highlight=False, markup=False)
+    if unseen := result.unseen():
+        out_console.print(f"caught by no scenario even then: {', '.join(unseen)}",
+                          highlight=False, markup=False)
+    if write:
+        for path in store(result, target):
+            err_console.print(f"wrote {path}", highlight=False, markup=False)
