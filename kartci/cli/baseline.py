@@ -61,6 +61,7 @@ def baseline_tolerances(
     it lets pass but can see beyond that floor (tightened); otherwise kept. Prints every change
     with the faults behind it, the detection matrix's score at today's and the proposed
     tolerances, and the faults no scenario catches even then; --write stores them."""
+    # CLI start-up: the judging behind the proposals loads the runner (+0.5 s)
     from kartci import project
     from kartci.app.tolerances import propose
     from kartci.app.tolerances import write as store
