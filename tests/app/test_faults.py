@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 from helpers import kartci
+from pydantic import BaseModel
 
 from kartci.app.faults import Cell, Entry, Scope, catalogue, injection, select
 from kartci.core import Change, Fault, Op, unknown_keys
@@ -40,15 +41,14 @@ def test_the_standard_catalogue_has_the_issues_faults_declared_by_their_owners()
 def test_every_fault_key_exists_in_its_owners_parameters() -> None:
     """`catalogue` checks every key against the owner's models (it raised otherwise); the check
     itself finds a key the model lacks, at any depth."""
-    roots = {"model": GokartModel, "sensors": KartSensors}
+    roots: dict[str, type[BaseModel] | None] = {"model": GokartModel, "sensors": KartSensors}
     typo = Fault("x", "", (Change.scale("model.motor_powr_w", 0.5),
                            Change.to("sensors.imu.gyro_nois_std_radps", 1.0),
                            Change.to("sensors.imu.enabled", False),
                            Change.to("controller.kp", 1.0)), when=("sensors.lidr.enabled",))
     assert unknown_keys(typo, roots) == ["model.motor_powr_w", "sensors.imu.gyro_nois_std_radps",
                                          "controller.kp", "sensors.lidr.enabled"]
-    assert all(not unknown_keys(e.fault, {"model": GokartModel, "sensors": KartSensors})
-               for e in STANDARD if e.owner == "gokart")
+    assert all(not unknown_keys(e.fault, roots) for e in STANDARD if e.owner == "gokart")
 
 
 @pytest.mark.parametrize("entry", STANDARD, ids=lambda e: e.name)
@@ -65,8 +65,11 @@ def test_a_fault_changes_the_scenario_as_declared(entry: Entry) -> None:
     prefix = next(iter(acts.overrides)).split("=")[0][:-len(entry.fault.changes[0].key)]
     for c in entry.fault.changes:
         old, new = _at(before, prefix + c.key), _at(after, prefix + c.key)
-        want = {Op.SET: c.value, Op.SCALE: old * c.value if c.op is Op.SCALE else None,
-                Op.ADD: old + c.value if c.op is Op.ADD else None}[c.op]
+        if c.op is Op.SET:
+            want = c.value
+        else:  # a number scaled or added to
+            assert isinstance(old, int | float) and isinstance(c.value, int | float)
+            want = old * c.value if c.op is Op.SCALE else old + c.value
         assert new == pytest.approx(want), (c, old, new)
         assert new != old
     changed = {o.split("=")[0] for o in acts.overrides}

@@ -58,11 +58,14 @@ def case(tmp_path: Path) -> tuple[Path, Path]:
 def test_each_metric_gets_the_width_the_rule_gives(case: tuple[Path, Path]) -> None:
     out, base = case
     result = propose(out, base)
-    got = {p.metric: (p.why, p.proposed) for p in result.proposals}
-    assert got["settle_time_s"] == (Why.TIGHTENED, pytest.approx(0.12))  # 0.24 / 2
-    assert got["lap_s"] == (Why.WIDENED, pytest.approx(0.15))  # 3 x 0.05
-    assert got["speed_mps"] == (Why.KEPT, 0.2)  # it catches the one fault that moves it
-    assert got["ok"] == (Why.KEPT, 1.0)  # nothing moves it: no evidence to tighten
+    why = {p.metric: p.why for p in result.proposals}
+    width = {p.metric: p.proposed for p in result.proposals}
+    assert why == {"settle_time_s": Why.TIGHTENED, "lap_s": Why.WIDENED,
+                   "speed_mps": Why.KEPT,  # it catches the one fault that moves it
+                   "ok": Why.KEPT}  # nothing moves it: no evidence to tighten
+    assert width == pytest.approx({"settle_time_s": 0.12,  # 0.24 / 2
+                                   "lap_s": 0.15,  # 3 x 0.05
+                                   "speed_mps": 0.2, "ok": 1.0})
     settle = next(p for p in result.proposals if p.metric == "settle_time_s")
     assert [f for f, _ in settle.moved_by] == ["r.slow", "r.weak"]
     # r.slow: today lap_s (0.12 > 0.1, inside its chaos) and speed_mps catch it; proposed,
