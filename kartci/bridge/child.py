@@ -9,6 +9,7 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -66,16 +67,39 @@ class Child:
         return "; ".join(parts) or "no output"
 
     def stop(self, timeout_s: float) -> None:
-        """SIGTERM to its process group, SIGKILL after `timeout_s`; waits for it."""
-        if self.proc.poll() is not None:
-            return
+        """SIGTERM to its process group, SIGKILL after `timeout_s`; returns when no process
+        of the group is left. The whole group, not the program alone: a stack started as
+        `sh -c "node_a & exec node_b"` has node_a in it, and node_a may outlive node_b (an
+        rclpy node was seen spinning at full CPU after SIGTERM, long after its run)."""
         for sig, wait_s in ((signal.SIGTERM, timeout_s), (signal.SIGKILL, 5.0)):
             try:
                 os.killpg(self.proc.pid, sig)
             except ProcessLookupError:
-                return
-            try:
-                self.proc.wait(wait_s)
-                return
-            except subprocess.TimeoutExpired:
-                continue
+                return  # no process of the group is left
+            deadline = time.monotonic() + wait_s
+            while time.monotonic() < deadline:
+                self.proc.poll()  # reap the program itself; init reaps the rest
+                if not _group_running(self.proc.pid):
+                    return
+                time.sleep(0.02)
+
+
+def _group_running(pgid: int) -> bool:
+    """Whether a process of group `pgid` is still running (a zombie is not: it only waits to
+    be reaped, by a PID 1 that may never do it in a container). Linux: from /proc; elsewhere,
+    whether the group can still be signalled."""
+    proc = Path("/proc")
+    if not proc.is_dir():
+        try:
+            os.killpg(pgid, 0)
+        except ProcessLookupError:
+            return False
+        return True
+    for stat in proc.glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue  # gone meanwhile
+        if int(fields[2]) == pgid and fields[0] not in ("Z", "X"):
+            return True
+    return False
