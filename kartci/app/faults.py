@@ -15,6 +15,7 @@ OUT/faults.html.
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager, contextmanager
@@ -35,6 +36,7 @@ from kartci.runner.suite import run_jobs
 from kartci.scenario.load import scenario_loader
 from kartci.scenario.models import Scenario
 from kartci.verdict import load, write_json_atomic
+from kartci.verdict.baseline import definition
 from kartci.verdict.runs import compare_runs
 
 if TYPE_CHECKING:
@@ -164,7 +166,10 @@ class Cell(StrEnum):
     """A fault on a scenario."""
 
     CAUGHT = "caught"  # the gate would fail: a metric regressed or went missing
-    MISSED = "missed"  # every metric within its tolerance
+    MISSED = "missed"  # a metric moved beyond its resolution, every one within its tolerance
+    # every metric moved less than its resolution: the fault changed nothing any metric sees
+    # (mutation testing's equivalent mutant); not scored, and listed as such
+    NO_EFFECT = "no effect"
     NOT_APPLICABLE = "not applicable"  # nothing in the scenario the fault acts on
     ERROR = "error"  # the nominal or the faulted run failed: not judged
 
@@ -177,7 +182,8 @@ class Judgement:
     scenario: str
     cell: Cell
     caught_by: tuple[str, ...] = ()  # the metrics that fail the gate, each with its change
-    why: str = ""  # not applicable or error: why; missed: the metric nearest its tolerance
+    why: str = ""  # not applicable or error: why; missed: the metric nearest its tolerance;
+    # no effect: the largest move against its resolution
     label: str = ""  # the faulted run's folder in OUT
     overrides: tuple[str, ...] = ()
 
@@ -187,7 +193,8 @@ class Score:
     """Caught of the faults judged (applicable, and both runs finished)."""
 
     caught: int
-    judged: int
+    judged: int  # caught + missed
+    no_effect: int = 0  # cells whose fault moved no metric beyond its resolution
 
     @property
     def value(self) -> float:
@@ -201,9 +208,10 @@ class Score:
 
 
 def score(cells: Sequence[Judgement]) -> Score:
-    """The score of some cells: errors and not-applicable ones are not counted."""
+    """The score of some cells: errors, not-applicable and no-effect ones are not counted."""
     return Score(sum(c.cell is Cell.CAUGHT for c in cells),
-                 sum(c.cell in (Cell.CAUGHT, Cell.MISSED) for c in cells))
+                 sum(c.cell in (Cell.CAUGHT, Cell.MISSED) for c in cells),
+                 sum(c.cell is Cell.NO_EFFECT for c in cells))
 
 
 @dataclass(frozen=True)
@@ -384,6 +392,43 @@ def run_faults(request: Request, running: Running | None = None) -> FaultsResult
     return FaultsResult(matrix, out, summary, page, r.min_score)
 
 
+def rejudge(out: Path, baselines: Path | None = None, min_score: float | None = None
+            ) -> FaultsResult:
+    """Judge a `kartci faults` folder's runs again with today's baselines, running nothing:
+    after `kartci baseline tolerances --write`, the matrix the new tolerances give."""
+    path = out / SUMMARY
+    try:
+        old = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as err:
+        raise SpecError(f"{path}: no detection matrix to judge again ({type(err).__name__}); "
+                        "run `kartci faults --out DIR` first") from None
+    if not isinstance(old, dict) or "kartci_faults" not in old:
+        raise SpecError(f"{path}: not written by `kartci faults`")
+    from kartci.verdict import ScenarioResult  # runtime: the judged runs' stand-ins
+
+    base = baselines if baselines is not None else project.current().baselines
+    declared = {e.name: e for e in catalogue(old["catalogue"])}
+    entries = [declared[f["name"]] for f in old["faults"] if f["name"] in declared]
+    names = [s["name"] for s in old["scenarios"]]
+    ran = {n: ScenarioResult(n, "") for n in names}
+    cells = []
+    for c in old["cells"]:
+        cell = Judgement(c["fault"], c["scenario"], Cell(c["result"]), why=c["why"],
+                         label=c["run"] or "", overrides=tuple(c["set"]))
+        if cell.cell in (Cell.CAUGHT, Cell.MISSED, Cell.NO_EFFECT):
+            cell = judge(cell, ran[cell.scenario], ScenarioResult(cell.label, ""), out, base)
+        cells.append(cell)
+    matrix = Matrix(entries, names, cells, {s["name"]: s["nominal"] for s in old["scenarios"]})
+    doc = to_json(matrix, old["command"], old["catalogue"],
+                  None if old["shard"] is None else (old["shard"][0], old["shard"][1]))
+    with locked(out):
+        write_json_atomic(path, doc)
+        from kartci.report.faults import faults_page  # late: matplotlib, for the page only
+
+        write_text_atomic(out / PAGE, faults_page(doc))
+    return FaultsResult(matrix, out, path, out / PAGE, min_score)
+
+
 def judge(cell: Judgement, nominal: ScenarioResult | None, faulted: ScenarioResult | None,
           out: Path, baselines: Path) -> Judgement:
     """A faulted run against its nominal run, as `kartci compare` judges head against base."""
@@ -400,9 +445,27 @@ def judge(cell: Judgement, nominal: ScenarioResult | None, faulted: ScenarioResu
     bad = [v for v in verdicts if v.status.bad]
     if bad:
         return _with(cell, Cell.CAUGHT, caught_by=tuple(_change(v) for v in bad))
+    moves = [(_over_resolution(v), v) for v in verdicts]
+    if all(m <= 1.0 for m, _ in moves):
+        m, v = max(moves, key=lambda mv: mv[0], default=(0.0, None))
+        return _with(cell, Cell.NO_EFFECT, why="no metric moved" if v is None or m == 0 else (
+            f"largest move: {_change(v)}, {m:.2g} of its resolution"))
     near = min((v for v in verdicts if v.tolerance and v.delta is not None),
                key=lambda v: -abs(v.delta or 0.0) / (v.tolerance or 1.0), default=None)
     return _with(cell, Cell.MISSED, why="" if near is None else f"nearest: {_change(near)}")
+
+
+def _over_resolution(v: MetricVerdict) -> float:
+    """A metric's move between the runs in units of its resolution (`MetricDef.resolution`):
+    inf when one side has no value or the metric has no definition and moved."""
+    if v.value is None or v.baseline is None:
+        return 0.0 if v.value is None and v.baseline is None else math.inf
+    move = abs(v.value - v.baseline)
+    d = definition(v.name)
+    resolution = 0.0 if d is None else d.resolution(v.baseline)
+    if resolution > 0:
+        return move / resolution
+    return math.inf if move > 0 else 0.0
 
 
 def _with(cell: Judgement, result: Cell, **kw: Any) -> Judgement:
@@ -423,7 +486,7 @@ def to_json(m: Matrix, command: str, name: str, shard: tuple[int, int] | None
             ) -> dict[str, Any]:
     """summary.json: the catalogue, the cells, the scores."""
     def s(x: Score) -> dict[str, Any]:
-        return {"caught": x.caught, "judged": x.judged,
+        return {"caught": x.caught, "judged": x.judged, "no_effect": x.no_effect,
                 "score": None if math.isnan(x.value) else round(x.value, 4)}
 
     return {

@@ -1,12 +1,14 @@
 """Tolerances that earn their width (`kartci baseline tolerances`, issue 42): from the runs of
 a `kartci faults` folder and each scenario's baseline, the width each metric needs.
 
-A metric's tolerance has a floor, 3 x its conditioning spread (narrower, its verdict follows
-nanometre perturbations: ill-conditioned), and a use: to fail the gate on the faults it can
+A metric's tolerance has a floor and a use. The floor is the larger of 3 x its conditioning
+spread (narrower, its verdict follows nanometre perturbations: ill-conditioned) and its
+resolution (a tenth of its default tolerance, `MetricDef.resolution`: narrower, the gate judges
+float digits and fails every harmless change). The use is to fail the gate on the faults it can
 see. A fault *moves* a metric when the faulted run differs from the nominal run, in the
 metric's bad direction, by more than the floor. The proposal is
 
-- the floor, where today's tolerance is below it (ill-conditioned: widened to earn trust);
+- the floor, where today's tolerance is below it (widened: to earn trust, or to mean something);
 - half the smallest move among the faults that move it, where today's tolerance lets one of
   them pass (tightened, with a factor of 2 to spare for a fault a little milder than the
   catalogue's), never below the floor;
@@ -31,7 +33,7 @@ from kartci.core import Direction, RunFolder
 from kartci.errors import SpecError
 from kartci.runner.compare import samples
 from kartci.verdict import load, write_json_atomic
-from kartci.verdict.baseline import SPREAD_MULTIPLE
+from kartci.verdict.baseline import SPREAD_MULTIPLE, definition
 from kartci.verdict.runs import compare_runs
 
 MARGIN = 2.0  # a tightened tolerance is the smallest move it must catch over this
@@ -43,6 +45,7 @@ class Why(StrEnum):
     """What a proposal does to a metric's tolerance."""
 
     WIDENED = "widened to 3 x spread"  # it was ill-conditioned
+    RESOLVED = "widened to its resolution"  # it judged float digits
     TIGHTENED = "tightened"  # it let a fault it can see pass
     KEPT = "kept"  # it catches every fault that moves it, or none moves it
 
@@ -55,7 +58,7 @@ class Proposal:
     metric: str
     unit: str
     tolerance: float
-    floor: float  # 3 x spread
+    floor: float  # the larger of 3 x spread and the metric's resolution
     proposed: float
     why: Why
     moved_by: tuple[tuple[str, float], ...]  # (fault, move beyond the floor), smallest first
@@ -150,12 +153,16 @@ def _round_down(x: float) -> float:
 def _propose(scenario: str, name: str, entry: Mapping[str, Any],
              moves: Mapping[str, Mapping[str, float]]) -> Proposal:
     tol = float(entry["tolerance"])
-    floor = SPREAD_MULTIPLE * float(entry.get("spread") or 0.0)  # the policy's own bound
+    chaos = SPREAD_MULTIPLE * float(entry.get("spread") or 0.0)  # the policy's own bound
+    d, value = definition(name), entry.get("value")
+    resolution = 0.0 if d is None else d.resolution(math.nan if value is None else float(value))
+    floor = max(chaos, resolution)
     moved = sorted(((f, m[name]) for f, m in moves.items() if m.get(name, 0.0) > floor),
                    key=lambda fm: fm[1])
     unit = str(entry.get("unit", ""))
     if tol < floor:
-        return Proposal(scenario, name, unit, tol, floor, floor, Why.WIDENED, tuple(moved))
+        why = Why.WIDENED if chaos >= resolution else Why.RESOLVED
+        return Proposal(scenario, name, unit, tol, floor, floor, why, tuple(moved))
     if moved and moved[0][1] <= tol:  # a fault it can see passes today
         target = max(floor, _round_down(moved[0][1] / MARGIN))
         if target < tol:

@@ -22,6 +22,7 @@ from kartci.cli.common import (
     out_console,
     out_dir,
 )
+from kartci.errors import SpecError
 from kartci.runner.kinds import ExecutorKind
 
 if TYPE_CHECKING:
@@ -31,7 +32,8 @@ if TYPE_CHECKING:
 
 # a cell of the terminal matrix: the same words as summary.json and the page, short
 _CELL = {"caught": ("caught", "green"), "missed": ("MISSED", "bold red"),
-         "not applicable": ("·", "dim"), "error": ("ERROR", "magenta")}
+         "no effect": ("none", "yellow"), "not applicable": ("·", "dim"),
+         "error": ("ERROR", "magenta")}
 
 
 @contextmanager
@@ -57,11 +59,14 @@ def print_matrix(matrix: Matrix) -> None:
                   *(Text(matrix.scenario_score(s).text()) for s in matrix.scenarios),
                   Text(matrix.score.text(), style="bold"))
     out_console.print(table)
+    if none := matrix.score.no_effect:
+        out_console.print(Text(f"{none} cells with no effect (no metric moved beyond its "
+                               "resolution) are not scored"), highlight=False)
     for c in matrix.cells:
         if c.cell.value == "caught":
             out_console.print(Text(f"{c.fault} on {c.scenario}: caught by "
                                    f"{'; '.join(c.caught_by)}"), highlight=False)
-        elif c.cell.value in ("missed", "error"):
+        elif c.cell.value in ("missed", "no effect", "error"):
             out_console.print(Text(f"{c.fault} on {c.scenario}: {c.cell.value.upper()}"
                                    + (f": {c.why}" if c.why else "")), highlight=False)
 
@@ -91,14 +96,18 @@ def faults(
     min_score: Annotated[float | None, typer.Option(
         help="Exit 1 when the suite catches less than this fraction (0-1) of the faults "
              "judged.")] = None,
+    rejudge: Annotated[bool, typer.Option(
+        "--rejudge", help="Run nothing: judge OUT's runs again with today's baselines (after "
+                          "`kartci baseline tolerances --write`).")] = False,
     out: OutOpt = None,
     baselines: BaselinesOpt = None,
     allow_outside_paths: AllowOutsideOpt = False,
 ) -> None:
     """Run each scenario as written and under each fault of a catalogue that acts on it, and
     judge every faulted run against the scenario's own run with its baseline's tolerances
-    (as `kartci compare` does): caught (a metric fails the gate), missed (all within
-    tolerance) or not applicable (nothing in the scenario for the fault to act on).
+    (as `kartci compare` does): caught (a metric fails the gate), missed (a metric moved, all
+    within tolerance), no effect (no metric moved beyond its resolution: not scored) or not
+    applicable (nothing in the scenario for the fault to act on).
 
     Writes OUT/<scenario>/ and OUT/<scenario>@fault=<fault>/ (run folders), OUT/summary.json
     (the detection matrix and scores) and OUT/faults.html (the matrix as a heat map).
@@ -106,15 +115,22 @@ def faults(
     """
     # CLI start-up: the runner and the simulator (+0.9 s), for this command only
     from kartci.app.faults import Request, run_faults
+    from kartci.app.faults import rejudge as judge_again
     from kartci.runner.jobs import parse_shard
 
     target = out_dir(out, "faults")
-    live = err_console.is_terminal and not os.environ.get("CI")
-    request = Request(target, tuple(names or ()), catalogue, tuple(only or ()),
-                      Path(baselines) if baselines is not None else None, jobs,
-                      parse_shard(shard) if shard else None, executor, ray_address, timeout_s,
-                      min_score, allow_outside_paths)
-    result = run_faults(request, lambda todo: _running(todo, live))
+    base = Path(baselines) if baselines is not None else None
+    if rejudge:
+        if names or only or shard:
+            raise SpecError("--rejudge judges the runs already in --out again; give it no "
+                            "scenarios, --only or --shard")
+        result = judge_again(target, base, min_score)
+    else:
+        live = err_console.is_terminal and not os.environ.get("CI")
+        request = Request(target, tuple(names or ()), catalogue, tuple(only or ()), base, jobs,
+                          parse_shard(shard) if shard else None, executor, ray_address,
+                          timeout_s, min_score, allow_outside_paths)
+        result = run_faults(request, lambda todo: _running(todo, live))
     print_matrix(result.matrix)
     code = result.exit_code
     if code and min_score is not None:

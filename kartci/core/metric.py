@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
+RESOLUTION = 0.1  # the narrowest meaningful tolerance, as a fraction of the default one
+
 
 class Direction(StrEnum):
     """Which way a metric is better, for judging it against its baseline."""
@@ -32,6 +34,12 @@ class MetricDef:
         """The tolerance a new baseline entry gets for this value."""
         return max(self.abs_tol, self.rel_tol * abs(value)) if math.isfinite(value) else (
             self.abs_tol)
+
+    def resolution(self, value: float) -> float:
+        """The narrowest tolerance worth gating on, in the metric's unit: RESOLUTION of its
+        default tolerance. A move below it is float digits, not behaviour, and a gate tighter
+        than it fails every harmless change, so that teams learn to re-accept blindly."""
+        return RESOLUTION * self.default_tolerance(value)
 
 
 @dataclass(frozen=True)

@@ -16,10 +16,10 @@ from matplotlib.patches import Patch
 from kartci.plotstyle import svg  # also sets Agg and the SVG settings
 from kartci.report.tables import CSS
 
-# the four results of a cell, in the heat map's colour order
-RESULTS = ("caught", "missed", "not applicable", "error")
-_COLOURS = ("#176f2c", "#b00020", "#d9d9d9", "#6a1b9a")
-_MARKS = {"caught": "✓", "missed": "✗", "not applicable": "", "error": "!"}
+# the five results of a cell, in the heat map's colour order
+RESULTS = ("caught", "missed", "no effect", "not applicable", "error")
+_COLOURS = ("#176f2c", "#b00020", "#c9a227", "#d9d9d9", "#6a1b9a")
+_MARKS = {"caught": "✓", "missed": "✗", "no effect": "=", "not applicable": "", "error": "!"}
 
 
 def _score(entry: dict[str, Any]) -> str:
@@ -71,12 +71,16 @@ def faults_page(summary: dict[str, Any]) -> str:
     pct = "" if total.get("score") is None else f" ({total['score']:.0%})"
     verdict = "pass" if total.get("judged") and total["caught"] == total["judged"] else "fail"
     parts = [f'<p class="verdict {verdict}">The suite catches {total["caught"]} of the '
-             f"{total['judged']} faults it was judged on{pct}.</p>",
+             f"{total['judged']} faults it was judged on{pct}"
+             + (f"; {total['no_effect']} had no effect on any metric and are not scored"
+                if total.get("no_effect") else "") + ".</p>",
              f"<p><code>{html.escape(summary['command'])}</code>: each scenario run as written "
              "and once under each fault of the catalogue that acts on it; each faulted run "
              "judged against the scenario's own run with its baseline's tolerances, as "
-             "<code>kartci compare</code> judges. Caught: the gate would fail. Not applicable "
-             "faults and failed runs are not scored.</p>"]
+             "<code>kartci compare</code> judges. Caught: the gate would fail. No effect: no "
+             "metric moved beyond its resolution (a tenth of its default tolerance), so no "
+             "gate could fail. No-effect and not-applicable faults and failed runs are not "
+             "scored.</p>"]
     if summary["faults"] and summary["scenarios"]:
         parts.append(f'<div class="figs">{heat_map(summary)}</div>')
     parts.append("<h2>Scenarios</h2><table><tr><th>scenario</th><th>nominal run vs its "
@@ -97,7 +101,8 @@ def faults_page(summary: dict[str, Any]) -> str:
         result = html.escape(c["result"])
         if c.get("run"):
             result = f'<a href="{html.escape(c["run"])}/">{result}</a>'
-        css = {"caught": "pass", "missed": "failed", "error": "error"}[c["result"]]
+        css = {"caught": "pass", "missed": "failed", "no effect": "new",
+               "error": "error"}[c["result"]]
         why = "<br>".join(html.escape(x) for x in c["caught_by"]) or html.escape(c["why"])
         parts.append(f"<tr><td>{html.escape(c['fault'])}</td><td>{html.escape(c['scenario'])}"
                      f'</td><td class="{css}">{result}</td><td>{why}</td></tr>')

@@ -190,9 +190,74 @@ def test_faults_on_a_short_line_run_write_the_matrix_its_metrics_imply(tmp_path:
         assert cell["result"] == (Cell.CAUGHT if moved else Cell.MISSED), (cell, moved)
         assert sorted(c.split(" ")[0] for c in cell["caught_by"]) == moved
         caught += bool(moved)
-    assert summary["score"] == {"caught": caught, "judged": 2, "score": caught / 2}
+    assert summary["score"] == {"caught": caught, "judged": 2, "no_effect": 0,
+                                "score": caught / 2}
     assert summary["scenarios"][0]["caught"] == caught
     page = (out / "faults.html").read_text(encoding="utf-8")
     assert "<svg" in page and "detection matrix" in page
     assert proc.returncode == (0 if caught == 2 else 1), proc.stderr
     assert "detection matrix" in proc.stdout and "line_pid.kp_x0.7" in proc.stdout
+
+
+def _three_faulted_runs(tmp_path: Path) -> Path:
+    """Runs q (settle_time_s 0.84 s) and q@a, q@b, q@c (+0.01, +0.1, +0.3 s) with a baseline
+    tolerance of 0.2 s; returns the baselines folder."""
+    base = tmp_path / "baselines"
+    base.mkdir()
+    (base / "q.json").write_text(json.dumps({"scenario": "q", "metrics": {
+        "settle_time_s": {"value": 0.84, "tolerance": 0.2, "direction": "lower", "unit": "s"}}}))
+    for label, value in (("q", 0.84), ("q@a", 0.85), ("q@b", 0.94), ("q@c", 1.14)):
+        (tmp_path / label).mkdir()
+        (tmp_path / label / "metrics.json").write_text(json.dumps(
+            {"metrics": {"settle_time_s": {"value": value, "unit": "s"}}}))
+    return base
+
+
+def test_a_fault_that_moves_no_metric_beyond_its_resolution_has_no_effect_and_is_not_scored(
+        tmp_path: Path) -> None:
+    """settle_time_s is registered (default tolerance 0.5 s at 0.84 s, so a resolution of
+    0.05 s) with a baseline tolerance of 0.2 s: +0.01 s is float-digit noise (no effect),
+    +0.1 s a real move the gate lets pass (missed), +0.3 s caught."""
+    from kartci.app.faults import Judgement, judge, score
+    from kartci.verdict import ScenarioResult
+
+    base = _three_faulted_runs(tmp_path)
+    runs = {label: ScenarioResult(label, "") for label in ("q", "q@a", "q@b", "q@c")}
+    cells = [judge(Judgement(f"f.{x}", "q", Cell.MISSED, label=f"q@{x}"), runs["q"],
+                   runs[f"q@{x}"], tmp_path, base) for x in "abc"]
+    assert [c.cell for c in cells] == [Cell.NO_EFFECT, Cell.MISSED, Cell.CAUGHT]
+    assert "0.2 of its resolution" in cells[0].why
+    got = score(cells)
+    assert (got.caught, got.judged, got.no_effect) == (1, 2, 1)
+
+
+def test_rejudge_gives_the_matrix_of_todays_tolerances_without_running(tmp_path: Path) -> None:
+    """The three runs above judged at a tolerance of 0.2 s, then again after it is narrowed
+    to 0.05 s: q@b is caught now, q@a still has no effect; a not-applicable cell stays."""
+    from kartci.app.faults import Judgement, Matrix, judge, rejudge, to_json
+    from kartci.verdict import ScenarioResult
+
+    base = _three_faulted_runs(tmp_path)
+    entries = [Entry("line_pid", Scope.CONTROLLER, Fault("kp_x0.7", "", ())),
+               Entry("line_pid", Scope.CONTROLLER, Fault("ki_x0.7", "", ())),
+               Entry("line_tracker", Scope.ROBOT, Fault("wheel_lag_x2", "", ())),
+               Entry("gokart", Scope.ROBOT, Fault("brake_x0.5", "", ()))]
+    cells = [judge(Judgement(e.name, "q", Cell.MISSED, label=f"q@{x}"), ScenarioResult("q", ""),
+                   ScenarioResult(f"q@{x}", ""), tmp_path, base)
+             for e, x in zip(entries, "abc", strict=False)]
+    cells.append(Judgement(entries[3].name, "q", Cell.NOT_APPLICABLE, why="no kart"))
+    (tmp_path / "summary.json").write_text(json.dumps(to_json(
+        Matrix(entries, ["q"], cells, {"q": "pass"}), "kartci faults q", "standard", None)))
+    doc = json.loads((base / "q.json").read_text())
+    doc["metrics"]["settle_time_s"]["tolerance"] = 0.05
+    (base / "q.json").write_text(json.dumps(doc))
+    proc = kartci("faults", "--rejudge", "--out", tmp_path, "--baselines", base)
+    assert proc.returncode == 0, proc.stderr
+    after = json.loads((tmp_path / "summary.json").read_text())
+    assert [c["result"] for c in after["cells"]] == ["no effect", "caught", "caught",
+                                                    "not applicable"]
+    assert after["score"] == {"caught": 2, "judged": 2, "no_effect": 1, "score": 1.0}
+    assert "1 cells with no effect" in proc.stdout
+    assert rejudge(tmp_path, base).matrix.score.caught == 2
+    bad = kartci("faults", "q", "--rejudge", "--out", tmp_path, "--baselines", base)
+    assert bad.returncode == 2 and "give it no scenarios" in bad.stderr
