@@ -392,41 +392,89 @@ def run_faults(request: Request, running: Running | None = None) -> FaultsResult
     return FaultsResult(matrix, out, summary, page, r.min_score)
 
 
+def _summary(out: Path) -> dict[str, Any]:
+    path = out / SUMMARY
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as err:
+        raise SpecError(f"{path}: no detection matrix to judge ({type(err).__name__}); run "
+                        "`kartci faults --out DIR` first") from None
+    if not isinstance(doc, dict) or "kartci_faults" not in doc:
+        raise SpecError(f"{path}: not written by `kartci faults`")
+    return doc
+
+
+def is_faults_folder(out: Path) -> bool:
+    """Whether OUT holds a `kartci faults` matrix (so `kartci merge` merges matrices)."""
+    try:
+        _summary(out)
+    except SpecError:
+        return False
+    return True
+
+
 def rejudge(out: Path, baselines: Path | None = None, min_score: float | None = None
             ) -> FaultsResult:
     """Judge a `kartci faults` folder's runs again with today's baselines, running nothing:
     after `kartci baseline tolerances --write`, the matrix the new tolerances give."""
-    path = out / SUMMARY
-    try:
-        old = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as err:
-        raise SpecError(f"{path}: no detection matrix to judge again ({type(err).__name__}); "
-                        "run `kartci faults --out DIR` first") from None
-    if not isinstance(old, dict) or "kartci_faults" not in old:
-        raise SpecError(f"{path}: not written by `kartci faults`")
+    old = _summary(out)
+    base = baselines if baselines is not None else project.current().baselines
+    with locked(out):
+        return _judge_again(out, old, base, min_score)
+
+
+def merge_faults(dirs: Sequence[Path], out: Path, baselines: Path | None = None,
+                 min_score: float | None = None) -> FaultsResult:
+    """Join `kartci faults --shard` OUTs into one matrix in `out`: their run folders copied as
+    `kartci merge` copies a sharded run's (checked, never outside OUT), their cells judged
+    again together with today's baselines."""
+    from kartci.runner.merge import merge  # start-up: PyBullet (+0.4 s)
+
+    docs = [_summary(d) for d in dirs]
+    if len({d["catalogue"] for d in docs}) > 1:
+        raise SpecError("the shards ran different catalogues ("
+                        + ", ".join(sorted({d["catalogue"] for d in docs})) + "); merge one's")
+    names = [s["name"] for d in docs for s in d["scenarios"]]
+    if len(set(names)) < len(names):
+        raise SpecError("a scenario is in two shards' matrices; merge the shards of one "
+                        "`kartci faults --shard I/N` run")
+    base = baselines if baselines is not None else project.current().baselines
+    order = {e.name: i for i, e in enumerate(catalogue(docs[0]["catalogue"]))}
+    faults = {f["name"]: f for d in docs for f in d["faults"]}
+    joined = {"kartci_faults": 1, "catalogue": docs[0]["catalogue"], "shard": None,
+              "command": "kartci merge " + " ".join(str(d) for d in dirs),
+              "faults": sorted(faults.values(), key=lambda f: order.get(f["name"], len(order))),
+              "scenarios": sorted((s for d in docs for s in d["scenarios"]),
+                                  key=lambda s: str(s["name"])),
+              "cells": [c for d in docs for c in d["cells"]]}
+    with locked(out):
+        merge(list(dirs), out, base)
+        return _judge_again(out, joined, base, min_score)
+
+
+def _judge_again(out: Path, old: dict[str, Any], base: Path, min_score: float | None
+                 ) -> FaultsResult:
     from kartci.verdict import ScenarioResult  # runtime: the judged runs' stand-ins
 
-    base = baselines if baselines is not None else project.current().baselines
     declared = {e.name: e for e in catalogue(old["catalogue"])}
     entries = [declared[f["name"]] for f in old["faults"] if f["name"] in declared]
     names = [s["name"] for s in old["scenarios"]]
-    ran = {n: ScenarioResult(n, "") for n in names}
     cells = []
     for c in old["cells"]:
         cell = Judgement(c["fault"], c["scenario"], Cell(c["result"]), why=c["why"],
                          label=c["run"] or "", overrides=tuple(c["set"]))
         if cell.cell in (Cell.CAUGHT, Cell.MISSED, Cell.NO_EFFECT):
-            cell = judge(cell, ran[cell.scenario], ScenarioResult(cell.label, ""), out, base)
+            cell = judge(cell, ScenarioResult(cell.scenario, ""),
+                         ScenarioResult(cell.label, ""), out, base)
         cells.append(cell)
     matrix = Matrix(entries, names, cells, {s["name"]: s["nominal"] for s in old["scenarios"]})
     doc = to_json(matrix, old["command"], old["catalogue"],
                   None if old["shard"] is None else (old["shard"][0], old["shard"][1]))
-    with locked(out):
-        write_json_atomic(path, doc)
-        from kartci.report.faults import faults_page  # late: matplotlib, for the page only
+    write_json_atomic(out / SUMMARY, doc)
+    from kartci.report.faults import faults_page  # late: matplotlib, for the page only
 
-        write_text_atomic(out / PAGE, faults_page(doc))
-    return FaultsResult(matrix, out, path, out / PAGE, min_score)
+    write_text_atomic(out / PAGE, faults_page(doc))
+    return FaultsResult(matrix, out, out / SUMMARY, out / PAGE, min_score)
 
 
 def judge(cell: Judgement, nominal: ScenarioResult | None, faulted: ScenarioResult | None,

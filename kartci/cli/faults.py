@@ -6,7 +6,7 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 from rich.table import Table
@@ -26,7 +26,7 @@ from kartci.errors import SpecError
 from kartci.runner.kinds import ExecutorKind
 
 if TYPE_CHECKING:
-    from kartci.app.faults import Matrix
+    from kartci.app.faults import FaultsResult, Matrix
     from kartci.runner.events import Listener
     from kartci.runner.jobs import Job
 
@@ -131,6 +131,11 @@ def faults(
                           parse_shard(shard) if shard else None, executor, ray_address,
                           timeout_s, min_score, allow_outside_paths)
         result = run_faults(request, lambda todo: _running(todo, live))
+    conclude_faults(result, min_score)
+
+
+def conclude_faults(result: FaultsResult, min_score: float | None) -> NoReturn:
+    """Print the matrix and where it is written, and exit with the result's code."""
     print_matrix(result.matrix)
     code = result.exit_code
     if code and min_score is not None:

@@ -10,6 +10,7 @@ import typer
 from kartci import project
 from kartci.app.suite import compare_suites, merge_shards, rescore_suite
 from kartci.cli.common import BaselinesOpt, OutOpt, StrictOpt, app, conclude, out_dir, strict_mode
+from kartci.errors import SpecError
 from kartci.project import Project
 from kartci.report import COMPARE
 
@@ -26,7 +27,19 @@ def merge(
              "a missing folder draws no history.")] = None,
 ) -> None:
     """Join partial results into one run: copy the scenario folders into OUT, then judge and
-    report them exactly as an unsharded run would (same summary, verdicts, exit code)."""
+    report them exactly as an unsharded run would (same summary, verdicts, exit code). Shards
+    of `kartci faults --shard` give one detection matrix, judged with today's baselines."""
+    from kartci.app.faults import is_faults_folder
+
+    kinds = {is_faults_folder(d) for d in dirs}
+    if kinds == {True}:
+        from kartci.app.faults import merge_faults
+        from kartci.cli.faults import conclude_faults
+
+        conclude_faults(merge_faults(dirs, out, baselines), None)
+    if len(kinds) > 1:
+        raise SpecError("the folders mix `kartci faults` and `kartci run` results; merge "
+                        "each kind on its own")
     suite = merge_shards(dirs, out, baselines, _project(baselines), strict=strict_mode(strict),
                          history=history)
     conclude(suite.results, suite.reports)

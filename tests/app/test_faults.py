@@ -261,3 +261,35 @@ def test_rejudge_gives_the_matrix_of_todays_tolerances_without_running(tmp_path:
     assert rejudge(tmp_path, base).matrix.score.caught == 2
     bad = kartci("faults", "q", "--rejudge", "--out", tmp_path, "--baselines", base)
     assert bad.returncode == 2 and "give it no scenarios" in bad.stderr
+
+
+def test_shards_of_a_faults_run_merge_into_one_matrix(tmp_path: Path) -> None:
+    """Two short scenarios dealt to two shards (each with its nominal and faulted run), merged
+    by `kartci merge`: one matrix with both scenarios, their cells as each shard judged them,
+    and the run folders copied beside it."""
+    names = []
+    for name, duration in (("line_straight", 10.0), ("line_sprint", 6.5)):
+        source = yaml.safe_load(Path(f"scenarios/{name}.yaml").read_text(encoding="utf-8"))
+        source["duration_s"] = duration
+        (tmp_path / f"{name}.yaml").write_text(yaml.safe_dump(source), encoding="utf-8")
+        names.append(tmp_path / f"{name}.yaml")
+    shards = [tmp_path / "s1", tmp_path / "s2"]
+    for i, shard in enumerate(shards, 1):
+        proc = kartci("faults", *names, "--only", "line_pid.kp_x0.7", "--shard", f"{i}/2",
+                      "--out", shard)
+        assert proc.returncode == 0, proc.stderr
+    parts = [json.loads((s / "summary.json").read_text()) for s in shards]
+    assert sorted(len(p["scenarios"]) for p in parts) == [1, 1]
+    merged = tmp_path / "merged"
+    proc = kartci("merge", *shards, "--out", merged)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((merged / "summary.json").read_text())
+    assert [s["name"] for s in doc["scenarios"]] == ["line_sprint", "line_straight"]
+    assert sorted((c["scenario"], c["result"]) for c in doc["cells"]) == sorted(
+        (c["scenario"], c["result"]) for p in parts for c in p["cells"])
+    for c in doc["cells"]:
+        assert (merged / c["run"] / "metrics.json").is_file()
+        assert (merged / c["scenario"] / "metrics.json").is_file()
+    assert (merged / "faults.html").is_file() and "detection matrix" in proc.stdout
+    mixed = kartci("merge", shards[0], tmp_path / "nothing", "--out", tmp_path / "m2")
+    assert mixed.returncode == 2 and "mix" in mixed.stderr
