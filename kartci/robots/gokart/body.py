@@ -6,6 +6,7 @@ friction and only carry the weight)."""
 
 from __future__ import annotations
 
+from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +54,10 @@ class Gokart(Base):
         self.accel = (0.0, 0.0)  # body-frame acceleration of the last step's forces, m/s^2
         self.mu_scale = [1.0] * 4
         self.input = KartInput()
+        # commands on their way to the actuators (model.command_delay_s): (due step, input)
+        self._delay_steps = round(model.command_delay_s / dt_s)
+        self._pending: deque[tuple[int, KartInput]] = deque()
+        self._steps = 0  # physics steps taken
         self.column = 0.0  # steering-column angle, rad
         self._steer_column: float | None = None  # column angle of the steer motors' targets, rad
         # per wheel (rl, rr, fl, fr): body-frame force and grip of the last step, N (`tyres`);
@@ -70,11 +75,18 @@ class Gokart(Base):
     def command(self, cmd: KartInput) -> None:
         """Take a command, each input clamped to the model's range (steering column, rad;
         acceleration and brake, m/s^2)."""
-        lo, hi = self.model.steering_limit_rad
-        self.input = KartInput(min(max(cmd.steering_rad, lo), hi),
-                               min(max(cmd.accel_mps2, 0.0), self.model.max_accel_mps2),
-                               min(max(cmd.brake_mps2, 0.0), self.model.max_brake_mps2),
-                               cmd.reverse, cmd.estop)
+        m = self.model
+        lo, hi = m.steering_limit_rad
+        steer = cmd.steering_rad + m.steering_offset_rad if m.steering_offset_rad else (
+            cmd.steering_rad)
+        taken = KartInput(min(max(steer, lo), hi),
+                          min(max(cmd.accel_mps2, 0.0), m.max_accel_mps2),
+                          min(max(cmd.brake_mps2, 0.0), m.max_brake_mps2),
+                          cmd.reverse, cmd.estop)
+        if self._delay_steps:
+            self._pending.append((self._steps + self._delay_steps, taken))
+        else:
+            self.input = taken
 
     def set_wheel_friction(self, mu: list[float]) -> None:
         """Per-wheel floor friction: each tyre's peak force is this mu (times the kart's
@@ -84,6 +96,9 @@ class Gokart(Base):
     def pre_step(self) -> None:
         """Turn the steering column towards its target at the steering rate, and apply the four
         tyre forces and the air drag for the coming physics step."""
+        while self._pending and self._pending[0][0] <= self._steps:
+            self.input = self._pending.popleft()[1]
+        self._steps += 1
         m, inp, dt, c = self.model, self.input, self.dt, self.client
         step = m.steering_rate_radps * dt
         column = self.column = self.column + min(max(inp.steering_rad - self.column, -step),

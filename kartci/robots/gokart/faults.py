@@ -3,8 +3,8 @@ tyres or sensors looks like, each through a parameter the simulation reads (para
 sensor faults act where a node reads the sensor (the kart's own controllers drive from its
 ground-truth odometry); an external stack that reads the IMU is not seen as a reader.
 
-Not declared, for want of a parameter the simulation reads: a steering offset, a command
-dead-time, sensor delays and mount offsets (the mounts are the URDF's frames)."""
+Not declared, for want of a parameter the simulation reads: sensor delays and mount offsets
+(the mounts are the URDF's frames)."""
 
 from __future__ import annotations
 
@@ -21,6 +21,10 @@ FAULTS = (
           (Change.scale("model.mass_kg", 1.5),)),
     Fault("steering_rate_0.6", "steering column slews at 0.6 rad/s (a weak steering motor)",
           (Change.to("model.steering_rate_radps", 0.6),)),
+    Fault("steering_offset_0.05", "the steering column's centre 0.05 rad (2.9 deg) off (a "
+          "miscalibrated encoder)", (Change.to("model.steering_offset_rad", 0.05),)),
+    Fault("command_delay_0.05", "commands reach the actuators 50 ms late (a congested bus)",
+          (Change.to("model.command_delay_s", 0.05),)),
     Fault("brake_x0.5", "half the brake deceleration (worn pads)",
           (Change.scale("model.max_brake_mps2", 0.5),)),
     Fault("tyre_friction_0.8", "tyres at 0.8 of their friction (cold or worn tyres)",

@@ -77,6 +77,12 @@ class GokartModel(RobotParams):
                                                     "(measured in Table 3.3)")
     steering_rate_radps: float = Field(4.0, ge=-1e3, le=1e3,
                                        description="column angle slew rate, rad/s")
+    steering_offset_rad: float = Field(0.0, ge=-0.5, le=0.5, description="column angle added "
+                                       "to every steering command: a miscalibrated centre, rad "
+                                       "(0: none)")
+    command_delay_s: float = Field(0.0, ge=0.0, le=1.0, description="dead time between a "
+                                   "command and the actuators taking it, s (rounded to physics "
+                                   "steps; 0: the next step)")
     wheelbase_m: float = Field(1.27, ge=-1e4, le=1e4,
                                description="l of Eq. 3.1/3.2, m (Ackermann option)")
     track_m: float = Field(0.94, ge=-1e4, le=1e4,

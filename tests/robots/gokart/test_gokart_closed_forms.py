@@ -17,6 +17,7 @@ from test_gokart_dynamics import DT, FLOOR_MU, Driver, drive
 
 from kartci.robots.gokart import KartInput
 from kartci.robots.gokart.params import GRAVITY_MPS2, GokartModel, axle_distance_m
+from kartci.robots.gokart.steering import wheel_angles
 
 
 def _resistances(model: GokartModel) -> tuple[float, float]:
@@ -177,3 +178,37 @@ def test_step_steer_yaw_rate_against_the_linear_single_track_model() -> None:
     # average of the step response, cannot peak higher
     assert yaw.min() > -0.01 * steady
     assert yaw.max() / steady - 1.0 <= linear.max() / steady - 1.0 + 0.02
+
+
+def test_a_steering_offset_turns_a_kart_held_straight_as_that_column_angle_does() -> None:
+    """`steering_offset_rad` (issue 42's miscalibrated centre): commanded straight, the column
+    settles at the offset, and the kart circles as one commanded to that angle does (0.086
+    rad/s at 5 m/s here)."""
+    offset, v = 0.05, 5.0
+    rows, model = drive(_hold(v), 4.0, v, model_set=(f"steering_offset_rad={offset}",))
+    commanded, _ = drive(_hold(v, offset), 4.0, v)
+    straight, _ = drive(_hold(v), 4.0, v)
+    wheel = sum(wheel_angles(model, offset)) / 2
+    assert float(np.mean(rows[-250:, 5])) == pytest.approx(wheel, abs=1e-9)
+    yaw_rate = float(np.mean(rows[-250:, 4]))
+    assert yaw_rate == pytest.approx(float(np.mean(commanded[-250:, 4])), rel=1e-6)
+    # the single-track model's steady yaw rate for that wheel angle, delta = L r / v + K v r,
+    # within the 10 % of the understeer test above
+    closed = wheel / (axle_distance_m(model) / v + understeer_gradient(model) * v)
+    assert yaw_rate == pytest.approx(closed, rel=0.10)
+    assert abs(float(np.mean(straight[-250:, 4]))) < 1e-3
+
+
+def test_a_command_delay_shifts_the_response_by_the_dead_time() -> None:
+    """`command_delay_s` (a congested bus): a throttle step from rest takes effect 0.05 s
+    (25 physics steps) later; the speed then follows the undelayed run's, shifted."""
+    def step(k: int, state: tuple[float, float]) -> KartInput:
+        return KartInput(0.0, 3.0, 0.0)
+
+    late, _ = drive(step, 1.5, 0.0, model_set=("command_delay_s=0.05",))
+    now, _ = drive(step, 1.5, 0.0)
+    shift = 25
+    assert abs(late[shift - 1, 3]) < 0.01 < now[shift - 1, 3]
+    # the first 25 steps settle the kart on its wheels either way: the shifted curves agree
+    # to within 1 % once moving
+    assert late[shift + 500:, 3] == pytest.approx(now[500:-shift, 3], rel=0.01)
