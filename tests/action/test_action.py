@@ -17,6 +17,7 @@ from typing import Any
 
 import pytest
 import yaml
+from action_project import make_project
 from composite import Ran, run_action, runs, with_values
 from helpers import PAIR
 
@@ -131,21 +132,7 @@ def test_inputs_reach_scripts_as_data_and_actions_are_pinned_as_the_workflows_pi
 @pytest.fixture(scope="module")
 def project(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A project with the two 3 s line scenarios and baselines accepted from a first run."""
-    proj = tmp_path_factory.mktemp("project")
-    (proj / "scenarios").mkdir()
-    (proj / "baselines").mkdir()
-    for name in PAIR:
-        spec = yaml.safe_load((ROOT / "scenarios" / f"{name}.yaml").read_text())
-        spec.update(duration_s=3.0, criteria={}, metrics={"line_tracking": {"transient_s": 1.0}})
-        (proj / "scenarios" / f"{name}.yaml").write_text(yaml.safe_dump(spec))
-    local = {**os.environ, "KARTCI_ROOT": str(proj)}
-    first = proj / "first"
-    for cmd in (["run", "--no-strict", "--out", str(first)],
-                ["baseline", "update", "--replicas", "0", str(first)]):
-        p = subprocess.run([sys.executable, "-m", "kartci.cli", *cmd], env=local,
-                           capture_output=True, text=True, timeout=300)
-        assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
-    return proj
+    return make_project(tmp_path_factory.mktemp("project"))
 
 
 def _env(project: Path, tmp_path: Path, **extra: str) -> dict[str, str]:
