@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
 import tomllib
 from dataclasses import dataclass
 from enum import Enum
@@ -100,8 +101,9 @@ def install_source(explicit: str | None = None) -> Install:
 def install_from(direct_url: str | None, version: str) -> Install:
     """The requirement for a kartci installed as `direct_url` (direct_url.json's text; None
     or "": from an index): its git commit, its https wheel with the recorded hash, its local
-    wheel copied into the project; a folder (editable) falls back to `kartci==version` with
-    a warning naming what to set."""
+    wheel copied into the project; a folder (editable) falls back, with a warning naming what
+    to set, to the release tag of its version in the folder's git origin, else to
+    `kartci==version`."""
     index = f"kartci=={version}"
     if direct_url is None:
         return Install(index)
@@ -121,11 +123,43 @@ def install_from(direct_url: str | None, version: str) -> Install:
         wheel = Path(unquote(urlparse(url).path))
         if wheel.suffix == ".whl" and wheel.is_file():
             return Install(f"./{(WHEELS / wheel.name).as_posix()}", wheel=wheel)
-    where = f" ({unquote(urlparse(url).path)})" if url else ""
-    return Install(index, warning=(
-        f"kartci runs from a folder{where}, not a release: the gate installs {index}, which "
-        "no package index may have. Set it: `kartci init --force --kartci SPEC` (a wheel, "
+    folder = Path(unquote(urlparse(url).path)) if url.startswith("file://") else None
+    release = _release_of_checkout(folder, version) if folder is not None else None
+    fallback = release or index
+    what = ("the release tag of this version in the folder's origin, not the folder's own "
+            "code; it may not exist yet" if release else "which no package index may have")
+    where = f" ({folder})" if folder is not None else ""
+    return Install(fallback, warning=(
+        f"kartci runs from a folder{where}, not a release: the gate installs {fallback}, "
+        f"{what}. Set it: `kartci init --force --kartci SPEC` (a wheel, "
         "'kartci @ git+URL@COMMIT') or the repository variable KARTCI_REQUIREMENT"))
+
+
+_SCP_URL = re.compile(r"^[\w.-]+@([\w.-]+):(.+)$")  # git@github.com:owner/kartci.git
+
+
+def _release_of_checkout(folder: Path, version: str) -> str | None:
+    """`kartci @ git+https://<origin>@v<version>` for a git checkout of kartci whose `origin`
+    is a remote repository (https, ssh or scp-like; credentials and keys left out); None
+    otherwise."""
+    try:
+        got = subprocess.run(["git", "-C", str(folder), "remote", "get-url", "origin"],
+                             capture_output=True, text=True, timeout=10, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None  # no git here
+    url = got.stdout.strip() if got.returncode == 0 else ""
+    scp = _SCP_URL.match(url)
+    if scp is not None:
+        url = f"https://{scp.group(1)}/{scp.group(2)}"
+    parts = urlparse(url)
+    if parts.scheme not in ("https", "ssh") or not parts.hostname:
+        return None  # a local path or something pip cannot fetch from CI
+    # CI fetches over https, with no key and no credential: the host and the path only
+    host = parts.hostname + (f":{parts.port}" if parts.port and parts.scheme == "https" else "")
+    try:
+        return checked_requirement(f"kartci @ git+https://{host}{parts.path}@v{version}")
+    except SpecError:
+        return None
 
 
 def template(name: str, install: Install | None = None) -> str:

@@ -236,6 +236,30 @@ def test_kartci_option_sets_the_requirement_and_bad_ones_are_refused(tmp_path: P
     assert not (tmp_path / "other").exists()
 
 
+@pytest.mark.parametrize(("origin", "requirement"), [
+    ("https://user:t0ken@github.com/team/kartci.git",
+     "kartci @ git+https://github.com/team/kartci.git@v0.1.0"),
+    ("git@github.com:team/kartci.git", "kartci @ git+https://github.com/team/kartci.git@v0.1.0"),
+    ("ssh://git@example.org:2222/team/kartci", "kartci @ git+https://example.org/team/kartci@v0.1.0"),
+    ("/srv/git/kartci.git", "kartci==0.1.0"),  # a path on this machine: CI cannot fetch it
+    (None, "kartci==0.1.0"),  # no origin
+])
+def test_a_folder_install_falls_back_to_its_origins_release(
+        tmp_path: Path, origin: str | None, requirement: str) -> None:
+    """kartci installed from a git checkout (editable): the gate installs the release tag of
+    its version from the checkout's origin, never a credential, and says so on one line."""
+    checkout = tmp_path / "kartci src"
+    subprocess.run(["git", "init", "-q", str(checkout)], check=True, timeout=60)
+    if origin is not None:
+        subprocess.run(["git", "-C", str(checkout), "remote", "add", "origin", origin],
+                       check=True, timeout=60)
+    got = install_from(f'{{"url": "{checkout.as_uri()}", "dir_info": {{"editable": true}}}}',
+                       "0.1.0")
+    assert got.requirement == requirement and got.warning is not None
+    assert f"the gate installs {requirement}, " in got.warning and "t0ken" not in got.warning
+    assert str(checkout) in got.warning
+
+
 def test_init_from_a_folder_warns_on_one_line(tmp_path: Path) -> None:
     """The test environment's kartci is an editable install: the gate gets the fallback and
     the team is told what to set before its first pull request."""
@@ -245,4 +269,4 @@ def test_init_from_a_folder_warns_on_one_line(tmp_path: Path) -> None:
     assert p.returncode == 0
     (line,) = p.stderr.strip().splitlines()
     assert line.startswith("kartci: warning: kartci runs from a folder")
-    assert f"the gate installs: kartci=={__version__}" in p.stdout
+    assert f"the gate installs: {install_source().requirement}" in p.stdout
