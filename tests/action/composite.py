@@ -2,7 +2,8 @@
 their defaults, `${{ }}` expressions (contexts, literals, ==, !=, &&, ||, !, the status
 functions), each `run:` step in bash -e -o pipefail with its `env:`, and step outputs through
 $GITHUB_OUTPUT. Other actions are not run: setup-python is this interpreter, download-artifact
-and upload-artifact are a plain hand-over of files in one folder (each upload is recorded)."""
+and upload-artifact are a plain hand-over of files in one folder (each upload is recorded), and
+every other action's `with:` is recorded, expanded (the cache keys)."""
 
 from __future__ import annotations
 
@@ -70,6 +71,7 @@ class Ran:
 
     steps: list[str] = field(default_factory=list)  # names (run) or action (uses), in order
     uploads: list[tuple[str, str]] = field(default_factory=list)  # (artifact name, path)
+    uses: list[tuple[str, dict[str, str]]] = field(default_factory=list)  # (action, with:)
     outputs: dict[str, str] = field(default_factory=dict)  # the action's outputs
     code: int = 0  # the failed run step's exit code (0: none failed)
     stdout: str = ""
@@ -77,11 +79,13 @@ class Ran:
 
 def run_action(action: Mapping[str, Any], with_: Mapping[str, str], github: Mapping[str, str],
                cwd: Path, env: Mapping[str, str],
-               skip: Callable[[str], bool] = lambda name: False) -> Ran:
+               skip: Callable[[str], bool] = lambda name: False,
+               contexts: Mapping[str, str] | None = None) -> Ran:
     """Run a composite action's steps in `cwd` as one job does; `with_` are its inputs (already
-    expanded), `github` the github.* context. A `run:` step named so that `skip(name)` is true
-    is not run (an install the test environment already did)."""
-    ctx: dict[str, str] = {f"github.{k}": v for k, v in github.items()}
+    expanded), `github` the github.* context, `contexts` other values by their dotted names
+    (`strategy.job-index`, `runner.os`). A `run:` step named so that `skip(name)` is true is
+    not run (an install the test environment already did)."""
+    ctx: dict[str, str] = {**(contexts or {}), **{f"github.{k}": v for k, v in github.items()}}
     for name, spec in action["inputs"].items():
         ctx[f"inputs.{name}"] = expand(str(with_.get(name, spec.get("default", ""))), ctx)
     ran, failed = Ran(), False
@@ -91,8 +95,9 @@ def run_action(action: Mapping[str, Any], with_: Mapping[str, str], github: Mapp
         uses = str(step.get("uses", "")).split("@")[0]
         if uses:
             ran.steps.append(uses)
+            w = {k: expand(str(v), ctx) for k, v in step.get("with", {}).items()}
+            ran.uses.append((uses, w))
             if uses == "actions/upload-artifact":
-                w = {k: expand(str(v), ctx) for k, v in step["with"].items()}
                 assert not (w.get("if-no-files-found") == "error"
                             and not (cwd / w["path"]).exists()), w
                 ran.uploads.append((w["name"], w["path"]))

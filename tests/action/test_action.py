@@ -6,6 +6,7 @@ and merge jobs (`uses: ./`), the gate's `fail-on`, the pull-request comment (wit
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -17,8 +18,12 @@ from typing import Any
 
 import pytest
 import yaml
+from action_project import make_project
 from composite import Ran, run_action, runs, with_values
 from helpers import PAIR
+
+from kartci import __version__
+from kartci.cachedir import cache_dir
 
 ROOT = Path(__file__).resolve().parents[2]
 ACTION_TEXT = (ROOT / "action.yml").read_text()
@@ -26,7 +31,7 @@ ACTION: dict[str, Any] = yaml.safe_load(ACTION_TEXT)
 CI: dict[str, Any] = yaml.safe_load((ROOT / ".github" / "workflows" / "ci.yml").read_text())
 BIN = str(Path(sys.executable).parent)
 GITHUB = {"action_path": str(ROOT), "event_name": "push", "repository": "team/robot",
-          "server_url": "https://github.com", "run_id": "7", "token": "t0ken"}
+          "server_url": "https://github.com", "run_id": "7", "job": "gate", "token": "t0ken"}
 
 
 def _actionlint() -> str:
@@ -89,6 +94,8 @@ EVERY_INPUT = """\
           python-version: "3.12"
           kartci: kartci==0.1.0
           constraints: constraints.txt
+          plugin-packages: -e . team-metrics==1.2
+          artifact-name: nightly
           baselines: baselines
           history: history/summaries
           fail-on: error
@@ -122,7 +129,7 @@ def test_inputs_reach_scripts_as_data_and_actions_are_pinned_as_the_workflows_pi
     assert all(s["shell"] == "bash" and "${{" not in s["run"] for s in steps if "run" in s)
     workflows = "\n".join(p.read_text() for p in (ROOT / ".github" / "workflows").glob("*.yml"))
     pins = re.findall(r"^\s*(?:- )?uses: (.*)$", ACTION_TEXT, re.MULTILINE)
-    assert len(pins) == 4 and all(re.fullmatch(r"[\w-]+/[\w-]+@[0-9a-f]{40} # v\d+\.\d+\.\d+", u)
+    assert len(pins) == 6 and all(re.fullmatch(r"[\w-]+/[\w-]+@[0-9a-f]{40} # v\d+\.\d+\.\d+", u)
                                   and u in workflows for u in pins), pins
     assert all(s["with"]["overwrite"] is True for s in steps
                if s.get("uses", "").startswith("actions/upload-artifact@"))
@@ -131,21 +138,7 @@ def test_inputs_reach_scripts_as_data_and_actions_are_pinned_as_the_workflows_pi
 @pytest.fixture(scope="module")
 def project(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A project with the two 3 s line scenarios and baselines accepted from a first run."""
-    proj = tmp_path_factory.mktemp("project")
-    (proj / "scenarios").mkdir()
-    (proj / "baselines").mkdir()
-    for name in PAIR:
-        spec = yaml.safe_load((ROOT / "scenarios" / f"{name}.yaml").read_text())
-        spec.update(duration_s=3.0, criteria={}, metrics={"line_tracking": {"transient_s": 1.0}})
-        (proj / "scenarios" / f"{name}.yaml").write_text(yaml.safe_dump(spec))
-    local = {**os.environ, "KARTCI_ROOT": str(proj)}
-    first = proj / "first"
-    for cmd in (["run", "--no-strict", "--out", str(first)],
-                ["baseline", "update", "--replicas", "0", str(first)]):
-        p = subprocess.run([sys.executable, "-m", "kartci.cli", *cmd], env=local,
-                           capture_output=True, text=True, timeout=300)
-        assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
-    return proj
+    return make_project(tmp_path_factory.mktemp("project"))
 
 
 def _env(project: Path, tmp_path: Path, **extra: str) -> dict[str, str]:
@@ -163,12 +156,25 @@ def _installed(name: str) -> bool:
 def test_one_job_runs_the_selected_scenarios_reports_and_uploads(project: Path,
                                                                  tmp_path: Path) -> None:
     ran = run_action(ACTION, {"scenarios": "line_straight"}, GITHUB, tmp_path,
-                     _env(project, tmp_path), skip=_installed)
+                     _env(project, tmp_path), skip=_installed,
+                     contexts={"runner.os": "Linux", "runner.arch": "X64"})
     assert ran.code == 0, ran.stdout[-3000:]
-    assert ran.steps == ["actions/setup-python", "Check the inputs", "Install kartci",
+    assert ran.steps == ["actions/setup-python", "Check the inputs", "actions/cache",
+                         "Install kartci", "Locate the solver cache", "actions/cache",
                          "Run kartci", "actions/upload-artifact", "Gate"]
+    name = ran.outputs.pop("artifact")
     assert ran.outputs == {"exit-code": "0", "report": "reports/kartci"}
-    assert ran.uploads == [("kartci-report", "reports/kartci/")]
+    assert re.fullmatch(r"kartci-report-gate-[0-9a-f]{8}", name)
+    assert ran.uploads == [(name, "reports/kartci/")]
+    # the solver cache: kartci's cache folder, keyed by kartci's version, the runner and the
+    # constraints (kartci's own, shipped with the action, when the input is empty)
+    pip, solver = [w for action, w in ran.uses if action == "actions/cache"]
+    pins = hashlib.sha256((ROOT / "constraints.txt").read_bytes()).hexdigest()[:16]
+    assert pip["key"] == f"kartci-pip-Linux-X64-py3.11-{pins}"
+    assert solver["path"] == str(cache_dir())
+    assert re.fullmatch(rf"kartci-solver-{re.escape(__version__)}-Linux-X64-{pins}-[0-9a-f]{{16}}",
+                        solver["key"]), solver
+    assert solver["key"].startswith(solver["restore-keys"])
     summary = json.loads((tmp_path / "reports" / "kartci" / "summary.json").read_text())
     assert sorted(summary["scenarios"]) == ["line_straight"] and summary["exit_code"] == 0
     assert (tmp_path / "reports" / "kartci" / "line_straight" / "run.mcap").is_file()
@@ -192,10 +198,11 @@ def test_kartcis_own_ci_runs_its_shards_and_merge_through_the_action(project: Pa
         done.append(run_action(ACTION, with_values(step, values), GITHUB, tmp_path, env,
                                skip=_installed))
         assert done[-1].code == 0, done[-1].stdout[-3000:]
-    assert [r.uploads for r in done] == [[("kartci-shard-1", "shards/")],
-                                         [("kartci-shard-2", "shards/")],
+    assert [r.uploads for r in done] == [[("kartci-report-shard-1", "shards/")],
+                                         [("kartci-report-shard-2", "shards/")],
                                          [("kartci-report", "reports/merged/")]]
-    assert "actions/download-artifact" in done[-1].steps
+    assert [w["pattern"] for action, w in done[-1].uses
+            if action == "actions/download-artifact"] == ["kartci-report-shard-*"]
     merged = json.loads((tmp_path / "reports" / "merged" / "summary.json").read_text())
     assert sorted(merged["scenarios"]) == sorted(PAIR) and merged["exit_code"] == 0
     assert (tmp_path / "step_summary.md").read_text().count("## kartci: all scenarios pass") == 1
@@ -298,3 +305,86 @@ def test_a_comment_that_cannot_be_posted_is_a_warning(tmp_path: Path) -> None:
                      {**os.environ, "PATH": os.pathsep.join([str(fake), os.environ["PATH"]])})
     assert ran.code == 0
     assert "::warning::kartci: no pull-request comment (needs pull-requests: write" in ran.stdout
+
+
+def _outputs(ran: Ran) -> dict[str, str]:
+    return dict(line.split("=", 1) for line in ran.stdout.splitlines() if "=" in line)
+
+
+def _names(tmp_path: Path, inputs: dict[str, str], contexts: dict[str, str] | None = None,
+           **github: str) -> tuple[str, str]:
+    """The report artifact's name and the shard prefix "Check the inputs" settles on."""
+    step = _step("Check the inputs")
+    action = {**ACTION, "runs": {"steps": [
+        step, {"name": "show", "shell": "bash", "env": {
+            "R": "${{ steps.setup.outputs.report-name }}",
+            "S": "${{ steps.setup.outputs.shard-prefix }}"},
+            "run": 'echo "r=$R"; echo "s=$S"'}]}}
+    ran = run_action(action, inputs, {**GITHUB, **github}, tmp_path, dict(os.environ),
+                     contexts=contexts)
+    assert ran.code == 0, ran.stdout
+    out = _outputs(ran)
+    return out["r"], out["s"]
+
+
+def test_artifact_names_are_unique_per_job_and_use(tmp_path: Path) -> None:
+    """Two uses in one job, two jobs, two legs of a matrix: each its own report artifact;
+    the same use again (a re-run) the same one; `artifact-name` names it and its shards."""
+    one, prefix = _names(tmp_path, {"scenarios": "line_straight"})
+    assert re.fullmatch(r"kartci-report-gate-[0-9a-f]{8}", one) and prefix == "kartci-shard"
+    assert _names(tmp_path, {"scenarios": "line_straight"})[0] == one
+    others = {_names(tmp_path, {"scenarios": "kart_wall"})[0],
+              _names(tmp_path, {"scenarios": "line_straight"}, job="nightly")[0],
+              _names(tmp_path, {"scenarios": "line_straight"}, {"strategy.job-index": "1"})[0],
+              _names(tmp_path, {"scenarios": "line_straight", "merge": "true"})[0]}
+    assert len(others) == 4 and one not in others
+    assert _names(tmp_path, {"artifact-name": "nightly"}) == ("nightly", "nightly-shard")
+
+
+def test_the_constraints_default_to_kartcis_own(tmp_path: Path) -> None:
+    step = _step("Check the inputs")
+    action = {**ACTION, "runs": {"steps": [step, {
+        "name": "show", "shell": "bash", "env": {"C": "${{ steps.setup.outputs.constraints }}"},
+        "run": 'echo "c=$C"'}]}}
+    ran = run_action(action, {}, GITHUB, tmp_path, dict(os.environ))
+    assert ran.code == 0 and _outputs(ran)["c"] == f"{ROOT}/constraints.txt"
+    (tmp_path / "team.txt").write_text("numpy==2.0\n")
+    ran = run_action(action, {"constraints": "team.txt"}, GITHUB, tmp_path, dict(os.environ))
+    assert ran.code == 0 and _outputs(ran)["c"] == "team.txt"
+    ran = _only("Check the inputs", {"constraints": "missing.txt"}, {}, tmp_path)
+    assert ran.code == 2
+    assert ran.stdout.strip() == "::error::kartci action: constraints: no file 'missing.txt'"
+
+
+def test_plugin_packages_are_installed_after_kartci_as_data(tmp_path: Path) -> None:
+    """A stand-in `python` records the installs: kartci, then the team's packages, both with
+    the constraints; a value with shell syntax stays one argument."""
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    log = tmp_path / "python.log"
+    (fake / "python").write_text(f'#!/usr/bin/env bash\nprintf "%s|" "$@" >> {log}\n'
+                                 f'echo >> {log}\n')
+    (fake / "python").chmod(0o755)
+    env = {"PATH": os.pathsep.join([str(fake), os.environ["PATH"]])}
+    step = _step("Install kartci")
+    action = {**ACTION, "runs": {"steps": [{**step, "env": {
+        **step["env"], "CONSTRAINTS": "pins.txt"}}]}}
+    ran = run_action(action, {"plugin-packages": "-e ./metrics team-x==1.2 $(touch pwned)"},
+                     GITHUB, tmp_path, {**os.environ, **env})
+    assert ran.code == 0, ran.stdout
+    assert log.read_text().splitlines() == [
+        f"-m|pip|install|-q|-c|pins.txt|{ROOT}|",
+        "-m|pip|install|-q|-c|pins.txt|-e|./metrics|team-x==1.2|$(touch|pwned)|"]
+    assert not (tmp_path / "pwned").exists()
+    log.unlink()
+    ran = run_action(action, {}, GITHUB, tmp_path, {**os.environ, **env})
+    assert ran.code == 0 and len(log.read_text().splitlines()) == 1  # no plugins: one install
+
+
+def test_every_input_and_output_is_documented() -> None:
+    """In action.yml (a description each) and in the GitHub Actions how-to (each by name)."""
+    page = (ROOT / "docs" / "howto" / "github-actions.md").read_text()
+    for kind in ("inputs", "outputs"):
+        for name, spec in ACTION[kind].items():
+            assert len(spec.get("description", "")) > 20, name
+            assert f"`{name}`" in page, f"{kind[:-1]} {name} not in the how-to"

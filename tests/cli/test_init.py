@@ -14,16 +14,26 @@ from helpers import kartci
 from venvs import offline_env
 
 from kartci import __version__
+from kartci.errors import SpecError
 from kartci.project import ProjectConfig, find_project
-from kartci.scaffold import SCENARIO, dependency_pins, init_project, workflow_text
+from kartci.scaffold import (
+    SCENARIO,
+    WHEELS,
+    Install,
+    dependency_pins,
+    init_project,
+    install_from,
+    install_source,
+    workflow_text,
+)
 
 FILES = ["kartci.toml", f"scenarios/{SCENARIO}.yaml", "baselines/README.md",
          ".github/workflows/kartci.yml", "constraints.txt", "README.md", ".gitignore"]
 
 
 def _tree(folder: Path) -> dict[str, str]:
-    return {str(p.relative_to(folder)): p.read_text() for p in sorted(folder.rglob("*"))
-            if p.is_file()}
+    return {str(p.relative_to(folder)): p.read_text(errors="replace")
+            for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
 @pytest.mark.long(reason="a fresh venv from the wheel")
@@ -47,9 +57,14 @@ def test_init_then_run_then_baseline_update_from_the_installed_wheel(
 
     init = k("init")
     assert init.returncode == 0, init.stderr
-    assert sorted(_tree(repo)) == sorted(FILES)
-    assert (repo / ".github/workflows/kartci.yml").read_text() == workflow_text()
-    assert f"kartci=={__version__}" in (repo / ".github/workflows/kartci.yml").read_text()
+    assert init.stderr == ""  # no warning: the gate installs the wheel this kartci came from
+    wheels = list((repo / WHEELS).iterdir())
+    assert [w.name for w in wheels] == [f"kartci-{__version__}-py3-none-any.whl"]
+    spec = f"./{WHEELS.as_posix()}/{wheels[0].name}"
+    assert f"the gate installs: {spec}" in init.stdout
+    assert sorted(_tree(repo)) == sorted([*FILES, f"{WHEELS.as_posix()}/{wheels[0].name}"])
+    assert (repo / ".github/workflows/kartci.yml").read_text() == workflow_text(Install(spec))
+    assert f'-c constraints.txt "{spec}"' in (repo / "README.md").read_text()
 
     run = k("run")
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
@@ -157,3 +172,101 @@ def test_constraints_pin_the_installed_numeric_dependencies(tmp_path: Path) -> N
     init_project(tmp_path)
     lines = (tmp_path / "constraints.txt").read_text().splitlines()
     assert [ln for ln in lines if not ln.startswith("#")] == pins
+
+
+GIT = ('{"url": "https://github.com/team/kartci.git", "vcs_info": {"vcs": "git", '
+       '"requested_revision": "v0", "commit_id": "0123456789abcdef0123456789abcdef01234567"}}')
+HTTPS = ('{"url": "https://example.org/kartci-0.1.0-py3-none-any.whl", "archive_info": '
+         '{"hashes": {"sha256": "ab12"}, "hash": "sha256=ab12"}}')
+FOLDER = '{"url": "file:///src/kartci", "dir_info": {"editable": true}}'
+
+
+@pytest.mark.parametrize(("direct_url", "requirement", "warns"), [
+    (None, "kartci==0.1.0", False),  # from a package index: no direct_url.json
+    (GIT, "kartci @ git+https://github.com/team/kartci.git"
+          "@0123456789abcdef0123456789abcdef01234567", False),
+    (HTTPS, "kartci @ https://example.org/kartci-0.1.0-py3-none-any.whl#sha256=ab12", False),
+    ('{"url": "https://example.org/k.whl", "archive_info": {}}',
+     "kartci @ https://example.org/k.whl", False),
+    (FOLDER, "kartci==0.1.0", True),  # editable: a fallback, and a warning naming the fix
+    ('{"url": "file:///gone/kartci-0.1.0-py3-none-any.whl", "archive_info": {}}',
+     "kartci==0.1.0", True),
+])
+def test_the_gate_installs_the_kartci_that_ran_init(direct_url: str | None, requirement: str,
+                                                    warns: bool) -> None:
+    got = install_from(direct_url, "0.1.0")
+    assert got.requirement == requirement and got.wheel is None
+    assert (got.warning is not None) == warns
+    if got.warning:
+        assert "kartci init --force --kartci SPEC" in got.warning
+        assert "KARTCI_REQUIREMENT" in got.warning and "\n" not in got.warning
+
+
+def test_a_local_wheel_is_copied_into_the_project(tmp_path: Path) -> None:
+    wheel = tmp_path / "dist dir" / "kartci-0.1.0-py3-none-any.whl"
+    wheel.parent.mkdir()
+    wheel.write_bytes(b"PK\x03\x04 not really a zip")
+    got = install_from(f'{{"url": "{wheel.as_uri()}", "archive_info": {{}}}}', "0.1.0")
+    assert got == Install("./.kartci/wheels/kartci-0.1.0-py3-none-any.whl", wheel=wheel)
+    repo = tmp_path / "repo"
+    steps = init_project(repo, install=got)
+    assert (repo / WHEELS / wheel.name).read_bytes() == wheel.read_bytes()
+    gate = (repo / ".github/workflows/kartci.yml").read_text()
+    assert "|| './.kartci/wheels/kartci-0.1.0-py3-none-any.whl' }}" in gate
+    assert {str(s.path): s.action.value for s in steps}[f".kartci/wheels/{wheel.name}"] == (
+        "created")
+    again = init_project(repo, force=True, install=got)  # the same bytes: kept
+    assert {str(s.path): s.action.value for s in again}[f".kartci/wheels/{wheel.name}"] == "kept"
+    wheel.write_bytes(b"other bytes")
+    with pytest.raises(SpecError, match="already exists"):
+        init_project(repo, install=got)
+
+
+def test_kartci_option_sets_the_requirement_and_bad_ones_are_refused(tmp_path: Path) -> None:
+    spec = "kartci @ git+https://github.com/team/kartci@v0"
+    p = kartci("init", tmp_path, "--kartci", spec)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+    assert f"|| '{spec}' }}}}" in (tmp_path / ".github/workflows/kartci.yml").read_text()
+    assert f"the gate installs: {spec}" in p.stdout
+    for bad in ("kartci==1' || 'x", 'a"b', "kartci #x", "${{ secrets.X }}", "a\nb", ""):
+        with pytest.raises(SpecError, match="not a pip requirement"):
+            install_source(bad)
+    refused = kartci("init", tmp_path / "other", "--kartci", "x'y")
+    assert refused.returncode == 2 and "not a pip requirement" in refused.stderr
+    assert not (tmp_path / "other").exists()
+
+
+@pytest.mark.parametrize(("origin", "requirement"), [
+    ("https://user:t0ken@github.com/team/kartci.git",
+     "kartci @ git+https://github.com/team/kartci.git@v0.1.0"),
+    ("git@github.com:team/kartci.git", "kartci @ git+https://github.com/team/kartci.git@v0.1.0"),
+    ("ssh://git@example.org:2222/team/kartci", "kartci @ git+https://example.org/team/kartci@v0.1.0"),
+    ("/srv/git/kartci.git", "kartci==0.1.0"),  # a path on this machine: CI cannot fetch it
+    (None, "kartci==0.1.0"),  # no origin
+])
+def test_a_folder_install_falls_back_to_its_origins_release(
+        tmp_path: Path, origin: str | None, requirement: str) -> None:
+    """kartci installed from a git checkout (editable): the gate installs the release tag of
+    its version from the checkout's origin, never a credential, and says so on one line."""
+    checkout = tmp_path / "kartci src"
+    subprocess.run(["git", "init", "-q", str(checkout)], check=True, timeout=60)
+    if origin is not None:
+        subprocess.run(["git", "-C", str(checkout), "remote", "add", "origin", origin],
+                       check=True, timeout=60)
+    got = install_from(f'{{"url": "{checkout.as_uri()}", "dir_info": {{"editable": true}}}}',
+                       "0.1.0")
+    assert got.requirement == requirement and got.warning is not None
+    assert f"the gate installs {requirement}, " in got.warning and "t0ken" not in got.warning
+    assert str(checkout) in got.warning
+
+
+def test_init_from_a_folder_warns_on_one_line(tmp_path: Path) -> None:
+    """The test environment's kartci is an editable install: the gate gets the fallback and
+    the team is told what to set before its first pull request."""
+    if install_source().warning is None:
+        pytest.skip("kartci is not installed from a folder here")
+    p = kartci("init", tmp_path)
+    assert p.returncode == 0
+    (line,) = p.stderr.strip().splitlines()
+    assert line.startswith("kartci: warning: kartci runs from a folder")
+    assert f"the gate installs: {install_source().requirement}" in p.stdout
