@@ -15,12 +15,14 @@ import hashlib
 import json
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from contextlib import suppress
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
+
+from pydantic import BaseModel
 
 from kartci import project
 from kartci.boundedio import open_regular
@@ -147,11 +149,46 @@ class Check:
                 "update`")
 
 
-def check(doc: Any, flat: Mapping[str, Any]) -> Check:
-    """A baseline document's recorded scenario against the fields of the one that ran."""
+def defaulted(scenario: Scenario) -> frozenset[str]:
+    """The flat fields at their parameter's declared default. A parameter added to kartci after
+    a baseline was accepted appears there at its default, which by kartci's contract reproduces
+    the old behaviour (the shipped scenarios' metrics stay byte-identical): it does not make the
+    baseline stale."""
+    out: set[str] = set()
+    _defaults(scenario, "", out)
+    return frozenset(out)
+
+
+def _defaults(node: Any, prefix: str, out: set[str]) -> None:
+    if isinstance(node, dict):
+        for key, value in node.items():
+            _defaults(value, f"{prefix}.{key}" if prefix else str(key), out)
+    elif isinstance(node, BaseModel):
+        for name, info in type(node).model_fields.items():
+            value, key = getattr(node, name), f"{prefix}.{name}" if prefix else name
+            if isinstance(value, (BaseModel, dict)):
+                _defaults(value, key, out)
+            elif not info.is_required() and _same(value, info.get_default(
+                    call_default_factory=True)):
+                out.add(key)
+
+
+def _same(a: Any, b: Any) -> bool:
+    try:
+        return bool(type(a) is type(b) and a == b)
+    except ValueError:  # an array's truth value
+        return False
+
+
+def check(doc: Any, flat: Mapping[str, Any], defaults: Collection[str] = frozenset()
+          ) -> Check:
+    """A baseline document's recorded scenario against the fields of the one that ran;
+    `defaults` (`defaulted`): fields at their declared default, which may be new since."""
     found, old = recorded(doc)
     if found is None:
         return Check(Freshness.UNHASHED)
     if found == digest(flat):
         return Check(Freshness.CURRENT)
-    return Check(Freshness.STALE, tuple(changed(old, flat)))
+    moved = [k for k in changed(old, flat) if not (k not in old and k in defaults)]
+    return Check(Freshness.STALE, tuple(moved)) if moved or not old else Check(
+        Freshness.CURRENT)

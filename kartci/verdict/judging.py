@@ -52,7 +52,8 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
     values = folder.read_metrics()
     record = folder.read_run_record()
     replaced = {str(k): str(v) for k, v in (record.get("replaced_agents") or {}).items()}
-    baseline, check, notes = _comparable(baseline, fingerprint.fields(scenario, replaced), stale)
+    baseline, check, notes = _comparable(baseline, fingerprint.fields(scenario, replaced),
+                                         fingerprint.defaulted(scenario), stale)
     verdicts, doubts, strict = trusted(compare(values, None if baseline is None
                                                else baseline.metrics), baseline, check)
     platform = record.get("platform") or {}
@@ -74,13 +75,13 @@ def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | Non
         baseline=None if baseline is None else baseline.path)
 
 
-def _comparable(baseline: Baseline | None, fields: Mapping[str, Any], stale: Stale
-                ) -> tuple[Baseline | None, fingerprint.Check | None, list[str]]:
+def _comparable(baseline: Baseline | None, fields: Mapping[str, Any], defaults: frozenset[str],
+                stale: Stale) -> tuple[Baseline | None, fingerprint.Check | None, list[str]]:
     """The baseline to judge against (None: none, or not comparable), its recorded scenario
     checked against `fields` (the scenario that ran), and why it is not compared."""
     if baseline is None:
         return None, None, []
-    check = fingerprint.check(baseline.doc, fields)
+    check = fingerprint.check(baseline.doc, fields, defaults)
     if check.freshness is fingerprint.Freshness.STALE and stale is Stale.SKIP:
         return None, None, [not_comparable(baseline, check)]
     return baseline, check, []

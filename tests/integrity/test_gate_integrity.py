@@ -201,3 +201,27 @@ def test_committed_baselines_were_accepted_from_the_scenarios_as_they_are() -> N
         if found != fingerprint.digest(flat):
             stale.append(path.stem)
     assert stale == []
+
+
+def test_a_parameter_added_at_its_default_leaves_older_baselines_current() -> None:
+    """kart_wall's baseline as it was before the kart gained `steering_offset_rad` and
+    `command_delay_s`: current for today's scenario (both at their defaults), stale once one
+    is set, and stale for a field removed or changed as before."""
+    from kartci.scenario import load_scenario
+    from kartci.verdict import fingerprint
+
+    new = ("agents.kart0.model.steering_offset_rad", "agents.kart0.model.command_delay_s")
+    spec = load_scenario("kart_wall")
+    flat = fingerprint.fields(spec)
+    assert set(new) <= fingerprint.defaulted(spec)
+    old = {k: v for k, v in flat.items() if k not in new}
+    doc = {"scenario_hash": fingerprint.digest(old), "scenario_fields": old}
+    fresh = fingerprint.check(doc, flat, fingerprint.defaulted(spec))
+    assert fresh.freshness is fingerprint.Freshness.CURRENT
+    assert fingerprint.check(doc, flat).freshness is fingerprint.Freshness.STALE  # no defaults
+    offset = load_scenario("kart_wall", [f"{new[0]}=0.05"])
+    got = fingerprint.check(doc, fingerprint.fields(offset), fingerprint.defaulted(offset))
+    assert got.freshness is fingerprint.Freshness.STALE and got.fields == (new[0],)
+    fewer = {k: v for k, v in flat.items() if k != "duration_s"}
+    got = fingerprint.check(doc, fewer, fingerprint.defaulted(spec))
+    assert got.fields == ("duration_s",)
