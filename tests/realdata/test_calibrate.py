@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import KART, TRUTH
+from helpers import KART, TRUTH
 
 from kartci.errors import SpecError
 from kartci.realdata.calibrate import calibrate_log, parse_params

@@ -7,8 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import changed
-from helpers import kartci
+from helpers import changed, kartci
 
 from kartci.core import RunFolder
 from kartci.errors import SpecError

@@ -19,9 +19,9 @@ from typing import Any
 
 import pytest
 from helpers import ROOT, kartci
-from ros2python import ros_python_or_skip
-from test_shm import _families_of, _left_of
 
+from bridge.dds.ros2python import ros_python_or_skip
+from bridge.dds.test_shm import _families_of, _left_of
 from kartci.bridge.dds.env import dds_env
 from kartci.bridge.dds.shm import clean_zombies
 from kartci.errors import RunError

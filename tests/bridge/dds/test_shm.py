@@ -24,8 +24,8 @@ from typing import Any
 import pytest
 import yaml
 from helpers import ROOT, kartci
-from ros2python import ros_python_or_skip
 
+from bridge.dds.ros2python import ros_python_or_skip
 from kartci.bridge import attach
 from kartci.bridge.child import Child
 from kartci.bridge.dds import env as ros_env
