@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from kartci import portable
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
@@ -107,7 +108,7 @@ def shipped_run(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Pat
         with (folder / f"{name}.lock").open("w") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)
             if not done.exists():
-                simulate(load_scenario(name), log)
+                simulate(load_scenario(name, project=active_project()), log)
                 done.touch()
         return log
 

@@ -23,10 +23,11 @@ from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from kartci import core, project
+from kartci import core
 from kartci.atomic import write_text_atomic
 from kartci.core import Acts, Fault, RunFolder, unknown_keys
 from kartci.errors import SpecError, did_you_mean
+from kartci.project import Project
 from kartci.runner.compare import samples
 from kartci.runner.jobs import Job, check_count, default_suite, point_label, shard_labels
 from kartci.runner.kinds import ExecutorKind
@@ -306,13 +307,13 @@ def _check(r: Request) -> None:
         raise SpecError(f"--baselines {r.baselines}: no such folder")
 
 
-def plan(names: Sequence[str], entries: list[Entry], allow_outside_paths: bool = False
-         ) -> list[Plan]:
+def plan(names: Sequence[str], entries: list[Entry], proj: Project,
+         allow_outside_paths: bool = False) -> list[Plan]:
     """Each scenario's runs (its nominal run first; none when no fault acts on it) and its
     cells, every faulted scenario validated before anything runs."""
     plans: list[Plan] = []
     for name in dict.fromkeys(names):
-        load = scenario_loader(name, allow_outside_paths=allow_outside_paths)
+        load = scenario_loader(name, project=proj, allow_outside_paths=allow_outside_paths)
         spec = load([])
         if spec.sweep:
             raise SpecError(f"scenario {spec.name}: a grid (its own sweep); faults judge one "
@@ -340,20 +341,19 @@ def plan(names: Sequence[str], entries: list[Entry], allow_outside_paths: bool =
     return plans
 
 
-def run_faults(request: Request, running: Running | None = None) -> FaultsResult:
+def run_faults(request: Request, proj: Project, running: Running | None = None
+               ) -> FaultsResult:
     """Check the request, run every scenario nominal and under each fault that acts on it,
     judge, and write OUT/summary.json and OUT/faults.html. Bad input (an unknown scenario,
     fault or catalogue) is a SpecError before anything runs or is written."""
     r = request
     _check(r)
-    proj = project.current()
     baselines = r.baselines if r.baselines is not None else proj.baselines
     entries = select(catalogue(r.catalogue), r.only)
-    with project.held():
-        names = list(r.names) or default_suite(proj.own_scenarios(), r.allow_outside_paths)
-        if not names:
-            raise SpecError("no scenarios: name one (`kartci list` shows the built-in ones)")
-        plans = plan(names, entries, r.allow_outside_paths)
+    names = list(r.names) or default_suite(proj.own_scenarios(), proj, r.allow_outside_paths)
+    if not names:
+        raise SpecError("no scenarios: name one (`kartci list` shows the built-in ones)")
+    plans = plan(names, entries, proj, r.allow_outside_paths)
     if r.shard is not None:  # a scenario with all its faults stays on one shard
         mine = shard_labels({p[0] for p in plans}, *r.shard)
         plans = [p for p in plans if p[0] in mine]
@@ -365,7 +365,7 @@ def run_faults(request: Request, running: Running | None = None) -> FaultsResult
             (out / stale).unlink(missing_ok=True)
         write_manifest(out, "faults", [j.label for j in todo])
         with (running or _no_events)(todo) as on_event:
-            results = run_jobs(todo, out, baselines, workers=r.jobs, executor=r.executor,
+            results = run_jobs(todo, out, baselines, proj, workers=r.jobs, executor=r.executor,
                                ray_address=r.ray_address, timeout_s=r.timeout_s,
                                on_event=on_event) if todo else []
         by_label = {x.name: x for x in results}

@@ -12,6 +12,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
+from kartci import project
 from kartci.cli.common import (
     AllowOutsideOpt,
     BaselinesOpt,
@@ -114,7 +115,7 @@ def faults(
                       Path(baselines) if baselines is not None else None, jobs,
                       parse_shard(shard) if shard else None, executor, ray_address, timeout_s,
                       min_score, allow_outside_paths)
-    result = run_faults(request, lambda todo: _running(todo, live))
+    result = run_faults(request, project.current(), lambda todo: _running(todo, live))
     print_matrix(result.matrix)
     code = result.exit_code
     if code and min_score is not None:

@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 from helpers import ROOT, kartci
 
+from kartci.project import current as active_project
 from kartci.verdict import load
 from kartci.verdict.baseline import above, policy_bound
 
@@ -174,7 +175,8 @@ def test_a_data_file_edited_in_place_makes_the_fields_differ(
     project.activate(None)
 
     def flat() -> dict[str, Any]:
-        return fingerprint.fields(load_scenario("kart_manual", ["world=my/hall"]))
+        return fingerprint.fields(load_scenario("kart_manual", ["world=my/hall"],
+                                                project=active_project()), active_project())
 
     before = flat()
     assert before["world.track"] == "my/track.csv"  # portable: as named in its world folder
@@ -197,7 +199,8 @@ def test_committed_baselines_were_accepted_from_the_scenarios_as_they_are() -> N
     for path in sorted((ROOT / "baselines").glob("*.json")):
         name, _, point = path.stem.partition("@")
         found, _ = fingerprint.recorded(json.loads(path.read_text()))
-        flat = fingerprint.fields(load_scenario(name, point.split(",") if point else []))
+        flat = fingerprint.fields(load_scenario(name, point.split(",") if point else [],
+                                                project=active_project()), active_project())
         if found != fingerprint.digest(flat):
             stale.append(path.stem)
     assert stale == []

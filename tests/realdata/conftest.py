@@ -8,6 +8,8 @@ from pathlib import Path
 import pytest
 from helpers import DURATION_S, changed
 
+from kartci.project import current as active_project
+
 
 @pytest.fixture(scope="session")
 def kart_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[float, Path]:
@@ -15,7 +17,8 @@ def kart_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[float, Path]:
     from kartci.realdata.synthetic import synthetic_log
 
     folder = tmp_path_factory.mktemp("synthetic")
-    return {f: synthetic_log("kart_simreal", changed(f), DURATION_S, folder / f"kart_{f}.mcap")
+    return {f: synthetic_log("kart_simreal", changed(f), DURATION_S, folder / f"kart_{f}.mcap",
+                             active_project())
             for f in (0.0, 0.5, 1.0)}
 
 

@@ -6,6 +6,7 @@ import pytest
 from helpers import KartLap, kartci
 
 from kartci.core import RunFolder
+from kartci.project import current as active_project
 from kartci.report import write_all
 from kartci.runner.run import evaluate
 
@@ -21,6 +22,6 @@ def kart_lap(tmp_path_factory: pytest.TempPathFactory) -> KartLap:
     assert run.returncode == 0, run.stderr
     update = kartci("baseline", "update", root / "out", "--baselines", root / "baselines")
     assert update.returncode == 0, update.stderr
-    result = evaluate(RunFolder(root / "out" / "kart_manual"), root / "baselines")
+    result = evaluate(RunFolder(root / "out" / "kart_manual"), root / "baselines", active_project())
     write_all([result], root / "out")
     return KartLap(root / "out", root / "baselines", update, result)
