@@ -24,10 +24,9 @@ from types import FrameType
 from typing import Any
 
 from kartci.core import RunFolder
-from kartci.core.loading import load as load_plugins
 from kartci.errors import PluginError, RunError, SpecError, one_line
 from kartci.plotting import Plots
-from kartci.project import Project
+from kartci.project import Project, held
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
     check_criteria_names,
@@ -350,11 +349,15 @@ def wall_clock_limit(limit_s: float | None, where: Callable[[], str]) -> Iterato
 
 def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
     """Simulate, score and (for the judged run) evaluate one job; never raises for a failed run,
-    so one crashing scenario cannot take the others down. Runs in any process, which imports
-    the plugins of the project `ctx` carries first (a worker's own working directory may be
+    so one crashing scenario cannot take the others down. Runs in any process, in the project
+    `ctx` carries (whose plugins the registries load: a worker's own working directory may be
     another project's, or none)."""
+    with held(ctx.project):
+        return _run_job(job, ctx, report)
+
+
+def _run_job(job: Job, ctx: Context, report: Report | None) -> Outcome:
     start = time.perf_counter()
-    load_plugins(ctx.project)
     sim_t = [0.0, 0.0]  # the sim time reached, and when it was last reported, s
 
     def where() -> str:

@@ -16,7 +16,7 @@ from pydantic import BaseModel, ValidationError
 
 from kartci import core
 from kartci.errors import KartciError, SpecError, did_you_mean
-from kartci.project import Origin, Project
+from kartci.project import Origin, Project, held
 from kartci.scenario.dispatch import ParamsError, context, dispatch, with_allowed_keys
 from kartci.scenario.models import Scenario, WorldParams, unit_of
 from kartci.scenario.schema import scenario_schema
@@ -484,7 +484,8 @@ def _validated(data: dict[str, Any], path: Path, overrides: list[str], proj: Pro
         _resolve_refs(data, path, proj, allow_outside, marks)
     _resolve_command_line_paths(data, overrides, proj, allow_outside)
     try:
-        scenario = Scenario.model_validate(data, context=context(registries))
+        with held(proj):  # a name the registries lack is looked up in `proj`'s plugins
+            scenario = Scenario.model_validate(data, context=context(registries))
     except ParamsError as err:
         raise SpecError(_one_line(err.errors, path, overrides, marks, registries,
                                   err.loc)) from err
