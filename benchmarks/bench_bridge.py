@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from kartci.bench import Better, Figure, Record
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import Session, simulate
 
@@ -31,7 +32,7 @@ def external_run(duration_s: float, out: Path,
     if echo:
         sets.append(f'agents.kart0.controller.command=["{{python}}", "{ECHO}", '
                     f'"{out / "echo.json"}", "kart0"]')
-    spec = load_scenario("external_pure_pursuit", sets)
+    spec = load_scenario("external_pure_pursuit", sets, project=active_project())
     ticks_ms: list[float] = []
     publish_ms: list[float] = []
     t0 = time.perf_counter()
@@ -64,7 +65,7 @@ def external_run(duration_s: float, out: Path,
 
 def inprocess_rtf(duration_s: float, out: Path) -> float:
     """kart_joy_driver: the same hall, a pure-pursuit driver inside kartci."""
-    spec = load_scenario("kart_joy_driver", [f"duration_s={duration_s}"])
+    spec = load_scenario("kart_joy_driver", [f"duration_s={duration_s}"], project=active_project())
     t0 = time.perf_counter()
     info = simulate(spec, out / "joy.mcap")
     return info.sim_time_s / (time.perf_counter() - t0)

@@ -31,6 +31,7 @@ import numpy as np
 
 from kartci import portable
 from kartci.bench import Better, Record
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import lidar, parts, simulate
 from kartci.worlds.hall import HallWorld
@@ -53,7 +54,7 @@ def rtf(name: str, sets: list[str], out: Path) -> float:
 
 def rtfs(name: str, sets: list[str], out: Path) -> tuple[float, float]:
     """Wall-clock and CPU real-time factors of one run (CPU: steadier on a shared machine)."""
-    spec = load_scenario(name, sets)
+    spec = load_scenario(name, sets, project=active_project())
     t0, c0 = time.perf_counter(), time.process_time()
     info = simulate(spec, out / "run.mcap")
     return (info.sim_time_s / (time.perf_counter() - t0),
@@ -61,7 +62,7 @@ def rtfs(name: str, sets: list[str], out: Path) -> tuple[float, float]:
 
 
 def scan_ms(name: str, repeats: int) -> tuple[list[float], list[float], int]:
-    spec = load_scenario("kart_replay")
+    spec = load_scenario("kart_replay", project=active_project())
     assert isinstance(spec.world, HallWorld)
     world = World(spec.world, 0.002)
     m = lidar.MODELS[name]
@@ -109,8 +110,9 @@ def anchor_rtf(python: Path, steps: int = 2000) -> AnchorRun | str:
 def step_parts(record: Record, repeats: int, out: Path, python: Path | None) -> None:
     """kart_manual (no lidar, 10 s) by part, µs of CPU time per physics step, and the
     f1tenth_gym anchor run by `python` after it in each round (none: skipped)."""
-    spec = load_scenario("kart_manual", ["duration_s=10"])
-    parts.measure(load_scenario("kart_manual", ["duration_s=0.5"]), out / "warm-up.mcap")
+    spec = load_scenario("kart_manual", ["duration_s=10"], project=active_project())
+    parts.measure(load_scenario("kart_manual", ["duration_s=0.5"],
+                                project=active_project()), out / "warm-up.mcap")
     runs, kart, cpu, anchor = [], [], [], []
     skipped = None if python else NO_ANCHOR
     for _ in range(repeats):

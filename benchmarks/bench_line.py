@@ -19,6 +19,7 @@ from pathlib import Path
 
 from kartci._bullet import pb
 from kartci.bench import Better, Record
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import parts, simulate
 from kartci.sim.session import Session
@@ -29,7 +30,8 @@ MODES = ("geometric", "rendered")
 
 def rtf(name: str, mode: str, out: Path) -> tuple[float, float]:
     """Wall-clock and CPU real-time factors of one run."""
-    spec = load_scenario(name, [f"agents.lt0.sensors.line_sensor.mode={mode}"])
+    spec = load_scenario(name, [f"agents.lt0.sensors.line_sensor.mode={mode}"],
+                         project=active_project())
     t0, c0 = time.perf_counter(), time.process_time()
     info = simulate(spec, out / f"{name}-{mode}.mcap")
     return (info.sim_time_s / (time.perf_counter() - t0),
@@ -39,7 +41,7 @@ def rtf(name: str, mode: str, out: Path) -> tuple[float, float]:
 def physics_rtf(name: str, steps: int = 5000) -> float:
     """Real-time factor of PyBullet's step alone (wheel motor commands included) in the
     scenario's world, after 100 steps of the scenario's own loop."""
-    spec = load_scenario(name)
+    spec = load_scenario(name, project=active_project())
     with Session(spec, None) as s:
         s.reset()
         for _ in range(100):
@@ -55,9 +57,11 @@ def physics_rtf(name: str, steps: int = 5000) -> float:
 
 def step_parts(record: Record, repeats: int, out: Path) -> None:
     """Each line scenario's step by part, CPU µs per physics step, median of repeats."""
-    parts.measure(load_scenario("line_circle", ["duration_s=0.5"]), out / "warm-up.mcap")
+    parts.measure(load_scenario("line_circle", ["duration_s=0.5"],
+                                project=active_project()), out / "warm-up.mcap")
     for name in SCENARIOS:
-        runs = [parts.measure(load_scenario(name), out / f"{name}.mcap") for _ in range(repeats)]
+        runs = [parts.measure(load_scenario(name, project=active_project()), out / f"{name}.mcap")
+                for _ in range(repeats)]
         print(f"{name}, geometric sensor: {runs[0].steps} steps; CPU µs per 2 ms step, median "
               f"of {repeats}")
         for label, us in parts.median_parts(runs).items():
@@ -84,7 +88,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         # warm-up, not timed: imports and message-type registration happen on the first run
         simulate(load_scenario("line_circle", ["duration_s=0.5",
-                                               "agents.lt0.sensors.line_sensor.mode=rendered"]),
+                                               "agents.lt0.sensors.line_sensor.mode=rendered"],
+                                               project=active_project()),
                  Path(tmp) / "warm-up.mcap")
         for name in SCENARIOS:
             for mode in MODES:

@@ -23,10 +23,10 @@ import numpy as np
 
 from kartci.bench import Better, Record
 from kartci.localization.deskew import deskew
-from kartci.localization.node import map_path
 from kartci.localization.registration import MapMatcher, pose_matrix
 from kartci.perception.clusters import MapMask, clusters, obstacle_points
 from kartci.pointcloud import read_ply
+from kartci.project import current as active_project
 from kartci.robots.gokart.noise import distorted_scan
 from kartci.scenario import load_scenario
 from kartci.scenario.load import load_world
@@ -40,11 +40,16 @@ V, W, H = 6.0, 0.5, 1.28
 VLP16 = lidar.MODELS["vlp16"]
 
 
+def hall_map() -> Path:
+    """The hall's point-cloud map (`kartci map winti/hall`)."""
+    return active_project().world_file("winti/hall_map.ply")
+
+
 def scans(n: int) -> list[tuple[np.ndarray, np.ndarray]]:
     """(points in the sensor frame, true x y yaw) along the track, obstacles included."""
-    world, _ = load_world("winti/hall")
+    world, _ = load_world("winti/hall", active_project())
     assert isinstance(world, HallWorld)
-    spec = load_scenario("perception_obstacles").world
+    spec = load_scenario("perception_obstacles", project=active_project()).world
     assert isinstance(spec, HallWorld)
     bl = blocks(spec)
     track = load_track(Path(world.track))
@@ -71,7 +76,7 @@ def scans(n: int) -> list[tuple[np.ndarray, np.ndarray]]:
 def localize(data: list[tuple[np.ndarray, np.ndarray]], method: str, voxel: float,
              floor: bool) -> tuple[list[float], list[float]]:
     """ms per scan (deskew + registration) and position error, m."""
-    matcher = MapMatcher.from_file(map_path("winti/hall_map.ply"), 0.2, method, 1.0, 20)
+    matcher = MapMatcher.from_file(hall_map(), 0.2, method, 1.0, 20)
     ms, err = [], []
     for xyz, (x, y, yaw) in data:
         t0 = time.process_time()
@@ -104,7 +109,7 @@ def kiss(data: list[tuple[np.ndarray, np.ndarray]]) -> list[float] | None:
 
 def detect(data: list[tuple[np.ndarray, np.ndarray]]) -> list[float]:
     """ms per scan: deskew, map frame, ground and map removal, clusters, boxes."""
-    mask = MapMask(read_ply(map_path("winti/hall_map.ply")), 0.12, 2.2)
+    mask = MapMask(read_ply(active_project().world_file("winti/hall_map.ply")), 0.12, 2.2)
     ms = []
     for xyz, (x, y, yaw) in data:
         t0 = time.process_time()
@@ -155,7 +160,8 @@ def main() -> None:
     report(record, "detection per scan", detect(data))
     run: Callable[[], None] | None = None
     if args.rtf_s > 0:
-        spec = load_scenario("localization_lap", [f"duration_s={args.rtf_s}"])
+        spec = load_scenario("localization_lap", [f"duration_s={args.rtf_s}"],
+                             project=active_project())
         with tempfile.TemporaryDirectory() as tmp:
             t0 = time.perf_counter()
             info = simulate(spec, Path(tmp) / "run.mcap")

@@ -20,6 +20,7 @@ from typing import Any
 
 from kartci.bench import Figure, Record
 from kartci.errors import KartciError
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import Session
 
@@ -49,7 +50,7 @@ def ticks_ms(case: str, duration_s: float, out: Path) -> list[float]:
     here = Path.cwd()
     os.chdir(folder)
     try:
-        spec = load_scenario(name, [f"duration_s={duration_s}", *sets])
+        spec = load_scenario(name, [f"duration_s={duration_s}", *sets], project=active_project())
         found: list[float] = []
         with Session(spec, out / f"{case}.mcap") as session:
             r = session.reset()

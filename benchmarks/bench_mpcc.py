@@ -29,6 +29,7 @@ import numpy as np
 
 from kartci.bench import Better, Record
 from kartci.logs import tables
+from kartci.project import current as active_project
 from kartci.robots.gokart.mpcc.cache import get_solver
 from kartci.robots.gokart.mpcc.direct import OcpQp
 from kartci.robots.gokart.mpcc.model import SingleTrack
@@ -43,7 +44,7 @@ METHODS = (MpccMethod.IPOPT, MpccMethod.RTI)
 
 def _spec(method: MpccMethod) -> tuple[MpccController, SingleTrack]:
     agent = load_scenario("mpcc_lap", [f"agents.kart0.controller.method={method}"]
-                          ).agents["kart0"]
+                          , project=active_project()).agents["kart0"]
     assert isinstance(agent.controller, MpccController)
     return agent.controller, SingleTrack.of(agent.model)  # type: ignore[arg-type]
 
@@ -77,7 +78,8 @@ def closed_loop(record: Record, repeat: int, variants: list[str]) -> None:
         for name in ("mpcc_lap", "multi_agent"):
             for variant in variants:
                 scenario = load_scenario(name, [f"agents.kart0.controller.{s}"
-                                                for s in VARIANTS[variant]])
+                                                for s in VARIANTS[variant]],
+                                                project=active_project())
                 with tempfile.TemporaryDirectory() as tmp:
                     log = Path(tmp) / "run.mcap"
                     t0 = time.perf_counter()
@@ -104,7 +106,7 @@ def _recorded_qps(count: int) -> list[list[np.ndarray]]:
     """`count` QPs, evenly spaced, from the first 20 s of an RTI run on the hall track: the
     arguments HPIPM's direct interface was given (`OcpQp.solve`, without its output)."""
     scenario = load_scenario("mpcc_lap", ["agents.kart0.controller.method=rti",
-                                          "duration_s=20"])
+                                          "duration_s=20"], project=active_project())
     seen: list[list[np.ndarray]] = []
     real = OcpQp.solve
 

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from kartci.bench import Better, Record
+from kartci.project import current as active_project
 from kartci.realdata.score import score_log, simreal_log
 from kartci.realdata.synthetic import synthetic_log
 from kartci.verdict.result import ScenarioResult
@@ -33,13 +34,13 @@ def main() -> None:
     record = Record("bench_realdata")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        log = synthetic_log("kart_simreal", [], LOG_S, folder / "kart60.mcap")
+        log = synthetic_log("kart_simreal", [], LOG_S, folder / "kart60.mcap", active_project())
         profile = folder / "bench_kart.yaml"
         profile.write_text(PROFILE, encoding="utf-8")
         runs: dict[str, Callable[[Path], ScenarioResult]] = {
-            "score": lambda out: score_log(log, profile, out, folder),
+            "score": lambda out: score_log(log, profile, out, folder, active_project()),
             "simreal": lambda out: simreal_log(log, profile, None, [], args.window_s, out,
-                                               folder)}
+                                               folder, active_project())}
         print(f"{'command':10s} {'median':>12s} {'p95 (slowest)':>14s}  log s per wall s")
         for name, run in runs.items():
             samples = []

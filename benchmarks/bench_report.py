@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 from kartci import project
+from kartci.project import current as active_project
 from kartci.report.html import report_html
 from kartci.runner.run import evaluate, scenario_folders
 
@@ -23,7 +24,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     baselines = project.current().baselines
-    results = [evaluate(f, baselines) for f in scenario_folders(args.out)]
+    results = [evaluate(f, baselines, active_project()) for f in scenario_folders(args.out)]
     print(f"{len(results)} scenarios from {args.out}")
     for static in (False, True):
         times, size = [], 0

@@ -26,6 +26,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from kartci import project
 from kartci.errors import SpecError
 from kartci.scenario.load import load_scenario as _load
 from kartci.scenario.models import Scenario
@@ -56,7 +57,8 @@ def load_scenario(scenario: str | Path, overrides: Sequence[str] = (), *,
         SpecError: The file is missing or malformed, or a value is bad; the message names the
             file, the key and what was expected.
     """
-    return _load(scenario, list(overrides), allow_outside_paths=allow_outside_paths)
+    return _load(scenario, list(overrides), project=project.current(),
+                 allow_outside_paths=allow_outside_paths)
 
 
 def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
@@ -95,7 +97,8 @@ def run(scenario: str | Path | Scenario, *, overrides: Sequence[str] = (),
     from kartci.app.run import run_scenario
 
     return run_scenario(scenario, overrides, out=None if out is None else Path(out),
-                        agents=agents, baselines=None if baselines is None else Path(baselines),
+                        agents=agents, project=project.current(),
+                        baselines=None if baselines is None else Path(baselines),
                         allow_outside_paths=allow_outside_paths)
 
 
@@ -124,7 +127,8 @@ def compare(base: RunResult, head: RunResult, *,
     # late, as in `run`: comparing loads the runner, which `import kartci.api` does not need
     from kartci.app.compare import compare_results
 
-    return compare_results(base, head, None if baselines is None else Path(baselines))
+    return compare_results(base, head,
+                           project.current().baselines if baselines is None else Path(baselines))
 
 
 def accept_baselines(run: RunResult | str | Path, names: Sequence[str] = (), *,
@@ -169,8 +173,9 @@ def accept_baselines(run: RunResult | str | Path, names: Sequence[str] = (), *,
         out, names = run.folder.parent, (run.folder.name,)
     else:
         out = Path(run)
-    return accept(out, names, baselines=None if baselines is None else Path(baselines),
-                  replicas=replicas, jobs=jobs)
+    return accept(out, project.current(), names,
+                  baselines=None if baselines is None else Path(baselines), replicas=replicas,
+                  jobs=jobs)
 
 
 def run_suite(names: Sequence[str | Path] = (), *, overrides: Sequence[str] = (),
@@ -213,7 +218,6 @@ def run_suite(names: Sequence[str | Path] = (), *, overrides: Sequence[str] = ()
             runs; OUT busy with another kartci command.
     """
     # late, as in `run`: the runner loads PyBullet and pandas
-    from kartci import project
     from kartci.app.suite import SuiteRequest
     from kartci.app.suite import run_suite as run_requested
 
@@ -245,10 +249,9 @@ def merge(parts: Sequence[str | Path], *, out: str | Path, baselines: str | Path
             in more than one part, or a part that is not a shard's output.
     """
     # late, as in `run`: judging loads the runner
-    from kartci import project
     from kartci.app.suite import merge_shards
 
-    proj = None if baselines is not None else project.current()
+    proj = project.current()
     return merge_shards([Path(p) for p in parts], Path(out),
                         None if baselines is None else Path(baselines), proj, strict=strict)
 
@@ -290,7 +293,6 @@ def search(scenario: str | Path, over: Sequence[str], *, overrides: Sequence[str
             an unknown objective, an OUT holding a search of other settings).
     """
     # late: searching loads the runner and the sampler, which `import kartci.api` does not need
-    from kartci import project
     from kartci.app.search import Options, Request, run_search
 
     request = Request(str(scenario), tuple(over), tuple(overrides), budget, objective, seed,
@@ -300,7 +302,7 @@ def search(scenario: str | Path, over: Sequence[str], *, overrides: Sequence[str
     base_dir = Path(baselines) if baselines is not None else proj.baselines
     if jobs < 1:
         raise SpecError(f"jobs {jobs}: expected 1 or more")
-    return run_search(request, target, Options(base_dir, jobs))
+    return run_search(request, target, Options(base_dir, proj, jobs))
 
 
 __all__ = ["RunResult", "accept_baselines", "compare", "load_scenario", "merge", "run",

@@ -28,7 +28,13 @@ AllowOutsideOpt = Annotated[bool, typer.Option(
     "outside the project and kartci's data.")]
 
 
+def command_project() -> project.Project:
+    """The project a command runs in (the working directory's, or the one `KARTCI_ROOT`
+    names): an entry point reads it here and hands it down; nothing below looks it up."""
+    return project.current()
+
+
 def out_dir(out: Path | None, name: str) -> Path:
     """`--out`, or `<the project's reports folder>/<name>` (a SpecError when no project was
     found: see `Project.default_output`)."""
-    return out if out is not None else project.current().default_output(name)
+    return out if out is not None else command_project().default_output(name)

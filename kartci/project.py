@@ -445,11 +445,12 @@ set_default_source(current)  # what plugin loading asks when no project is hande
 
 
 @contextmanager
-def held() -> Iterator[Project]:
-    """The active project looked up once and kept for the enclosed work: loading a sweep's
-    many points would otherwise find and parse the project's configuration for each."""
+def held(project: Project | None = None) -> Iterator[Project]:
+    """`project` (None: the active one, looked up once) active for the enclosed work, where
+    plugin loading asks for it (`kartci.core.loading`'s default source): a run in the project
+    its scenario carries, and found once, not for every registry lookup."""
     before = _CURRENT
-    activate(current())
+    activate(project if project is not None else current())
     try:
         yield current()
     finally:

@@ -220,6 +220,7 @@ class ScenarioItem(pytest.Item):
         `--kartci-accept`, store the run as the scenario's baseline first and fail on its
         criteria only."""
         # late, these three: kartci (pydantic, the simulator) only when a scenario item runs
+        from kartci import project
         from kartci.app.accept import accept
         from kartci.app.run import run_scenario
         from kartci.verdict.judging import Stale
@@ -228,10 +229,13 @@ class ScenarioItem(pytest.Item):
         baselines = None if given is None else Path(given)
         # the file as written, judged as `kartci run` judges it: a baseline accepted from an
         # earlier version of the scenario is stale (a warning), not "not comparable"
-        result = run_scenario(self.path, out=self._out(), baselines=baselines, stale=Stale.WARN)
+        proj = project.current()
+        result = run_scenario(self.path, out=self._out(), project=proj, baselines=baselines,
+                              stale=Stale.WARN)
         self.user_properties.append(("kartci_log", str(result.log)))
         if self.config.getoption("kartci_accept"):
-            [accepted] = accept(result.folder.parent, [result.folder.name], baselines=baselines)
+            [accepted] = accept(result.folder.parent, proj, [result.folder.name],
+                                baselines=baselines)
             text = "\n".join([*accepted.lines(), *(f"warning: {w}" for w in accepted.warnings)])
             self.user_properties.append((ACCEPTED, text))
             if not all(c.ok for c in result.criteria):

@@ -38,7 +38,8 @@ from kartci.logs.types import typestore
 from kartci.metrics import compute, metric_sets
 from kartci.plotting import Figure, FigureContext, PlotContext, Plots
 from kartci.plotting.builders import events
-from kartci.scenario import Scenario, load_scenario
+from kartci.project import Project
+from kartci.scenario import Scenario, in_project, load_scenario
 from kartci.sim.session import Session
 
 MSGTYPE = re.compile(r"^[A-Za-z0-9_]+/msg/[A-Za-z0-9_]+$")
@@ -229,10 +230,12 @@ def check_kind(scenario: str | Path | Scenario | None = None, *, robot: str | No
     """
     out = Checked()
     named = _parts(robot, world, controller, metrics)
+    proj = project.current()  # an entry point for plugin authors, as kartci.api
     if scenario is None:
-        scenario = _scenario_using(named)
-    sc = scenario if isinstance(scenario, Scenario) else load_scenario(
-        scenario, [*overrides, *([f"duration_s={duration_s}"] if duration_s else [])])
+        scenario = _scenario_using(named, proj)
+    sc = in_project(scenario, proj) if isinstance(scenario, Scenario) else load_scenario(
+        scenario, [*overrides, *([f"duration_s={duration_s}"] if duration_s else [])],
+        project=proj)
     if isinstance(scenario, Scenario) and duration_s:
         sc = sc.model_copy(update={"duration_s": min(sc.duration_s, duration_s)})
     uses = parts_of(sc)
@@ -285,13 +288,13 @@ def parts_of(sc: Scenario) -> dict[str, set[str]]:
             "metrics": {m.name for a in sc.agents for m in metric_sets(sc, a)}}
 
 
-def _scenario_using(named: dict[str, list[str]]) -> Scenario:
-    """The first scenario of the project (its own, then kartci's) that uses every part."""
+def _scenario_using(named: dict[str, list[str]], proj: Project) -> Scenario:
+    """The first scenario of `proj` (its own, then kartci's) that uses every part."""
     if not any(named.values()):
         raise KindCheckError("check_kind: name a scenario or a part to check")
-    for path in project.current().all_scenarios():
+    for path in proj.all_scenarios():
         try:
-            sc = load_scenario(path)
+            sc = load_scenario(path, project=proj)
         except KartciError:
             continue
         uses = parts_of(sc)

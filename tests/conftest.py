@@ -1,23 +1,23 @@
-"""Shared fixtures: paths to the real recorded logs (skipped when ../shared is absent), a
-project copy with its own baselines folder, so tests never touch the committed baselines, and
-kartci as a user installs it: its wheel (once per session) in a fresh venv."""
+"""Fixtures shared by several test folders: paths to the real recorded logs (skipped when
+../shared is absent), a baselines folder of its own, so tests never touch the committed
+baselines, kartci as a user installs it (its wheel, once per session, in a fresh venv), and
+shipped scenarios' full-length logs. A fixture one folder uses lives in that folder's
+conftest.py; such a folder (and every folder between it and tests/) is a package, with an
+`__init__.py`, so that mypy names its conftest `report.conftest` as pytest imports it (tests/
+itself is no package: pytest's `prepend` import mode puts it on sys.path, where `helpers` is)."""
 
 from __future__ import annotations
 
 import fcntl
 import os
 import sys
-import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from helpers import KartLap, kartci
 
 from kartci import portable
-from kartci.core import RunFolder
-from kartci.report import write_all
-from kartci.runner.run import evaluate
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
@@ -94,58 +94,6 @@ def fresh_venv(tmp_path: Path, kartci_wheel: Path) -> Path:
     return make_venv(tmp_path / "venv", kartci_wheel)
 
 
-# --- synthetic "real" kart logs with known truth (tests/realdata), made once per session ---
-KART = "agents.kart0.model"
-# the truth of the perturbed log, relative to the nominal model: gain +20 %, steering rate
-# -15 %, speed scale (the motor controller's wheel radius) +4.7 %
-TRUTH = {"speed_gain_per_s": 2.4, "steering_rate_radps": 3.4, "rear_wheel_radius_m": 0.133}
-NOMINAL = {"speed_gain_per_s": 2.0, "steering_rate_radps": 4.0, "rear_wheel_radius_m": 0.127}
-DURATION_S = 5.0
-
-
-def changed(fraction: float) -> list[str]:
-    """Overrides that move every TRUTH parameter `fraction` of the way from nominal."""
-    return [f"{KART}.{k}={NOMINAL[k] + fraction * (TRUTH[k] - NOMINAL[k])}" for k in TRUTH]
-
-
-@pytest.fixture(scope="session")
-def kart_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[float, Path]:
-    """Logs of the kart with 0, half and all of the TRUTH change."""
-    from kartci.realdata.synthetic import synthetic_log
-
-    folder = tmp_path_factory.mktemp("synthetic")
-    return {f: synthetic_log("kart_simreal", changed(f), DURATION_S, folder / f"kart_{f}.mcap")
-            for f in (0.0, 0.5, 1.0)}
-
-
-@pytest.fixture(scope="session")
-def kart_profile(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The profile of the synthetic kart logs."""
-    path = tmp_path_factory.mktemp("profile") / "synth_kart.yaml"
-    path.write_text("name: synth_kart\npose: {topic: /kart0/odom}\n"
-                    "commands: {topic: /kart0/ackermann_cmd}\nrobot: {kind: gokart}\n",
-                    encoding="utf-8")
-    return path
-
-
-LAP = ["kart_manual", "--set", "duration_s=17", "--set", "criteria={}", "--no-strict"]
-
-
-@pytest.fixture(scope="session")
-def kart_lap(tmp_path_factory: pytest.TempPathFactory) -> KartLap:
-    """One kart lap shared by the report tests (kart_manual's first lap ends at ~15.8 s)."""
-    root = tmp_path_factory.mktemp("lap")
-    (root / "baselines").mkdir()
-    run = kartci("run", *LAP, "--out", root / "out", "--baselines", root / "baselines")
-    assert run.returncode == 0, run.stderr
-    update = kartci("baseline", "update", root / "out", "--baselines", root / "baselines")
-    assert update.returncode == 0, update.stderr
-    result = evaluate(RunFolder(root / "out" / "kart_manual"), root / "baselines")
-    write_all([result], root / "out")
-    return KartLap(root / "out", root / "baselines", update, result)
-
-
-
 @pytest.fixture(scope="session")
 def shipped_run(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Path]:
     """The log of a shipped scenario run at full length with its committed settings, simulated
@@ -160,19 +108,8 @@ def shipped_run(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Pat
         with (folder / f"{name}.lock").open("w") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)
             if not done.exists():
-                simulate(load_scenario(name), log)
+                simulate(load_scenario(name, project=active_project()), log)
                 done.touch()
         return log
 
     return get
-
-
-@pytest.fixture
-def dds_alone(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
-    """One DDS test at a time on this machine, across xdist workers and test runs: the tests
-    that check a run leaves no Fast DDS shared memory compare /dev/shm before and after, which
-    another worker's or another run's DDS processes would fill meanwhile (each run has its own
-    domain, but /dev/shm is the machine's; two checkouts tested at once on one host failed so)."""
-    with (Path(tempfile.gettempdir()) / "kartci-dds-tests.lock").open("w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        yield

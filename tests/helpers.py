@@ -85,6 +85,20 @@ class KartLap:
 
 
 
+# the synthetic "real" kart logs of tests/realdata (its conftest's `kart_logs`)
+KART = "agents.kart0.model"
+# the truth of the perturbed log, relative to the nominal model: gain +20 %, steering rate
+# -15 %, speed scale (the motor controller's wheel radius) +4.7 %
+TRUTH = {"speed_gain_per_s": 2.4, "steering_rate_radps": 3.4, "rear_wheel_radius_m": 0.133}
+NOMINAL = {"speed_gain_per_s": 2.0, "steering_rate_radps": 4.0, "rear_wheel_radius_m": 0.127}
+DURATION_S = 5.0
+
+
+def changed(fraction: float) -> list[str]:
+    """Overrides that move every TRUTH parameter `fraction` of the way from nominal."""
+    return [f"{KART}.{k}={NOMINAL[k] + fraction * (TRUTH[k] - NOMINAL[k])}" for k in TRUTH]
+
+
 # an emoji (pictographs, dingbats, arrows and shapes, the emoji presentation selector)
 EMOJI = re.compile("[\U0001F000-\U0001FAFF\u2600-\u27BF\u2B00-\u2BFF\uFE0F]")
 

@@ -279,3 +279,51 @@ def test_levels_put_every_import_above_what_it_imports() -> None:
     found = edges()
     at = {name: k for k, names in levels(found).items() for name in names}
     assert [e.where for e in found if at[e.source] <= at[e.target]] == []
+
+
+# Where `kartci.project.current()` may be read: the entry points, which find the project a
+# command, a Python call or a test session runs in and hand it down (issue 41). Everything
+# below them is handed its `Project` (or a `Scenario` carrying one, `Scenario.project`).
+ENTRY_POINTS = ("cli/", "command_options.py", "api.py", "pytest_plugin.py", "testing.py",
+                "gym/", "project.py")
+
+
+def project_lookups(root: Path = ROOT) -> list[str]:
+    """Every read of the active project (`project.current()`, or `current` imported from
+    `kartci.project`) outside the entry points, with its file and line."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        if rel.startswith(ENTRY_POINTS):
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for n in ast.walk(tree):
+            if (isinstance(n, ast.Attribute) and n.attr == "current"
+                    and isinstance(n.value, ast.Name) and n.value.id == "project"):
+                found.append(f"kartci/{rel}:{n.lineno}: project.current")
+            elif isinstance(n, ast.ImportFrom) and n.module == "kartci.project" and any(
+                    a.name == "current" for a in n.names):
+                found.append(f"kartci/{rel}:{n.lineno}: from kartci.project import current")
+    return sorted(found)
+
+
+def test_only_the_entry_points_look_the_project_up() -> None:
+    """The CLI, `kartci.api`, the pytest plugin (and the other public entry points: the
+    Gymnasium envs, `kartci.testing.check_kind`) read the working directory's project; the
+    code below them is handed it (issue 41)."""
+    assert project_lookups() == []
+
+
+def test_the_project_lookup_scan_finds_what_it_looks_for(tmp_path: Path) -> None:
+    """The scan is not vacuous: a call, a reference and an imported `current` are caught;
+    an entry point's own reads and another `current` are not."""
+    (tmp_path / "cli").mkdir()
+    (tmp_path / "cli/run.py").write_text("from kartci import project\nP = project.current()\n")
+    (tmp_path / "deep.py").write_text("from kartci import project\n"
+                                      "from kartci.project import current\n"
+                                      "A = project.current()\n"
+                                      "B = project.current\n"
+                                      "C = other.current()\n")
+    assert project_lookups(tmp_path) == ["kartci/deep.py:2: from kartci.project import current",
+                                         "kartci/deep.py:3: project.current",
+                                         "kartci/deep.py:4: project.current"]

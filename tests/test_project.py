@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from kartci import project
+from kartci.errors import SpecError
 
 ROOT = Path(__file__).resolve().parents[1]
 FOLDERS = ("scenarios", "models", "sims")
@@ -62,3 +63,43 @@ def test_the_wheel_carries_every_data_file_where_the_resolver_looks(folder: str)
     expected = {rel: f"{inside}/{rel}" for rel in files if not rel.endswith(".py")}
     assert {rel: shipped.get(rel) for rel in files} == {
         rel: expected.get(rel) for rel in files}
+
+
+def test_a_scenario_is_loaded_in_the_project_handed_in_and_carries_it(tmp_path: Path) -> None:
+    """No lookup of the working directory below the entry points (issue 41): the scenario is
+    found in the project handed in, a URDF named relative to its kind (here by `--set`) is
+    resolved on that project's model path when it loads, and the scenario carries the project
+    to what runs it (across a pickle: a worker process, a Ray task), outside its value."""
+    import pickle
+
+    from kartci.scenario import load_scenario
+    from kartci.sim.session import build_world
+
+    (tmp_path / "kartci.toml").write_text("")
+    (tmp_path / "scenarios").mkdir()
+    shutil.copy(ROOT / "scenarios" / "line_straight.yaml", tmp_path / "scenarios" / "mine.yaml")
+    urdf = tmp_path / "models" / "line_tracker" / "ours.urdf"
+    urdf.parent.mkdir(parents=True)
+    shutil.copy(ROOT / "models" / "line_tracker" / "line_tracker.urdf", urdf)
+    proj = project.find_project(tmp_path)
+    spec = load_scenario("mine", ["agents.lt0.model.urdf=ours.urdf"], project=proj)
+    assert spec.project == proj
+    assert spec.agents["lt0"].model.urdf == str(urdf)
+    assert pickle.loads(pickle.dumps(spec)).project == proj
+    assert "project" not in spec.model_dump()
+    assert spec == spec.model_validate_json(spec.model_dump_json(), context=spec_context())
+    with pytest.raises(SpecError, match="unknown scenario 'mine'"):
+        load_scenario("mine", project=project.find_project(ROOT))
+    world = build_world(spec)
+    try:
+        assert [r.name for r in world.robots] == ["lt0"]
+    finally:
+        world.close()
+
+
+def spec_context() -> dict[str, object]:
+    """The validation context a recorded scenario is read back with (every registry)."""
+    from kartci.core import DEFAULT_REGISTRIES
+    from kartci.scenario.dispatch import context
+
+    return context(DEFAULT_REGISTRIES)

@@ -335,7 +335,7 @@ class ScenariosDirective(Directive):
         """A table of all, then one section per scenario with its file."""
         rows: list[list[str | list[nodes.Node]]] = []
         for path in builtin_scenarios():
-            spec = load_scenario(path)
+            spec = load_scenario(path, project=project.current())
             agents = "; ".join(
                 f"`{name}`: `{a.model.kind}` driven by `{a.controller.type}`"
                 for name, a in spec.agents.items())

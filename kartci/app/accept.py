@@ -11,15 +11,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from kartci import project
 from kartci.core import RunFolder
 from kartci.errors import SpecError
 from kartci.plotting import Plots
+from kartci.project import Project
 from kartci.runner import conditioning
 from kartci.runner.executors import execute
 from kartci.runner.jobs import MAX_RUNS, Context, Job, check_count
 from kartci.runner.outdir import check_inside, locked, read_manifest, valid_label
 from kartci.runner.run import check_finished, recorded_scenario, reference_plots
+from kartci.scenario.load import in_project
 from kartci.scenario.models import Scenario
 from kartci.verdict import (
     Change,
@@ -90,8 +91,8 @@ def _clip(text: str | None) -> str:
     return text if len(text) <= FIELD_MAX_CHARS else text[:FIELD_MAX_CHARS - 1] + "…"
 
 
-def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = None,
-           replicas: int = REPLICAS, jobs: int = 1,
+def accept(out: Path, project: Project, names: Sequence[str] = (), *,
+           baselines: Path | None = None, replicas: int = REPLICAS, jobs: int = 1,
            say: Callable[[str], None] = lambda _line: None) -> list[Accepted]:
     """Store the runs in OUT as their scenarios' baselines, with each metric's spread over
     `replicas` conditioning replicas (those missing in OUT are run now, `jobs` at once; 0:
@@ -99,7 +100,8 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
     reference trace (baselines/traces/). Only complete, current, pinned runs are taken, and all
     are checked before anything is written: a scenario whose last run failed or did not finish
     is refused (SpecError), and nothing is replaced. `names`: the scenarios (default: those of
-    the last run in OUT). `say`: progress lines (the replicas being run)."""
+    the last run in OUT). `project`: its baselines (the default) and tolerance policy. `say`:
+    progress lines (the replicas being run)."""
     if replicas == 1 or replicas < 0:
         raise SpecError(f"--replicas {replicas}: expected 0 (none) or 2 or more")
     if jobs < 1:
@@ -108,10 +110,9 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
     check_count("--jobs", jobs)
     if not out.is_dir():
         raise SpecError(f"{out}: no such folder; run `kartci run` first")
-    check_allowed()
+    check_allowed(project)
     if baselines is None:
-        proj = project.current()
-        target = proj.writable(proj.baselines, "--baselines DIR (in Python: baselines=)")
+        target = project.writable(project.baselines, "--baselines DIR (in Python: baselines=)")
     else:
         target = baselines
     with locked(out):
@@ -128,11 +129,11 @@ def accept(out: Path, names: Sequence[str] = (), *, baselines: Path | None = Non
             load(target / f"{folder.name}.json")
             checked.append((folder, folder.read_metrics()))
         if replicas:
-            _replicate(out, target, labels, replicas, jobs, say)
+            _replicate(out, target, project, labels, replicas, jobs, say)
         # the traces' plots read the logs: after the cheap checks, still before any write
         traced = [(folder, values, reference_plots(folder), recorded_scenario(folder))
                   for folder, values in checked]
-        return [_write(folder, target, values, drawn, scenario, bool(replicas))
+        return [_write(folder, target, project, values, drawn, scenario, bool(replicas))
                 for folder, values, drawn, scenario in traced]
 
 
@@ -167,11 +168,11 @@ def _replaced(folder: RunFolder) -> dict[str, str]:
     return {str(k): str(v) for k, v in replaced.items()}
 
 
-def _write(folder: RunFolder, target: Path, values: dict[str, dict[str, Any]], drawn: Plots | None,
-           scenario: Scenario, replicated: bool) -> Accepted:
+def _write(folder: RunFolder, target: Path, proj: Project, values: dict[str, dict[str, Any]],
+           drawn: Plots | None, scenario: Scenario, replicated: bool) -> Accepted:
     """One scenario's baseline written, and what that changed (criteria included)."""
     label, path = folder.name, target / f"{folder.name}.json"
-    fields = fingerprint.fields(scenario, _replaced(folder))
+    fields = fingerprint.fields(scenario, proj, _replaced(folder))
     spreads, provenance = _conditioning(folder) if replicated else (None, _provenance(folder))
     note, moved = _scenario_diff(path, fields)
     old = read_baseline(path)
@@ -180,7 +181,7 @@ def _write(folder: RunFolder, target: Path, values: dict[str, dict[str, Any]], d
     notes = [f"  accepted: {c.text().partition(':')[0]}" for c in accepted]
     more, warnings = _conditioning_notes(path)
     notes += more
-    notes += _kept_loose(path, label)
+    notes += _kept_loose(path, label, proj)
     if drawn is not None and drawn.tracks:
         size = write_trace(trace_path(target, label), drawn)
         notes.append(f"  reference trace {trace_path(target, label)} ({size} bytes)")
@@ -199,14 +200,15 @@ def _conditioning(folder: RunFolder) -> tuple[dict[str, float | None] | None, di
     return measured, {**_provenance(folder), "conditioning": conditioning.record(folder)}
 
 
-def _replicate(out: Path, target: Path, labels: list[str], replicas: int, workers: int,
-               say: Callable[[str], None]) -> None:
-    """Run the conditioning replicas OUT lacks; all must finish before anything is written."""
-    todo = conditioning.missing_jobs(out, labels, replicas,
-                                     lambda folder: Job(recorded_scenario(folder), folder.name))
+def _replicate(out: Path, target: Path, proj: Project, labels: list[str], replicas: int,
+               workers: int, say: Callable[[str], None]) -> None:
+    """Run the conditioning replicas OUT lacks, in `proj` (the scenario a log recorded carries
+    no project); all must finish before anything is written."""
+    todo = conditioning.missing_jobs(out, labels, replicas, lambda folder: Job(
+        in_project(recorded_scenario(folder), proj), folder.name))
     if todo:
         say(f"running {len(todo)} conditioning replicas (start moved 1-{replicas - 1} nm) ...")
-        for _ in execute(todo, Context(out, target), lambda _event: None, workers):
+        for _ in execute(todo, Context(out, target, proj), lambda _event: None, workers):
             pass
     conditioning.check_complete(out, labels, replicas)
 
@@ -254,9 +256,8 @@ def _conditioning_notes(path: Path) -> tuple[list[str], list[str]]:
     return [note], ill_conditioned([v for v in verdicts if v.conditioning is Conditioning.ILL])
 
 
-def _kept_loose(path: Path, label: str) -> list[str]:
+def _kept_loose(path: Path, label: str, proj: Project) -> list[str]:
     """A line for every tolerance the update kept above the policy bound: never silent."""
-    proj = project.current()
     allowed = dict(proj.allow_loose_tolerances)
     out = []
     for name, entry in sorted((load(path) or {}).items()):

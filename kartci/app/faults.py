@@ -24,10 +24,11 @@ from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from kartci import core, project
+from kartci import core
 from kartci.atomic import write_text_atomic
 from kartci.core import Acts, Fault, RunFolder, unknown_keys
 from kartci.errors import SpecError, did_you_mean
+from kartci.project import Project
 from kartci.runner.compare import samples
 from kartci.runner.jobs import Job, check_count, default_suite, point_label, shard_labels
 from kartci.runner.kinds import ExecutorKind
@@ -314,13 +315,13 @@ def _check(r: Request) -> None:
         raise SpecError(f"--baselines {r.baselines}: no such folder")
 
 
-def plan(names: Sequence[str], entries: list[Entry], allow_outside_paths: bool = False
-         ) -> list[Plan]:
+def plan(names: Sequence[str], entries: list[Entry], proj: Project,
+         allow_outside_paths: bool = False) -> list[Plan]:
     """Each scenario's runs (its nominal run first; none when no fault acts on it) and its
     cells, every faulted scenario validated before anything runs."""
     plans: list[Plan] = []
     for name in dict.fromkeys(names):
-        load = scenario_loader(name, allow_outside_paths=allow_outside_paths)
+        load = scenario_loader(name, project=proj, allow_outside_paths=allow_outside_paths)
         spec = load([])
         if spec.sweep:
             raise SpecError(f"scenario {spec.name}: a grid (its own sweep); faults judge one "
@@ -348,20 +349,19 @@ def plan(names: Sequence[str], entries: list[Entry], allow_outside_paths: bool =
     return plans
 
 
-def run_faults(request: Request, running: Running | None = None) -> FaultsResult:
+def run_faults(request: Request, proj: Project, running: Running | None = None
+               ) -> FaultsResult:
     """Check the request, run every scenario nominal and under each fault that acts on it,
     judge, and write OUT/summary.json and OUT/faults.html. Bad input (an unknown scenario,
     fault or catalogue) is a SpecError before anything runs or is written."""
     r = request
     _check(r)
-    proj = project.current()
     baselines = r.baselines if r.baselines is not None else proj.baselines
     entries = select(catalogue(r.catalogue), r.only)
-    with project.held():
-        names = list(r.names) or default_suite(proj.own_scenarios(), r.allow_outside_paths)
-        if not names:
-            raise SpecError("no scenarios: name one (`kartci list` shows the built-in ones)")
-        plans = plan(names, entries, r.allow_outside_paths)
+    names = list(r.names) or default_suite(proj.own_scenarios(), proj, r.allow_outside_paths)
+    if not names:
+        raise SpecError("no scenarios: name one (`kartci list` shows the built-in ones)")
+    plans = plan(names, entries, proj, r.allow_outside_paths)
     if r.shard is not None:  # a scenario with all its faults stays on one shard
         mine = shard_labels({p[0] for p in plans}, *r.shard)
         plans = [p for p in plans if p[0] in mine]
@@ -373,7 +373,7 @@ def run_faults(request: Request, running: Running | None = None) -> FaultsResult
             (out / stale).unlink(missing_ok=True)
         write_manifest(out, "faults", [j.label for j in todo])
         with (running or _no_events)(todo) as on_event:
-            results = run_jobs(todo, out, baselines, workers=r.jobs, executor=r.executor,
+            results = run_jobs(todo, out, baselines, proj, workers=r.jobs, executor=r.executor,
                                ray_address=r.ray_address, timeout_s=r.timeout_s,
                                on_event=on_event) if todo else []
         by_label = {x.name: x for x in results}
@@ -413,17 +413,15 @@ def is_faults_folder(out: Path) -> bool:
     return True
 
 
-def rejudge(out: Path, baselines: Path | None = None, min_score: float | None = None
-            ) -> FaultsResult:
+def rejudge(out: Path, baselines: Path, min_score: float | None = None) -> FaultsResult:
     """Judge a `kartci faults` folder's runs again with today's baselines, running nothing:
     after `kartci baseline tolerances --write`, the matrix the new tolerances give."""
     old = _summary(out)
-    base = baselines if baselines is not None else project.current().baselines
     with locked(out):
-        return _judge_again(out, old, base, min_score)
+        return _judge_again(out, old, baselines, min_score)
 
 
-def merge_faults(dirs: Sequence[Path], out: Path, baselines: Path | None = None,
+def merge_faults(dirs: Sequence[Path], out: Path, baselines: Path, proj: Project,
                  min_score: float | None = None) -> FaultsResult:
     """Join `kartci faults --shard` OUTs into one matrix in `out`: their run folders copied as
     `kartci merge` copies a sharded run's (checked, never outside OUT), their cells judged
@@ -438,7 +436,7 @@ def merge_faults(dirs: Sequence[Path], out: Path, baselines: Path | None = None,
     if len(set(names)) < len(names):
         raise SpecError("a scenario is in two shards' matrices; merge the shards of one "
                         "`kartci faults --shard I/N` run")
-    base = baselines if baselines is not None else project.current().baselines
+    base = baselines
     order = {e.name: i for i, e in enumerate(catalogue(docs[0]["catalogue"]))}
     faults = {f["name"]: f for d in docs for f in d["faults"]}
     joined = {"kartci_faults": 1, "catalogue": docs[0]["catalogue"], "shard": None,
@@ -448,7 +446,7 @@ def merge_faults(dirs: Sequence[Path], out: Path, baselines: Path | None = None,
                                   key=lambda s: str(s["name"])),
               "cells": [c for d in docs for c in d["cells"]]}
     with locked(out):
-        merge(list(dirs), out, base)
+        merge(list(dirs), out, base, proj)
         return _judge_again(out, joined, base, min_score)
 
 

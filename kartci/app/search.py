@@ -23,10 +23,11 @@ from typing import Any
 
 import yaml
 
-from kartci import metrics, project
+from kartci import metrics
 from kartci.atomic import write_text_atomic
 from kartci.core import Direction
 from kartci.errors import SpecError, did_you_mean
+from kartci.project import Project
 from kartci.runner.events import Listener
 from kartci.runner.executors import Warm
 from kartci.runner.jobs import MAX_RUNS, Job, point_label
@@ -85,9 +86,11 @@ class Request:
 
 @dataclass(frozen=True)
 class Options:
-    """How the runs are made: workers, executor, wall-clock limit per run, baselines."""
+    """How the runs are made: workers, executor, wall-clock limit per run, baselines, and the
+    project the scenario is found and judged in."""
 
     baselines: Path
+    project: Project
     workers: int = 1
     executor: ExecutorKind = ExecutorKind.LOCAL
     ray_address: str | None = None
@@ -344,7 +347,8 @@ def _runner(request: Request, plan: Plan, out: Path, opts: Options, load: Loader
                                                   list(p)))))
         if jobs:
             check_inside(out, [j.label for _, j in jobs])
-            results = run_jobs([j for _, j in jobs], out, opts.baselines, workers=opts.workers,
+            results = run_jobs([j for _, j in jobs], out, opts.baselines, opts.project,
+                               workers=opts.workers,
                                executor=opts.executor, ray_address=opts.ray_address,
                                timeout_s=opts.timeout_s, strict=False, on_event=opts.on_event,
                                warm=warm)
@@ -376,10 +380,10 @@ def run_search(request: Request, out: Path, opts: Options, progress: Progress | 
                evaluate: Evaluate | None = None) -> SearchResult:
     """Check the request, search, write OUT/found.yaml and OUT/search.html. `evaluate`
     replaces the runner (tests inject a cheap one); either is journaled in OUT/search.json."""
-    with project.held():
-        load = scenario_loader(request.scenario, allow_outside_paths=request.allow_outside_paths)
-        axes = make_axes(request, load)
-        plan = make_plan(request, axes)
+    load = scenario_loader(request.scenario, project=opts.project,
+                           allow_outside_paths=request.allow_outside_paths)
+    axes = make_axes(request, load)
+    plan = make_plan(request, axes)
     warm = Warm()
     with locked(out), contextlib.closing(warm):  # a busy --out fails here, before any run
         journal = Journal(out, request)
@@ -390,7 +394,8 @@ def run_search(request: Request, out: Path, opts: Options, progress: Progress | 
         write_manifest(out, "search", [e.label for e in found.counted if e.label])
         target = found.failure if (found.failure is not None and (
             plan.objective is not None or found.failure.status.failing)) else None
-        yaml_path = write_found(request, found, target, out) if target is not None else None
+        yaml_path = (write_found(request, found, target, out, opts.project)
+                     if target is not None else None)
         if yaml_path is None:
             (out / FOUND).unlink(missing_ok=True)  # an earlier search's: not this one's
         from kartci.report.search import search_page  # late: matplotlib, for the page only
@@ -410,11 +415,12 @@ def describe(request: Request) -> str:
     return " ".join([*parts, f"--seed {request.seed}"])
 
 
-def write_found(request: Request, found: Found, e: Evaluation, out: Path) -> Path:
+def write_found(request: Request, found: Found, e: Evaluation, out: Path, proj: Project
+                ) -> Path:
     """OUT/found.yaml: the scenario's own file with the overrides and the found values
     written in, runnable as is (`kartci run OUT/found.yaml`); its name is the file's, so a
     copy into scenarios/ under a name of its own joins the suite with a baseline of its own."""
-    source = scenario_path(request.scenario)
+    source = scenario_path(request.scenario, proj)
     data = yaml.safe_load(source.read_text(encoding="utf-8"))
     for agent in (data.get("agents") or {}).values():  # a recorded input's log is found from
         log = ((agent or {}).get("controller") or {}).get("source") or {}  # the file's folder

@@ -150,7 +150,8 @@ def run_suite(request: SuiteRequest, project: Project, view: SuiteView | None = 
     part = check_shard(r.shard) if r.shard is not None else None
     if r.live and ((r.jobs or 1) > 1 or r.executor is not ExecutorKind.LOCAL):
         raise SpecError("--live serves one run at a time in this process: drop -j / --executor")
-    selected = list(r.names) or default_suite(project.own_scenarios(), r.allow_outside_paths)
+    selected = list(r.names) or default_suite(project.own_scenarios(), project,
+                                                r.allow_outside_paths)
     if not selected:
         where = ", ".join(str(p) for p in project.scenarios)
         raise SpecError(f"no scenarios to run: none in {where}; name one (`kartci list` shows "
@@ -162,9 +163,11 @@ def run_suite(request: SuiteRequest, project: Project, view: SuiteView | None = 
     replicas, vary = (r.conditioning, Vary.START) if r.conditioning else (r.repeat, Vary.SEED)
     check_plugins(r.strict, view.warn)
     overrides = list(r.overrides)
-    selected, refused = runnable(selected, overrides, allow_outside_paths=r.allow_outside_paths)
+    selected, refused = runnable(selected, overrides, project,
+                                 allow_outside_paths=r.allow_outside_paths)
     with view.validating() as progress:
-        todo = expand(selected, overrides, list(r.sweep) or None, replicas, vary, progress,
+        todo = expand(selected, overrides, project, list(r.sweep) or None, replicas, vary,
+                      progress,
                       allow_outside_paths=r.allow_outside_paths) if selected else []
     if part is not None:
         mine = shard_of([*(j.label for j in todo), *(x.label for x in refused)], part)
@@ -181,7 +184,7 @@ def run_suite(request: SuiteRequest, project: Project, view: SuiteView | None = 
         write_manifest(out, "run", labels)
         with judging_all(labels, r.strict) as complete:
             with view.running(todo) as on_event:
-                results = run_jobs(todo, out, _baselines(r.baselines, project),
+                results = run_jobs(todo, out, _baselines(r.baselines, project), project,
                                    workers=workers, executor=r.executor,
                                    ray_address=r.ray_address, timeout_s=r.timeout_s,
                                    strict=r.strict, on_event=on_event, draw=scenario_svgs)
@@ -206,22 +209,22 @@ def check_plugins(strict: bool, warn: Callable[[str], None]) -> None:
 
 
 def merge_shards(dirs: Sequence[Path], out: Path, baselines: Path | None,
-                 project: Project | None, *, strict: bool = False,
+                 project: Project, *, strict: bool = False,
                  history: Path | None = None) -> Suite:
     """Join partial results (each a sharded run's OUT) into one run in `out`: copy the scenario
     folders, then judge and report them exactly as an unsharded run would. `history`: a folder
     of earlier commits' summary.json for report.html. `project` gives the default baselines
-    (None: `baselines` must be given)."""
+    and the tolerance policy."""
     from kartci.runner.merge import merge  # start-up: PyBullet (+0.4 s)
 
     with locked(out):
         clear_reports(out)
-        results = merge(list(dirs), out, _baselines(baselines, project), strict)
+        results = merge(list(dirs), out, _baselines(baselines, project), project, strict)
         write_manifest(out, "merge", [x.name for x in results])
         return Suite(out, results, write_reports(results, out, history=history))
 
 
-def rescore_suite(out: Path, baselines: Path | None, project: Project | None, *,
+def rescore_suite(out: Path, baselines: Path | None, project: Project, *,
                   strict: bool = False) -> Suite:
     """Rebuild the metrics and reports of a run's OUT from its logs alone (the scenarios of its
     last run); a scenario whose log is missing or damaged is an error."""
@@ -232,7 +235,7 @@ def rescore_suite(out: Path, baselines: Path | None, project: Project | None, *,
     target = _baselines(baselines, project)
     with locked(out):
         clear_reports(out)
-        results = rescore(out, target)
+        results = rescore(out, target, project)
         if strict:
             results = [require_baselines(x, out, target) for x in results]
         if manifest_labels(out) is None:
@@ -241,7 +244,7 @@ def rescore_suite(out: Path, baselines: Path | None, project: Project | None, *,
 
 
 def compare_suites(base: Path, head: Path, out: Path, baselines: Path | None,
-                   project: Project | None, *, alpha: float = 0.05) -> Suite:
+                   project: Project, *, alpha: float = 0.05) -> Suite:
     """Head's OUT judged against base's, scenario by scenario and metric by metric, reported
     in `out` (with repeats, a change must also be significant at `alpha`)."""
     from kartci.runner.compare import compare_outs  # start-up: PyBullet, scipy (+1 s)
@@ -250,7 +253,7 @@ def compare_suites(base: Path, head: Path, out: Path, baselines: Path | None,
         raise SpecError(f"--alpha {alpha:g}: expected 0 < alpha < 1")
     with locked(out):
         clear_reports(out)
-        results = compare_outs(base, head, _baselines(baselines, project), alpha)
+        results = compare_outs(base, head, _baselines(baselines, project), project, alpha)
         return Suite(out, results, write_reports(results, out, COMPARE))
 
 
@@ -268,12 +271,8 @@ def write_reports(results: list[ScenarioResult], out: Path, words: Wording = RUN
                        f"{one_line(str(err), 200)} (no report was left in place)") from err
 
 
-def _baselines(given: Path | None, project: Project | None) -> Path:
+def _baselines(given: Path | None, project: Project) -> Path:
     """The baselines folder: `given` (which must exist), else the project's."""
     if given is not None and not given.is_dir():
         raise SpecError(f"--baselines {given}: no such folder")
-    if given is not None:
-        return given
-    if project is None:
-        raise SpecError("no baselines folder: give one, or a project")
-    return project.baselines
+    return given if given is not None else project.baselines

@@ -26,7 +26,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.bridge import ros2
 from kartci.bridge.attach import announce, for_zenoh
@@ -49,6 +48,7 @@ from kartci.bridge.params import ExternalController, Mode, command_types
 from kartci.core import ROBOTS, AgentContext, JoyCommand, Outbox, RobotParams
 from kartci.errors import RunError, SpecError
 from kartci.logs.types import base_link, msg, stamp_ns
+from kartci.project import BUILTIN_MODELS
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 LATE_TOPIC = "bridge/late_commands"  # std_msgs/UInt32: the count so far, at each late tick
@@ -72,13 +72,15 @@ def substitute(text: str, values: dict[str, str]) -> str:
     return text
 
 
-def joystick(agent: str, model: RobotParams, mapping: str) -> JoyCommand:
-    """What the robot's kind makes of the stack's Joy messages through `mapping`."""
+def joystick(agent: str, model: RobotParams, mapping: str, models: tuple[Path, ...]
+             ) -> JoyCommand:
+    """What the robot's kind makes of the stack's Joy messages through `mapping` (a name looked
+    up in the robot model folders `models`)."""
     make = ROBOTS.get(model.kind).joystick
     if make is None:
         raise SpecError(f"agent {agent}: a {model.kind} robot reads no joystick; command it "
                         "with another of the external controller's command types")
-    return make(model, mapping)
+    return make(model, mapping, models)
 
 
 class ExternalAgent:
@@ -119,7 +121,11 @@ class ExternalAgent:
         self.spec, self.name, self.period_s = spec, ctx.name, spec.period_s
         self.inputs = tuple(spec.publish)
         self.frame = base_link(ctx.name)
-        self.joystick = joystick(ctx.name, ctx.model, spec.mapping) if any(
+        # the project's folder ({root} in the stack's command; a scenario built by hand: the
+        # working directory) and its model folders (a joystick mapping's name)
+        self.root = ctx.project.root if ctx.project is not None else Path.cwd()
+        models = ctx.project.model_path if ctx.project is not None else (BUILTIN_MODELS,)
+        self.joystick = joystick(ctx.name, ctx.model, spec.mapping, models) if any(
             c.type == "sensor_msgs/msg/Joy" for c in spec.commands) else None
         self.commands = {self._full(c.topic): c.type for c in spec.commands}
         self.applied_on = command_types()  # command type -> the robot topic it is applied on
@@ -151,7 +157,7 @@ class ExternalAgent:
         return topic if topic.startswith("/") else f"/{self.name}/{topic}"
 
     def _start(self, run_dir: Path | None) -> Child:
-        root = project.current().root
+        root = self.root
         values = {"python": sys.executable, "endpoint": self.endpoint, "root": str(root),
                   "domain_id": str(self.spec.domain_id), "namespace": self.name}
         argv = [substitute(a, values) for a in self.spec.command]

@@ -40,7 +40,9 @@ def baseline_update(
     def say(line: str) -> None:
         err_console.print(line, highlight=False, markup=False)
 
-    accepted = accept(out, names or (), baselines=baselines,
+    from kartci import project  # with accept's, for this command only
+
+    accepted = accept(out, project.current(), names or (), baselines=baselines,
                       replicas=replicas, jobs=jobs, say=say)
     for one in accepted:
         for line in one.lines():

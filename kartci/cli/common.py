@@ -130,11 +130,9 @@ def strict_mode(flag: bool | None) -> bool:
 
 def baselines_dir(path: Path | None, must_exist: bool = True) -> Path:
     """`--baselines` (a folder, when it must exist), else the project's baselines folder."""
-    from kartci.runner import default_baselines  # CLI start-up: PyBullet (+0.5 s)
-
     if path is not None and must_exist and not path.is_dir():
         raise SpecError(f"--baselines {path}: no such folder")
-    return path or default_baselines()
+    return path or project.current().baselines
 
 
 def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
@@ -185,7 +183,11 @@ def conclude(results: list[ScenarioResult], paths: dict[str, Path], words: Wordi
     if ci:
         append_step_summary(paths["markdown"].read_text(encoding="utf-8"))
     if ci and in_github_actions():
-        for line in annotation_lines(results, files=scenario_files(results)):
+        try:
+            files = scenario_files(results, project.current())
+        except KartciError:  # a broken configuration anchors no annotation, and fails no report
+            files = {}
+        for line in annotation_lines(results, files=files):
             typer.echo(line)
     code = exit_code(results)
     shown = paths["html" if html else "markdown"]

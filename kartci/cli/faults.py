@@ -12,6 +12,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
+from kartci import project
 from kartci.cli.common import (
     AllowOutsideOpt,
     BaselinesOpt,
@@ -124,13 +125,13 @@ def faults(
         if names or only or shard:
             raise SpecError("--rejudge judges the runs already in --out again; give it no "
                             "scenarios, --only or --shard")
-        result = judge_again(target, base, min_score)
+        result = judge_again(target, base or project.current().baselines, min_score)
     else:
         live = err_console.is_terminal and not os.environ.get("CI")
         request = Request(target, tuple(names or ()), catalogue, tuple(only or ()), base, jobs,
                           parse_shard(shard) if shard else None, executor, ray_address,
                           timeout_s, min_score, allow_outside_paths)
-        result = run_faults(request, lambda todo: _running(todo, live))
+        result = run_faults(request, project.current(), lambda todo: _running(todo, live))
     conclude_faults(result, min_score)
 
 

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from kartci import project
 from kartci.atomic import check_target
 from kartci.cli.common import (
     AllowOutsideOpt,
@@ -75,7 +76,9 @@ def replay(
     from kartci.runner import Job, run_jobs
 
     out = out_dir(out, "replay")
-    spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)
+    proj = project.current()
+    spec = load_scenario(scenario, set_ or [], project=proj,
+                         allow_outside_paths=allow_outside_paths)
     name = agent or next(iter(spec.agents))
     if name not in spec.agents:
         raise SpecError(f"scenario {spec.name} has no agent '{name}' "
@@ -86,7 +89,7 @@ def replay(
     if make is None:
         raise SpecError(f"scenario {spec.name}: agent {name} is a {kind} robot, which cannot be "
                         "driven from a recorded input")
-    controller = make(log, chosen.topic, chosen.msgtype, mapping)
+    controller = make(log, chosen.topic, chosen.msgtype, mapping, proj.model_path)
     agents = dict(spec.agents)
     agents[name] = agents[name].model_copy(update={"controller": controller})
     spec = spec.model_copy(update={"agents": agents})
@@ -96,7 +99,7 @@ def replay(
         check_inside(out, [spec.name])
         clear_reports(out)
         write_manifest(out, "replay", [spec.name])
-        finish(run_jobs([Job(spec, spec.name)], out, baselines_dir(baselines),
+        finish(run_jobs([Job(spec, spec.name)], out, baselines_dir(baselines), proj,
                         strict=strict_mode(strict), draw=scenario_svgs), out)
 
 

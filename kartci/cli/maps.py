@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from kartci import project
 from kartci.atomic import check_target
 from kartci.cli.common import app, out_console
 from kartci.scenario.load import load_world
@@ -30,7 +31,7 @@ def map_(
         save_map,
     )
 
-    params, path = load_world(world)
+    params, path = load_world(world, project.current())
     target = out if out is not None else path.with_name(f"{path.stem}_map.ply")
     check_target(target)  # before the mapping run
     n = save_map(params, world, target, MapRun(lidar, step_m, 1.0, voxel_m, seed))

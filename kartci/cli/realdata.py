@@ -11,6 +11,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.cli.common import (
     AllowOutsideOpt,
@@ -81,7 +82,7 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
     with locked(out):
         clear_reports(out)
         base = baselines_dir(baselines)
-        result = score_log(log, profile, out, base, allow_outside_paths,
+        result = score_log(log, profile, out, base, project.current(), allow_outside_paths,
                            None if align is None else Alignment(align.value), align_first,
                            with_plots=html, t_max_diff_s=t_max_diff)
         if strict_mode(strict):
@@ -118,7 +119,7 @@ def simreal_cmd(
         clear_reports(out)
         base = baselines_dir(baselines)
         result = simreal_log(log, profile, scenario, set_ or [], window_s, out, base,
-                             allow_outside_paths, say=lambda line: typer.echo(
+                             project.current(), allow_outside_paths, say=lambda line: typer.echo(
                                  f"kartci: {line}", err=True))
         if strict_mode(strict):
             result = require_baselines(result, out, base)
@@ -155,8 +156,11 @@ def localize_cmd(
     )
 
     out = out_dir(out, "localize")
-    r = replay_localization(log, profile, out, DetectAt(detect_at.value) if detect else None,
-                            detect_map)
+    proj = project.current()
+    if detect_map is not None and not Path(detect_map).is_absolute():  # on the world path
+        detect_map = str(proj.world_file(detect_map))
+    r = replay_localization(log, profile, out, proj,
+                            DetectAt(detect_at.value) if detect else None, detect_map)
     doc = {"ape_rmse_m": r.ape.rmse, "ape_max_m": r.ape.max, "poses": r.ape.count,
            "scans": r.scans, "estimates": r.estimates, "log_s": r.log_s,
            "wall_s": round(r.wall_s, 3), "map_points": r.map_points,
@@ -214,7 +218,7 @@ def calibrate_cmd(
 
     out = out_dir(out, "calibrate")
     fit = calibrate_log(log, profile, scenario, set_ or [], params, window_s, out,
-                        allow_outside_paths)
+                        project.current(), allow_outside_paths)
     table = Table("parameter", "start", "fitted", "95 % interval", "note",
                   title=f"calibration ({fit.evaluations} evaluations, {fit.method})",
                   title_justify="left")

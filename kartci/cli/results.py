@@ -11,7 +11,6 @@ from kartci import project
 from kartci.app.suite import compare_suites, merge_shards, rescore_suite
 from kartci.cli.common import BaselinesOpt, OutOpt, StrictOpt, app, conclude, out_dir, strict_mode
 from kartci.errors import SpecError
-from kartci.project import Project
 from kartci.report import COMPARE
 
 
@@ -36,11 +35,12 @@ def merge(
         from kartci.app.faults import merge_faults
         from kartci.cli.faults import conclude_faults
 
-        conclude_faults(merge_faults(dirs, out, baselines), None)
+        conclude_faults(merge_faults(dirs, out, baselines or project.current().baselines,
+                                     project.current()), None)
     if len(kinds) > 1:
         raise SpecError("the folders mix `kartci faults` and `kartci run` results; merge "
                         "each kind on its own")
-    suite = merge_shards(dirs, out, baselines, _project(baselines), strict=strict_mode(strict),
+    suite = merge_shards(dirs, out, baselines, project.current(), strict=strict_mode(strict),
                          history=history)
     conclude(suite.results, suite.reports)
 
@@ -59,7 +59,7 @@ def compare_cmd(
     significant). Reports both runs' paths and time series overlaid. Exit 1 when head
     regressed, 0 when not, 2 when a run failed."""
     out = out_dir(out, "compare")
-    suite = compare_suites(base, head, out, baselines, _project(baselines), alpha=alpha)
+    suite = compare_suites(base, head, out, baselines, project.current(), alpha=alpha)
     conclude(suite.results, suite.reports, COMPARE)
 
 
@@ -68,13 +68,9 @@ def report(out: Annotated[Path, typer.Argument(help="A folder written by `kartci
            baselines: BaselinesOpt = None, strict: StrictOpt = None) -> None:
     """Rebuild metrics and all reports of a run folder from its logs alone (the scenarios of
     its last run); a scenario whose log is missing or damaged is an error."""
-    suite = rescore_suite(out, baselines, _project(baselines), strict=strict_mode(strict))
+    suite = rescore_suite(out, baselines, project.current(), strict=strict_mode(strict))
     conclude(suite.results, suite.reports)
 
-
-def _project(baselines: Path | None) -> Project | None:
-    """The project, when it must say where the baselines are (no --baselines given)."""
-    return project.current() if baselines is None else None
 
 
 @app.command()

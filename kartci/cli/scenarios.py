@@ -34,9 +34,10 @@ def list_cmd() -> None:
     Every scenario reachable by name: the project's own, then kartci's built-ins, each with its
     one-line description. A file that cannot be loaded is listed with its error (exit 2); the
     others are listed all the same. Exit 1 when a plugin failed to load (named on stderr)."""
-    entries = scenario_catalogue()
+    proj = project.current()
+    entries = scenario_catalogue(proj)
     if not entries:
-        where = ", ".join(str(p) for p in project.current().scenario_path)
+        where = ", ".join(str(p) for p in proj.scenario_path)
         raise SpecError(f"no scenarios found (searched {where}); `kartci init` creates a project "
                         "with one")
     table = Table("scenario", "from", "description", box=None)
@@ -57,7 +58,8 @@ def show(name: Annotated[str, typer.Argument(help="A scenario name or YAML path.
          set_: SetOpt = None, allow_outside_paths: AllowOutsideOpt = False) -> None:
     """Print a scenario fully resolved (world and model files included, overrides applied)."""
     with stdout_to_stderr():  # a plugin printing while it loads or validates: not into JSON
-        spec = load_scenario(name, set_ or [], allow_outside_paths=allow_outside_paths)
+        spec = load_scenario(name, set_ or [], project=project.current(),
+                             allow_outside_paths=allow_outside_paths)
     typer.echo(json.dumps(spec.model_dump(mode="json"), indent=2))
 
 

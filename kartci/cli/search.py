@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 from rich.text import Text
 
+from kartci import project
 from kartci.cli.common import (
     AllowOutsideOpt,
     BaselinesOpt,
@@ -97,7 +98,8 @@ def search(
     target = out_dir(out, "search")
     request = Request(name, tuple(over), tuple(set_ or ()), budget, objective, seed,
                       allow_outside_paths)
-    opts = Options(baselines_dir(baselines), jobs, executor, ray_address, timeout_s)
+    opts = Options(baselines_dir(baselines), project.current(), jobs, executor, ray_address,
+                   timeout_s)
     live = err_console.is_terminal and not os.environ.get("CI")
     with _progress(live) as progress:
         result = run_search(request, target, opts, progress)

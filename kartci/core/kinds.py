@@ -34,6 +34,26 @@ if TYPE_CHECKING:  # the types the Protocols name, from the packages that call t
     from kartci.sim.robot import Robot, RobotContext, SimWorld
 
 
+class DataFolders(Protocol):
+    """What a controller or node may ask of the project it runs in (`kartci.project.Project`
+    is one, handed in by the entry point, never looked up here): where its data files are."""
+
+    @property
+    def root(self) -> Path:
+        """The project's folder (an external stack's working folder)."""
+        ...
+
+    @property
+    def model_path(self) -> tuple[Path, ...]:
+        """Robot model folders in search order (the project's own, then kartci's)."""
+        ...
+
+    @property
+    def world_path(self) -> tuple[Path, ...]:
+        """World folders in search order (the project's own, then kartci's)."""
+        ...
+
+
 @dataclass(frozen=True)
 class AgentContext:
     """What a controller is told when it is built: who it is and which robot it drives.
@@ -44,6 +64,9 @@ class AgentContext:
     others: tuple[str, ...] = ()  # the other agents of the scenario (their topics: /<name>/...)
     run_dir: Path | None = None  # where the run's files go (a controller's own output files)
     world: WorldParams | None = None  # the scenario's world: the map a real robot would carry
+    # the project the scenario was loaded in (None: a scenario built by hand; kartci's own
+    # data folders only): where a controller finds a data file named in its parameters
+    project: DataFolders | None = None
 
 
 P = TypeVar("P", ControllerParams, NodeParams)
@@ -216,18 +239,20 @@ class JoyCommand(Protocol):
 class JoystickFn(Protocol):
     """A robot kind's joystick mappings (`RobotKind.joystick`)."""
 
-    def __call__(self, model: Any, mapping: str, /) -> JoyCommand:
-        """`(model, mapping name) -> JoyCommand`."""
+    def __call__(self, model: Any, mapping: str, models: tuple[Path, ...], /) -> JoyCommand:
+        """`(model, mapping name, robot model folders a name is looked up in) ->
+        JoyCommand`."""
         ...
 
 
 class ReplayFn(Protocol):
     """A robot kind's replay of recorded input (`RobotKind.replay`)."""
 
-    def __call__(self, log: Path, topic: str, msgtype: str, mapping: str, /
-                 ) -> ControllerParams:
-        """`(log, topic, message type, joystick mapping) -> ControllerParams` that replay that
-        recorded input into a robot of this kind (`kartci replay`); checks the log first."""
+    def __call__(self, log: Path, topic: str, msgtype: str, mapping: str,
+                 models: tuple[Path, ...], /) -> ControllerParams:
+        """`(log, topic, message type, joystick mapping, robot model folders a mapping name is
+        looked up in) -> ControllerParams` that replay that recorded input into a robot of this
+        kind (`kartci replay`); checks the log first."""
         ...
 
 

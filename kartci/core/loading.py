@@ -3,8 +3,9 @@ modules, imported once per process into the registries (`kartci.core.registry`).
 fails is recorded, never raised here, and fails only what names it.
 
 The project (its root and `plugins` list) is handed in as a `PluginSource`; without one, the
-source `kartci.project` installs when imported (`set_default_source`: the project of the
-working directory) is asked, so the contracts never import the project module."""
+source `kartci.project` installs when imported (`set_default_source`: the project held for the
+work at hand, `kartci.project.held`, else the working directory's) is asked, so the contracts
+never import the project module."""
 
 from __future__ import annotations
 
@@ -164,7 +165,8 @@ def load_named(reg: Registry[Any], name: str) -> bool:
 
 def load(project: PluginSource | None = None) -> None:
     """Import every installed plugin (entry points) and the project's plugin modules, once.
-    Worker processes call this with their parent's project before running anything. A plugin
+    Without `project`, the default source's (the project its caller holds active: a runner job,
+    a scenario's validation, a session hold the one handed to them). A plugin
     that fails (any exception, SystemExit too) is recorded in `broken()`, never raised here:
     only the scenarios that name it fail (`Registry.get`); `plugin_failure` says what counts.
     What the plugins print while they load goes to stderr (`stdout_to_stderr`)."""

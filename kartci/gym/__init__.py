@@ -31,6 +31,7 @@ try:
 except ImportError as err:  # the optional extra is not installed
     raise ImportError("kartci.gym needs Gymnasium: pip install 'kartci[gym]'") from err
 
+from kartci import project
 from kartci.gym.env import (
     TERMINAL,
     Ending,
@@ -57,7 +58,7 @@ def register_scenarios() -> list[str]:
     """Register an env id for every scenario reachable by name (again after new files appear);
     returns the ids."""
     ids = []
-    for name in scenario_names():
+    for name in scenario_names(project.current()):  # an entry point, as kartci.api
         ids.append(env_id(name))
         if ids[-1] not in gymnasium.registry:
             gymnasium.register(ids[-1], entry_point="kartci.gym.env:KartciEnv",

@@ -15,13 +15,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from kartci import core, metrics
+from kartci import core, metrics, project
 from kartci._bullet import pb
 from kartci.core import ControlSpace, Metric
 from kartci.core.course import Course
 from kartci.errors import SpecError, did_you_mean
 from kartci.scenario import Scenario
-from kartci.scenario.load import load_scenario
+from kartci.scenario.load import in_project, load_scenario
 from kartci.sim.session import Session, StepResult
 
 Observation = np.ndarray[Any, Any]  # float32, one value per channel
@@ -177,10 +177,13 @@ class KartciEnv(gym.Env[Observation, Observation]):
             raise SpecError(f"kartci.gym: render_mode {render_mode!r}: kartci renders nothing "
                             "live; open the episode's log (log_dir) in Foxglove")
         sets = [*overrides, *override_strings(values)]
+        proj = project.current()  # an entry point (gymnasium.make), as kartci.api
         if not isinstance(scenario, Scenario):
-            scenario = load_scenario(scenario, sets)
+            scenario = load_scenario(scenario, sets, project=proj)
         elif sets:
-            scenario = load_scenario(scenario.name, sets)
+            scenario = load_scenario(scenario.name, sets, project=proj)
+        else:
+            scenario = in_project(scenario, proj)
         self.scenario = scenario
         self.agent = agent or next(iter(scenario.agents))
         if self.agent not in scenario.agents:

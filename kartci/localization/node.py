@@ -15,22 +15,31 @@ from typing import Any
 
 import numpy as np
 
-from kartci import project
 from kartci.core import ROBOTS, AgentContext, Outbox
+from kartci.errors import SpecError
 from kartci.localization.deskew import deskew
 from kartci.localization.ekf import BIAS, VY, Noise, PlanarEkf, wrap
 from kartci.localization.params import LocalizationParams
 from kartci.localization.registration import MapMatcher, Match, pose_matrix
 from kartci.logs.types import WORLD_FRAME, header, msg, stamp_ns
 from kartci.pointcloud import cloud_xyz
+from kartci.project import BUILTIN_SIMS
 from kartci.worlds.track import TRACK_TOPIC, track_from_text
 
 SCAN_RATE_HZ = 10.0  # the revolution time deskewing assumes when the header gives none
 
 
-def map_path(name: str) -> Path:
-    """A map named relative to the world folders, or an absolute path."""
-    return Path(name) if Path(name).is_absolute() else project.current().world_file(name)
+def map_path(name: str, ctx: AgentContext) -> Path:
+    """A map named relative to the world folders of the project the agent runs in
+    (`AgentContext.project`; kartci's own for a scenario built by hand), or an absolute path.
+    A loaded scenario's maps are absolute already: found and checked where it was loaded."""
+    if Path(name).is_absolute():
+        return Path(name)
+    folders = ctx.project.world_path if ctx.project is not None else (BUILTIN_SIMS,)
+    for folder in folders:
+        if (folder / name).is_file():
+            return folder / name
+    raise SpecError(f"map {name[:120]!r} not found (searched {', '.join(map(str, folders))})")
 
 
 class LocalizationNode:
@@ -49,7 +58,7 @@ class LocalizationNode:
         self.mount = np.array([0.0, 0.0, spec.sensor_height_m])  # velodyne_link in base_link
         self.imu_xy = np.zeros(2)  # imu_link in base_link, from /tf_static (lever arm)
         self.z_m = 0.0  # base_link's height, from registration
-        self.matcher = MapMatcher.from_file(map_path(spec.map), spec.map_voxel_m, spec.method,
+        self.matcher = MapMatcher.from_file(map_path(spec.map, ctx), spec.map_voxel_m, spec.method,
                                             spec.max_correspondence_m, spec.max_iterations,
                                             spec.vgicp_voxel_m)
         self.ekf: PlanarEkf | None = None

@@ -34,7 +34,7 @@ class ObstacleDetector:
         """Load the map's walls and fixed objects; tracks start empty."""
         self.spec, self.ns, self.period_s = spec, ctx.name, spec.period_s
         self.inputs: tuple[str, ...] = ("/tf_static", spec.pose_topic, "velodyne_points")
-        cloud = read_ply(map_path(spec.map)) if spec.map is not None else np.zeros((0, 3))
+        cloud = read_ply(map_path(spec.map, ctx)) if spec.map is not None else np.zeros((0, 3))
         self.mask = MapMask(cloud, spec.ground_m, spec.top_m)
         self.tracker = Tracker(spec.gate_m, spec.dynamic_mps, spec.dynamic_m)
         self.mount = np.array([0.0, 0.0, spec.sensor_height_m])

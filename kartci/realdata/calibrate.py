@@ -33,6 +33,7 @@ from scipy.optimize import least_squares
 
 from kartci.atomic import write_text_atomic
 from kartci.errors import RunError, SpecError
+from kartci.project import Project
 from kartci.realdata.divergence import divergence, residuals, run_whole, run_windows
 from kartci.realdata.drive import Drive, read_drive
 from kartci.realdata.importer import import_log
@@ -169,8 +170,9 @@ class Objective:
     """The windowed divergence as a residual vector of the parameter values."""
 
     def __init__(self, profile: Profile, scenario: str | None, base: Sequence[str],
-                 params: tuple[Param, ...], drive: Drive, window_s: float) -> None:
-        self.profile, self.scenario, self.base = profile, scenario, list(base)
+                 params: tuple[Param, ...], drive: Drive, window_s: float,
+                 proj: Project) -> None:
+        self.profile, self.scenario, self.base, self.proj = profile, scenario, list(base), proj
         self.params, self.drive, self.window_s = params, drive, window_s
         self.calls = 0
 
@@ -180,7 +182,7 @@ class Objective:
         sets = [f"{p.path}={float(v)!r}" for p, v in pairs if not p.path.startswith(PROFILE)]
         profile = with_values(self.profile, {p.path.removeprefix(PROFILE): float(v)
                                              for p, v in pairs if p.path.startswith(PROFILE)})
-        return sim_setup(profile, self.scenario, [*self.base, *sets])
+        return sim_setup(profile, self.scenario, [*self.base, *sets], self.proj)
 
     def runs(self, values: Sequence[float]) -> dict[str, Any]:
         """Windowed and whole-log runs with these values."""
@@ -303,19 +305,19 @@ def overlay_yaml(fit: Fit, log: str) -> str:
 
 def calibrate_log(log: Path, profile_path: Path | None, scenario: str | None,
                   overrides: Sequence[str], names: Sequence[str], window_s: float,
-                  out: Path, allow_outside_paths: bool = False) -> Fit:
+                  out: Path, proj: Project, allow_outside_paths: bool = False) -> Fit:
     """Fit `names` to `log`; writes OUT/calibration.json and OUT/overlay.yaml. The profile's
     files stay inside the project unless `allow_outside_paths` (`--allow-outside-paths`)."""
-    profile, info = resolve_profile(log, profile_path, allow_outside_paths)
+    profile, info = resolve_profile(log, profile_path, proj, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
-    setup = sim_setup(profile, scenario, overrides)
+    setup = sim_setup(profile, scenario, overrides, proj)
     check_commands(setup, profile, types)
     params = parse_params(setup, names, profile)
     with tempfile.TemporaryDirectory() as tmp:
         imported = Path(tmp) / "imported.mcap"
         import_log(log, profile, types, imported)
         drive = read_drive(imported, profile.agent)
-    fit = calibrate(Objective(profile, scenario, overrides, params, drive, window_s))
+    fit = calibrate(Objective(profile, scenario, overrides, params, drive, window_s, proj))
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "calibration.json", json.dumps(fit.to_json(), indent=2) + "\n")
     write_text_atomic(out / "overlay.yaml", overlay_yaml(fit, str(log)))

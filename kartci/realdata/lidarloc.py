@@ -28,6 +28,7 @@ from kartci.errors import SpecError
 from kartci.logs import header, messages, msg
 from kartci.metrics.trajectory import ErrorStats, Trajectory, ape, associate
 from kartci.pointcloud import cloud_xyz, voxel_downsample, write_ply
+from kartci.project import Project
 from kartci.realdata.importer import import_log
 from kartci.realdata.lidardetect import (
     DetectAt,
@@ -162,7 +163,7 @@ def _check_streams(profile: Any, log: Path) -> None:
                         "or PointCloud2) topic")
 
 
-def replay_localization(log: Path, profile_path: Path | None, out: Path,
+def replay_localization(log: Path, profile_path: Path | None, out: Path, proj: Project,
                         detect: DetectAt | None = None, detect_map: str | None = None
                         ) -> LocReplay:
     """Replay `log` through the localization node open loop (see the module docstring); the
@@ -170,7 +171,7 @@ def replay_localization(log: Path, profile_path: Path | None, out: Path,
     detector at the log's poses or the estimate's (on `detect_map`, default none):
     OUT/detections.mcap."""
     t_wall = time.perf_counter()
-    profile, info = resolve_profile(log, profile_path, sensors=True)
+    profile, info = resolve_profile(log, profile_path, proj, sensors=True)
     _check_streams(profile, log)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:

@@ -12,12 +12,12 @@ from typing import Any
 
 from pydantic import Field, ValidationError, model_validator
 
-from kartci import project
 from kartci.core import Frozen
 from kartci.errors import SpecError
 from kartci.logs import LogReader, TopicInfo, topics
 from kartci.logs.poses import POSE_TYPES
 from kartci.metrics.alignment import Alignment
+from kartci.project import Project
 from kartci.realdata.tfchain import TF_TYPES
 from kartci.scenario.models import Criterion
 from kartci.scenario.yamlio import read_yaml
@@ -152,9 +152,9 @@ def _pose_types(role: PoseRole | None) -> tuple[str, ...]:
     return TF_TYPES if role is not None and role.is_tf else POSE_TYPES
 
 
-def load_profile(path: Path, allow_outside: bool = False) -> Profile:
+def load_profile(path: Path, proj: Project, allow_outside: bool = False) -> Profile:
     """A profile file, validated; a SpecError naming the file and the key otherwise. Its track
-    must lie inside the project or kartci's data, as a scenario's does, unless
+    must lie inside the project `proj` or kartci's data, as a scenario's does, unless
     `allow_outside`: the profile is the user's choice, the file it names may not be."""
     data = read_yaml(path)  # as scenario files are: a small regular file, no duplicate keys
     data.setdefault("name", re.sub(r"[^a-z0-9_]", "_", path.stem.lower()))
@@ -165,8 +165,7 @@ def load_profile(path: Path, allow_outside: bool = False) -> Profile:
         where = ".".join(str(p) for p in first["loc"]) or "(top)"
         raise SpecError(f"{path}: {where}: {first['msg']}") from err
     if profile.track is not None:  # relative to the profile file
-        track = project.current().contained(path.parent / profile.track, f"{path}: track",
-                                            allow_outside)
+        track = proj.contained(path.parent / profile.track, f"{path}: track", allow_outside)
         profile = profile.model_copy(update={"track": str(track)})
     return profile
 
@@ -235,13 +234,13 @@ def _check_distinct(log: Path, profile: Profile) -> None:
                         f"{source}: {why}")
 
 
-def resolve_profile(log: Path, path: Path | None, allow_outside: bool = False,
+def resolve_profile(log: Path, path: Path | None, proj: Project, allow_outside: bool = False,
                     reader: LogReader | None = None, sensors: bool = False
                     ) -> tuple[Profile, dict[str, TopicInfo]]:
     """The profile (from its file, else guessed from the log, its sensors too with `sensors`)
     and the log's topic per role; the log's topics are read once (from `reader` when the
     caller has the log open)."""
-    loaded = load_profile(path, allow_outside) if path is not None else None
+    loaded = load_profile(path, proj, allow_outside) if path is not None else None
     known = reader.topics() if reader is not None else topics(log)
     profile = loaded if loaded is not None else auto_profile(log, known, sensors)
     return profile, check_profile(log, profile, known)

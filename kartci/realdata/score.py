@@ -8,10 +8,10 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from kartci import project
 from kartci.core import RunFolder
 from kartci.logs import open_log
 from kartci.metrics.alignment import Alignment
+from kartci.project import Project
 from kartci.realdata.importer import import_log
 from kartci.realdata.profile import Profile, resolve_profile
 from kartci.realdata.runlog import write_result
@@ -19,7 +19,7 @@ from kartci.runner.run import evaluate
 from kartci.verdict.result import ScenarioResult
 
 
-def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
+def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path, proj: Project,
               allow_outside_paths: bool = False, align: Alignment | None = None,
               align_first: int | None = None, with_plots: bool = True,
               t_max_diff_s: float | None = None) -> ScenarioResult:
@@ -30,8 +30,8 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
     paths too (only an HTML report draws them). Bad input (profile, missing topics, a
     profile's track outside the project without `allow_outside_paths`) raises before anything
     is written. The project is looked up once (every registry lookup would read its file)."""
-    with project.held(), open_log(log) as reader:  # opened once: checked, then imported
-        profile, info = resolve_profile(log, profile_path, allow_outside_paths, reader)
+    with open_log(log) as reader:  # opened once: checked, then imported
+        profile, info = resolve_profile(log, profile_path, proj, allow_outside_paths, reader)
         update = {k: v for k, v in (("align", align), ("align_first", align_first),
                                     ("t_max_diff_s", t_max_diff_s)) if v is not None}
         profile = Profile.model_validate({**profile.model_dump(), **update})
@@ -40,21 +40,21 @@ def score_log(log: Path, profile_path: Path | None, out: Path, baselines: Path,
         write_result(folder, profile.name,
                      lambda dst: import_log(log, profile, types, dst, reader).warnings,
                      {"imported_from": str(log.resolve()), "profile": profile.name})
-        return evaluate(folder, baselines, with_plots)
+        return evaluate(folder, baselines, proj, with_plots)
 
 
 def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
                 overrides: Sequence[str], window_s: float, out: Path,
-                baselines: Path, allow_outside_paths: bool = False,
+                baselines: Path, proj: Project, allow_outside_paths: bool = False,
                 say: Callable[[str], None] = print) -> ScenarioResult:
     """The log's commands replayed into the sim (whole and windowed) into
     OUT/<profile name>_simreal/, scored for divergence and judged like a run. A scenario
     guessed from the log (none named) is told through `say`, with why, in one line."""
     from kartci.realdata import simreal  # start-up: the simulator and its scipy, not for score
 
-    profile, info = resolve_profile(log, profile_path, allow_outside_paths)
+    profile, info = resolve_profile(log, profile_path, proj, allow_outside_paths)
     types = {role: i.msgtype for role, i in info.items()}
-    setup = simreal.sim_setup(profile, scenario, overrides, types)
+    setup = simreal.sim_setup(profile, scenario, overrides, proj, types)
     if setup.picked:
         say(setup.picked)
     simreal.check_commands(setup, profile, types)
@@ -70,6 +70,6 @@ def simreal_log(log: Path, profile_path: Path | None, scenario: str | None,
                  {"imported_from": str(log.resolve()), "profile": profile.name,
                   "scenario": setup.scenario.name, "overrides": list(setup.overrides),
                   "window_s": window_s})
-    result = evaluate(folder, baselines)
+    result = evaluate(folder, baselines, proj)
     result.run["wall_s"] = round(time.perf_counter() - t0, 3)
     return result

@@ -17,6 +17,7 @@ from kartci.core import SimReal
 from kartci.errors import SpecError
 from kartci.logs import SCENARIO_TOPIC, McapLogWriter, messages, msg, open_log
 from kartci.logs.types import for_writing
+from kartci.project import Project
 from kartci.realdata.divergence import SIM_WHOLE, SIM_WINDOWS, run_whole, run_windows
 from kartci.realdata.drive import Drive, read_drive
 from kartci.realdata.importer import _odom, import_log, imported_scenario
@@ -80,7 +81,7 @@ def guess_scenario(profile: Profile, types: dict[str, str]) -> tuple[str, str]:
                              f"{topic} are {got}, {why} (--scenario to choose another)")
 
 
-def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str],
+def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str], proj: Project,
               types: dict[str, str] | None = None) -> SimSetup:
     """The scenario to simulate (given, else the profile's, else by the profile's robot kind,
     else guessed from the log's command type `types["commands"]` when `types` is given), with
@@ -94,7 +95,7 @@ def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str],
     if name is None:
         raise SpecError(f"profile {profile.name}: no scenario to simulate the log in; "
                         f"{_NAME_IT}")
-    base = load_scenario(name)
+    base = load_scenario(name, project=proj)
     if len(base.agents) != 1:
         raise SpecError(f"scenario {base.name}: simreal needs exactly one agent")
     agent = next(iter(base.agents))
@@ -104,7 +105,7 @@ def sim_setup(profile: Profile, scenario: str | None, overrides: Sequence[str],
     sets = [f"agents.{agent}.model.{key}={json.dumps(value)}"
             for key, value in (profile.robot or {}).items() if key != "kind"]
     sets += list(overrides)
-    spec = load_scenario(name, sets)
+    spec = load_scenario(name, sets, project=proj)
     model_kind = spec.agents[agent].model.kind
     if profile.commands is None:
         raise SpecError(f"profile {profile.name}: names no commands topic to replay")

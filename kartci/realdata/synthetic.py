@@ -15,6 +15,7 @@ import numpy as np
 from kartci import core
 from kartci.logs import McapLogWriter, header, messages, msg, open_log
 from kartci.logs.types import for_writing
+from kartci.project import Project
 from kartci.realdata.plant import diff_drive
 from kartci.realdata.profile import CommandRole
 from kartci.scenario import load_scenario
@@ -68,11 +69,12 @@ class Exciter:
 
 
 def synthetic_log(scenario: str, overrides: Sequence[str], duration_s: float, dst: Path,
-                  noise_m: float = 0.005, noise_rad: float = 0.003, seed: int = 0) -> Path:
+                  proj: Project, noise_m: float = 0.005, noise_rad: float = 0.003,
+                  seed: int = 0) -> Path:
     """Run `scenario` (one agent) with `overrides` (the changed parameters) under the exciter
     for `duration_s`, and write its log to `dst` with Gaussian noise on the odometry's pose
     (`noise_m` on x and y, `noise_rad` on yaw) and twist (a tenth of those, per second)."""
-    spec = load_scenario(scenario, [*overrides, f"duration_s={duration_s}"])
+    spec = load_scenario(scenario, [*overrides, f"duration_s={duration_s}"], project=proj)
     agent = next(iter(spec.agents))
     replay = core.ROBOTS.get(spec.agents[agent].model.kind).simreal
     diff = replay is not None and replay.wheel_speeds

@@ -9,8 +9,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from kartci import project
 from kartci.errors import KartciError
+from kartci.project import Project
 from kartci.report.tables import delta, num, regression_size
 from kartci.verdict import Status
 from kartci.verdict.result import ScenarioResult
@@ -51,15 +51,16 @@ def _escape(text: str, prop: bool = False) -> str:
     return text.replace(":", "%3A").replace(",", "%2C") if prop else text
 
 
-def scenario_files(results: list[ScenarioResult], root: Path | None = None) -> dict[str, str]:
-    """Each scenario's YAML file relative to `root` (the repository: $GITHUB_WORKSPACE, else the
-    working directory), for annotations anchored to it; a scenario found elsewhere (installed
-    with kartci) or not at all gets none."""
+def scenario_files(results: list[ScenarioResult], proj: Project, root: Path | None = None
+                   ) -> dict[str, str]:
+    """Each scenario's YAML file (found by name in `proj`) relative to `root` (the repository:
+    $GITHUB_WORKSPACE, else the working directory), for annotations anchored to it; a scenario
+    found elsewhere (installed with kartci) or not at all gets none."""
     base = (root or Path(os.environ.get("GITHUB_WORKSPACE") or Path.cwd())).resolve()
     out = {}
     for r in results:
         try:
-            path = project.current().find_scenario(r.name.split("@", 1)[0]).resolve()
+            path = proj.find_scenario(r.name.split("@", 1)[0]).resolve()
         except KartciError:
             continue
         if path.is_relative_to(base):

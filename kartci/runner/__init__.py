@@ -22,7 +22,6 @@ if TYPE_CHECKING:
     )
     from kartci.runner.kinds import ExecutorKind
     from kartci.runner.run import (
-        default_baselines,
         evaluate,
         rescore,
         run_one,
@@ -34,7 +33,7 @@ if TYPE_CHECKING:
 _WHERE = {"Event": "events", "EventKind": "events", "ExecutorKind": "kinds",
           "Job": "jobs", "Outcome": "jobs", "Refused": "jobs", "shard_labels": "jobs",
           "expand": "jobs", "parse_shard": "jobs", "runnable": "jobs",
-          "shard": "jobs", "default_baselines": "run",
+          "shard": "jobs",
           "evaluate": "run", "rescore": "run", "run_one": "run", "scenario_folders": "run",
           "score": "run", "refused_results": "suite", "run_jobs": "suite"}
 
@@ -48,6 +47,6 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = ["Event", "EventKind", "ExecutorKind", "Job", "Outcome", "Refused",
-           "default_baselines", "evaluate", "expand", "parse_shard", "refused_results",
+           "evaluate", "expand", "parse_shard", "refused_results",
            "rescore", "run_jobs", "run_one", "runnable", "scenario_folders", "score", "shard",
            "shard_labels"]

@@ -10,6 +10,7 @@ from pathlib import Path
 from kartci.core import RunFolder
 from kartci.errors import SpecError
 from kartci.plotting import overlay
+from kartci.project import Project
 from kartci.runner.jobs import REPEAT_PREFIX
 from kartci.runner.outdir import check_inside
 from kartci.runner.run import evaluate, scenario_folders
@@ -31,7 +32,7 @@ def samples(folder: RunFolder) -> Samples:
     return out
 
 
-def compare_outs(base_out: Path, head_out: Path, baselines: Path,
+def compare_outs(base_out: Path, head_out: Path, baselines: Path, proj: Project,
                  alpha: float = ALPHA) -> list[ScenarioResult]:
     """Head judged against base. Both must hold scored scenarios: an empty or unscorable side
     is bad input (exit 2), and a side whose run failed is an error for that scenario."""
@@ -47,15 +48,15 @@ def compare_outs(base_out: Path, head_out: Path, baselines: Path,
             hint = (f"run `kartci report {d}` to score its logs" if logged
                     else "run `kartci run` first")
             raise SpecError(f"{side} {d}: no scored scenario folders; {hint}")
-    return [_one(label, base.get(label), head.get(label), baselines, alpha)
+    return [_one(label, base.get(label), head.get(label), baselines, proj, alpha)
             for label in sorted(set(base) | set(head))]
 
 
-def _one(label: str, b: RunFolder | None, h: RunFolder | None, baselines: Path,
+def _one(label: str, b: RunFolder | None, h: RunFolder | None, baselines: Path, proj: Project,
          alpha: float) -> ScenarioResult:
     """A scenario in one run only: its metrics are all NEW (head) or MISSING (base)."""
-    hr = evaluate(h, baselines) if h is not None else None
-    br = evaluate(b, baselines) if b is not None else None
+    hr = evaluate(h, baselines, proj) if h is not None else None
+    br = evaluate(b, baselines, proj) if b is not None else None
     for side, r in (("head", hr), ("base", br)):
         if r is not None and r.error:
             return ScenarioResult(label, r.description, error=f"{side}: {r.error}")

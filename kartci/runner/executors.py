@@ -241,7 +241,7 @@ def in_pinned_child(jobs: Sequence[Job], ctx: Context, emit: Listener,
     a pinned `kartci run` would, its own workers included): this process was not started
     pinned, and a multiprocessing child would import its `__main__` again. Progress is not
     relayed; each outcome is announced when the child is done."""
-    for outcome in call_pinned(outcomes, list(jobs), ctx, workers):
+    for outcome in call_pinned(ctx.project, outcomes, list(jobs), ctx, workers):
         emit(Event(EventKind.FINISHED, outcome.job.folder, outcome=outcome))
         yield outcome
 

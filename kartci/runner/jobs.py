@@ -23,10 +23,10 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from kartci import project
 from kartci.core import RunFolder
 from kartci.errors import PluginError, RunError, SpecError, one_line
 from kartci.plotting import Plots
+from kartci.project import Project, held
 from kartci.runner.gate import require_baselines
 from kartci.runner.run import (
     check_criteria_names,
@@ -126,6 +126,7 @@ class Context:
 
     out: Path
     baselines: Path
+    project: Project  # the parent's: workers import its plugins and judge by its policy
     timeout_s: float | None = None
     strict: bool = False  # a missing baseline or baseline metric fails (see runner.gate)
     # draws the judged run's figures where it was judged: in a worker with -j N, so drawing
@@ -164,31 +165,31 @@ def plugin_failure(err: BaseException) -> PluginError | None:
     return seen
 
 
-def runnable(names: list[str], overrides: list[str], *, allow_outside_paths: bool = False
-             ) -> tuple[list[str], list[Refused]]:
+def runnable(names: list[str], overrides: list[str], proj: Project, *,
+             allow_outside_paths: bool = False) -> tuple[list[str], list[Refused]]:
     """The scenarios that can run, and those refused because a plugin they name failed to
     load; any other problem is bad input that stops everything, as in `expand`."""
     keep: list[str] = []
     refused: list[Refused] = []
-    with project.held():
-        for name in names:
-            try:
-                load_scenario(name, overrides, allow_outside_paths=allow_outside_paths)
-            except SpecError as err:
-                cause = plugin_failure(err)
-                if cause is None:
-                    raise
-                stem = Path(name).stem if name.endswith((".yaml", ".yml")) else name
-                refused.append(Refused(_safe(stem + _variant(overrides, [])),
-                                       PluginError(str(err), cause.trace)))
-                continue
-            keep.append(name)
+    for name in names:
+        try:
+            load_scenario(name, overrides, project=proj,
+                          allow_outside_paths=allow_outside_paths)
+        except SpecError as err:
+            cause = plugin_failure(err)
+            if cause is None:
+                raise
+            stem = Path(name).stem if name.endswith((".yaml", ".yml")) else name
+            refused.append(Refused(_safe(stem + _variant(overrides, [])),
+                                   PluginError(str(err), cause.trace)))
+            continue
+        keep.append(name)
     return keep, refused
 
 
-def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = None,
-           repeat: int = 1, vary: Vary = Vary.SEED, progress: Progress | None = None, *,
-           allow_outside_paths: bool = False) -> list[Job]:
+def expand(names: list[str], overrides: list[str], proj: Project,
+           sweeps: list[str] | None = None, repeat: int = 1, vary: Vary = Vary.SEED,
+           progress: Progress | None = None, *, allow_outside_paths: bool = False) -> list[Job]:
     """Every job of a run, all validated before anything runs (bad input stops everything);
     data files resolved once here, so workers never look a path up again.
 
@@ -197,21 +198,22 @@ def expand(names: list[str], overrides: list[str], sweeps: list[str] | None = No
     if repeat < 1:
         raise SpecError(f"--repeat {repeat}: expected 1 or more")
     axes = [parse_sweep(s) for s in sweeps or []]
-    with project.held():
-        grids = [(name, axes or [(k, [str(v) for v in vs]) for k, vs in
-                                 load_scenario(name, overrides, allow_outside_paths=
-                                               allow_outside_paths).sweep.items()])
-                 for name in names]
-        total = sum(_checked_size(name, grid) for name, grid in grids)
-        if total * repeat > MAX_RUNS:  # each replica is a run of its own
-            raise SpecError(f"{total:,} runs x {repeat:,} replicas = {total * repeat:,} runs, "
-                            f"more than the {MAX_RUNS:,} allowed; split the command")
-        jobs = _points(grids, overrides, repeat, vary, (total, progress), allow_outside_paths)
-    check_criteria_names([j.spec for j in jobs if j.repeat == 0])
+    grids = [(name, axes or [(k, [str(v) for v in vs]) for k, vs in
+                             load_scenario(name, overrides, project=proj,
+                                           allow_outside_paths=
+                                           allow_outside_paths).sweep.items()])
+             for name in names]
+    total = sum(_checked_size(name, grid) for name, grid in grids)
+    if total * repeat > MAX_RUNS:  # each replica is a run of its own
+        raise SpecError(f"{total:,} runs x {repeat:,} replicas = {total * repeat:,} runs, "
+                        f"more than the {MAX_RUNS:,} allowed; split the command")
+    jobs = _points(grids, overrides, proj, repeat, vary, (total, progress),
+                   allow_outside_paths)
+    check_criteria_names([j.spec for j in jobs if j.repeat == 0], proj)
     return jobs
 
 
-def _points(grids: list[tuple[str, Grid]], overrides: list[str],
+def _points(grids: list[tuple[str, Grid]], overrides: list[str], proj: Project,
             repeat: int, vary: Vary, report: tuple[int, Progress | None],
             allow_outside_paths: bool) -> list[Job]:
     """The jobs of every grid point, each validated as it comes (a duplicate label is found
@@ -220,7 +222,7 @@ def _points(grids: list[tuple[str, Grid]], overrides: list[str],
     labels: set[str] = set()
     done, (total, progress) = 0, report
     for name, grid in grids:
-        load = scenario_loader(name, allow_outside_paths=allow_outside_paths)
+        load = scenario_loader(name, project=proj, allow_outside_paths=allow_outside_paths)
         for point in itertools.product(*[[(k, v) for v in values] for k, values in grid]):
             spec = load([*overrides, *(f"{k}={v}" for k, v in point)])
             label = point_label(spec.name, overrides, list(point))
@@ -258,16 +260,17 @@ def _checked_size(name: str, grid: Grid) -> int:
     return count
 
 
-def default_suite(paths: list[Path], allow_outside_paths: bool = False) -> list[str]:
+def default_suite(paths: list[Path], proj: Project, allow_outside_paths: bool = False
+                  ) -> list[str]:
     """The scenarios a plain `kartci run` runs: all but `tool` ones and grids (a scenario with
     its own sweep), which run by name; one that names a plugin that failed to load is kept
     (it is reported as failed, see `runnable`)."""
-    return [p.stem for p in paths if _in_default_suite(p.stem, allow_outside_paths)]
+    return [p.stem for p in paths if _in_default_suite(p.stem, proj, allow_outside_paths)]
 
 
-def _in_default_suite(name: str, allow_outside_paths: bool) -> bool:
+def _in_default_suite(name: str, proj: Project, allow_outside_paths: bool) -> bool:
     try:
-        spec = load_scenario(name, allow_outside_paths=allow_outside_paths)
+        spec = load_scenario(name, project=proj, allow_outside_paths=allow_outside_paths)
     except SpecError as err:
         if plugin_failure(err) is None:
             raise
@@ -346,7 +349,14 @@ def wall_clock_limit(limit_s: float | None, where: Callable[[], str]) -> Iterato
 
 def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
     """Simulate, score and (for the judged run) evaluate one job; never raises for a failed run,
-    so one crashing scenario cannot take the others down. Runs in any process."""
+    so one crashing scenario cannot take the others down. Runs in any process, in the project
+    `ctx` carries (whose plugins the registries load: a worker's own working directory may be
+    another project's, or none)."""
+    with held(ctx.project):
+        return _run_job(job, ctx, report)
+
+
+def _run_job(job: Job, ctx: Context, report: Report | None) -> Outcome:
     start = time.perf_counter()
     sim_t = [0.0, 0.0]  # the sim time reached, and when it was last reported, s
 
@@ -370,7 +380,7 @@ def run_job(job: Job, ctx: Context, report: Report | None = None) -> Outcome:
         return Outcome.failed(job, one_line(failure_text(err)))  # must not end the suite
     if job.repeat != 0:
         return Outcome(job, None, None, run, time.perf_counter() - start)
-    result = evaluate(folder, ctx.baselines)
+    result = evaluate(folder, ctx.baselines, ctx.project)
     if result.plots is not None and ctx.draw is not None:
         result = replace(result, static_figures=ctx.draw(result.plots))
     if ctx.strict:

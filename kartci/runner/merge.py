@@ -13,6 +13,7 @@ from pathlib import Path
 
 from kartci.core import UNFINISHED, RunFolder
 from kartci.errors import SpecError
+from kartci.project import Project
 from kartci.runner.gate import require_baselines
 from kartci.runner.outdir import check_inside, valid_label
 from kartci.runner.run import evaluate, scenario_folders
@@ -107,13 +108,13 @@ def _check_tree(src: Path) -> None:
                             "refusing to merge it")
 
 
-def merge(dirs: list[Path], out: Path, baselines: Path,
+def merge(dirs: list[Path], out: Path, baselines: Path, proj: Project,
           strict: bool = False) -> list[ScenarioResult]:
     """Copy every shard's scenario folders into OUT and judge them as one run would. Labels
     and folders are checked first (shard artifacts are untrusted); nothing is written outside
     OUT, and a folder is replaced only by a complete copy. Until then, OUT's older folder of
     each label is marked unfinished: an interrupted merge leaves none passing as merged."""
-    check_allowed()
+    check_allowed(proj)
     sources = _sources(dirs)
     for src in sources.values():
         if src is not None:
@@ -135,7 +136,7 @@ def merge(dirs: list[Path], out: Path, baselines: Path,
             raise SpecError(f"{label}: would be written outside {out}")
         if src.resolve() != dst.path.resolve():
             _replace_tree(src, dst.path)
-        result = evaluate(dst, baselines)
+        result = evaluate(dst, baselines, proj)
         results.append(require_baselines(result, out, baselines) if strict else result)
     write_marker(out, None, None, [])
     return results

@@ -24,6 +24,7 @@ from typing import Any, TypeVar
 
 from kartci import portable, project
 from kartci.errors import RunError
+from kartci.project import Project
 
 T = TypeVar("T")
 
@@ -41,10 +42,11 @@ class NotPortable(Exception):  # noqa: N818  (not an error of the work: the call
     which the child by design does not import): the caller does it in its own process."""
 
 
-def call_pinned(fn: Callable[..., T], *args: Any) -> T:
-    """`fn(*args)` in a fresh pinned child process; its exception is raised here as it was
+def call_pinned(proj: Project | None, fn: Callable[..., T], *args: Any) -> T:
+    """`fn(*args)` in a fresh pinned child process, in the project `proj` (whose plugins it
+    imports; None: the child's working directory's); its exception is raised here as it was
     raised there. NotPortable when the child cannot load `fn` or `args`."""
-    request = pickle.dumps((list(sys.path), project.current(), pickle.dumps((fn, args))))
+    request = pickle.dumps((list(sys.path), proj, pickle.dumps((fn, args))))
     read_end, write_end = os.pipe()
     env = portable.pinned_env(os.environ)
     try:

@@ -19,12 +19,13 @@ from typing import Any
 
 import pandas as pd
 
-from kartci import core, metrics, portable, project
+from kartci import core, metrics, portable
 from kartci.core import UNFINISHED, RunFolder
 from kartci.errors import KartciError, LogError, SpecError, did_you_mean, one_line
 from kartci.logs import SCENARIO_TOPIC, tables
 from kartci.logs.recorded import COMMANDS, JOY, Recorded
 from kartci.plotting import PlotContext, Plots
+from kartci.project import Project
 from kartci.runner.outdir import check_inside, manifest_labels
 from kartci.runner.pinned import NotPortable, call_pinned
 from kartci.scenario import Scenario
@@ -35,11 +36,6 @@ from kartci.verdict import Baseline, read_baseline, write_json_atomic
 from kartci.verdict.judging import check_allowed, judge_folder
 from kartci.verdict.result import ScenarioResult
 from kartci.verdict.trace import load_trace, trace_path
-
-
-def default_baselines() -> Path:
-    """The active project's baselines folder."""
-    return project.current().baselines
 
 
 def failure_text(err: BaseException) -> str:
@@ -92,7 +88,7 @@ def run_pinned(scenario: Scenario, out: Path, folder: RunFolder,
     if agents or portable.state() is not portable.Pin.UNPINNED:
         return run_one(scenario, out, None, folder, agents)
     try:
-        return call_pinned(run_one, scenario, out, None, folder)
+        return call_pinned(scenario.project, run_one, scenario, out, None, folder)
     except NotPortable:
         return run_one(scenario, out, None, folder)
 
@@ -205,8 +201,10 @@ def check_finished(out: Path, labels: list[str]) -> None:
                         " again")
 
 
-def evaluate(folder: RunFolder, baselines: Path, with_plots: bool = True) -> ScenarioResult:
-    """Judge one scenario folder (metrics.json + log) against its baseline and criteria.
+def evaluate(folder: RunFolder, baselines: Path, proj: Project, with_plots: bool = True
+             ) -> ScenarioResult:
+    """Judge one scenario folder (metrics.json + log) against its baseline in `baselines` and
+    its criteria, by `proj`'s tolerance policy.
 
     A folder that cannot be judged (log, metrics or plots unreadable) is marked failed, so that
     nothing promotes or compares its outputs later; a bad baseline file is the baseline's fault
@@ -221,7 +219,7 @@ def evaluate(folder: RunFolder, baselines: Path, with_plots: bool = True) -> Sce
     except KartciError as err:
         return ScenarioResult(name, "", error=str(err))
     try:
-        return _judge(folder, baseline, with_plots, reference)
+        return _judge(folder, baseline, proj, with_plots, reference)
     except Exception as err:  # this scenario only: the others are still judged
         error = str(err) if isinstance(err, KartciError) else (
             f"cannot judge {name}: {type(err).__name__}: {err}")
@@ -230,10 +228,10 @@ def evaluate(folder: RunFolder, baselines: Path, with_plots: bool = True) -> Sce
         return ScenarioResult(name, "", error=one_line(error))
 
 
-def _judge(folder: RunFolder, baseline: Baseline | None, with_plots: bool,
+def _judge(folder: RunFolder, baseline: Baseline | None, proj: Project, with_plots: bool,
            reference: dict[str, pd.DataFrame]) -> ScenarioResult:
     scenario, _ = _recorded(folder)
-    result = judge_folder(folder, scenario, baseline)
+    result = judge_folder(folder, scenario, baseline, proj)
     drawn = plots(folder, scenario) if with_plots else None
     if drawn is not None:
         drawn = replace(drawn, reference=reference)
@@ -251,10 +249,10 @@ def _recorded(folder: RunFolder) -> tuple[Scenario, dict[str, pd.DataFrame]]:
     return metrics.recorded_scenario(t, log), t
 
 
-def check_criteria_names(specs: list[Scenario]) -> None:
-    """Criteria must name known metrics, and so must the project's allowed loose tolerances
+def check_criteria_names(specs: list[Scenario], proj: Project) -> None:
+    """Criteria must name known metrics, and so must `proj`'s allowed loose tolerances
     (check_allowed): a typo is bad input, found before anything runs."""
-    check_allowed()
+    check_allowed(proj)
     defs = metrics.definitions()
     for spec in specs:
         unknown = sorted(
@@ -276,7 +274,7 @@ def scenario_folders(out: Path) -> list[RunFolder]:
          for p in out.glob(pattern)})]
 
 
-def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:
+def rescore(out: Path, baselines: Path, proj: Project) -> list[ScenarioResult]:
     """Recompute every scenario's metrics from its log alone and judge them again: those of the
     last run in OUT (its manifest), else every folder with a log, metrics or a failure mark.
     Each gets a result: one whose log is gone or damaged is an error, its folder marked."""
@@ -287,13 +285,13 @@ def rescore(out: Path, baselines: Path) -> list[ScenarioResult]:
     if not names:
         raise LogError(f"{out}: no <scenario>/{RunFolder.LOG_NAME} logs found")
     check_inside(out, names)
-    check_allowed()
-    return [_rescore_one(RunFolder(out / name), baselines) for name in sorted(names)]
+    check_allowed(proj)
+    return [_rescore_one(RunFolder(out / name), baselines, proj) for name in sorted(names)]
 
 
-def _rescore_one(folder: RunFolder, baselines: Path) -> ScenarioResult:
+def _rescore_one(folder: RunFolder, baselines: Path, proj: Project) -> ScenarioResult:
     if folder.failed_reason() is not None:
-        return evaluate(folder, baselines)
+        return evaluate(folder, baselines, proj)
     if not folder.path.is_dir():
         return ScenarioResult(folder.name, "",
                               error=f"{folder.path}: the scenario folder is missing")
@@ -306,4 +304,4 @@ def _rescore_one(folder: RunFolder, baselines: Path) -> ScenarioResult:
         error = str(err) if isinstance(err, KartciError) else f"{type(err).__name__}: {err}"
         folder.mark_failed(folder.name, error, err)
         return ScenarioResult(folder.name, "", error=one_line(error))
-    return evaluate(folder, baselines)
+    return evaluate(folder, baselines, proj)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from kartci.atomic import write_text_atomic
 from kartci.core import UNFINISHED, RunFolder
+from kartci.project import Project
 from kartci.runner import conditioning, costs
 from kartci.runner.events import Event, Listener
 from kartci.runner.executors import Warm, execute
@@ -19,7 +20,7 @@ def _ignore(_: Event) -> None:
     pass
 
 
-def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
+def run_jobs(jobs: list[Job], out: Path, baselines: Path, proj: Project, *, workers: int = 1,
              executor: ExecutorKind = ExecutorKind.LOCAL, ray_address: str | None = None,
              timeout_s: float | None = None, strict: bool = False,
              on_event: Listener | None = None, draw: Draw | None = None,
@@ -38,7 +39,7 @@ def run_jobs(jobs: list[Job], out: Path, baselines: Path, *, workers: int = 1,
         folder = RunFolder(out / job.folder)
         if folder.path.is_dir():
             folder.mark_failed(job.spec.name, UNFINISHED)
-    ctx = Context(out, baselines, timeout_s, strict, draw)
+    ctx = Context(out, baselines, proj, timeout_s, strict, draw)
     outcomes: dict[str, Outcome] = {}
     for outcome in execute(costs.order(jobs), ctx, emit, workers, executor, ray_address, warm):
         outcomes[outcome.job.folder] = outcome

@@ -2,9 +2,9 @@
 
 from kartci.scenario.load import (
     ScenarioEntry,
+    in_project,
     json_schema,
     load_scenario,
-    project_root,
     scenario_catalogue,
     scenario_from_json,
     scenario_names,
@@ -17,9 +17,9 @@ __all__ = [
     "Criterion",
     "Scenario",
     "ScenarioEntry",
+    "in_project",
     "json_schema",
     "load_scenario",
-    "project_root",
     "scenario_catalogue",
     "scenario_from_json",
     "scenario_names",

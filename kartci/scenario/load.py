@@ -14,9 +14,9 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ValidationError
 
-from kartci import core, project
+from kartci import core
 from kartci.errors import KartciError, SpecError, did_you_mean
-from kartci.project import Origin
+from kartci.project import Origin, Project, held
 from kartci.scenario.dispatch import ParamsError, context, dispatch, with_allowed_keys
 from kartci.scenario.models import Scenario, WorldParams, unit_of
 from kartci.scenario.schema import scenario_schema
@@ -25,14 +25,9 @@ from kartci.scenario.yamlio import Mark, clip, parse_value, preview, read_yaml_m
 Marks = dict[str, Mark]  # dotted key -> where it was written (yamlio.read_yaml_marked)
 
 
-def project_root() -> Path:
-    """The active project's root folder (see `kartci.project`)."""
-    return project.current().root
-
-
-def scenario_names() -> list[str]:
+def scenario_names(proj: Project) -> list[str]:
     """Every scenario reachable by name: the project's own, then the built-in ones."""
-    return list(project.current().all_scenarios())
+    return list(proj.all_scenarios())
 
 
 @dataclass(frozen=True)
@@ -47,10 +42,9 @@ class ScenarioEntry:
     error: str | None = None
 
 
-def scenario_catalogue() -> list[ScenarioEntry]:
+def scenario_catalogue(proj: Project) -> list[ScenarioEntry]:
     """Every scenario reachable by name, each loaded and validated; a bad file is an entry
     with its error, not an exception, so one broken file hides no other."""
-    proj = project.current()
     out = []
     for name, path in proj.all_scenarios().items():
         origin = proj.origin_of(path)
@@ -59,7 +53,7 @@ def scenario_catalogue() -> list[ScenarioEntry]:
                                      error=f"{path}: broken link (to {path.readlink()})"))
             continue
         try:
-            spec = load_scenario(name)
+            spec = load_scenario(name, project=proj)
         except KartciError as err:
             out.append(ScenarioEntry(name, path, origin, error=str(err)))
         except Exception as err:  # a kartci bug: still one line, and the others are listed
@@ -92,18 +86,18 @@ def _forget(marks: Marks, key: str, keep: tuple[str, ...] = ()) -> None:
         del marks[k]
 
 
-def scenario_path(name: str | Path) -> Path:
+def scenario_path(name: str | Path, proj: Project) -> Path:
     """A scenario by name (on the project's scenario path) or by path to a YAML file."""
     if isinstance(name, Path) or name.endswith((".yaml", ".yml")) or "/" in name:
         return Path(name)
-    return project.current().find_scenario(name)
+    return proj.find_scenario(name)
 
 
-def _resolve_refs(data: dict[str, Any], path: Path, allow_outside: bool, marks: Marks) -> None:
+def _resolve_refs(data: dict[str, Any], path: Path, proj: Project, allow_outside: bool,
+                  marks: Marks) -> None:
     """World and model names become their files' contents; data files named inside them become
     absolute paths found on the project's search path (never outside it, nor outside the
     project and kartci's data through an absolute path or a symlink, unless `allow_outside`)."""
-    proj = project.current()
     _resolve_world(data, proj, allow_outside, marks)
     agents = data.get("agents")
     if not isinstance(agents, dict):
@@ -114,7 +108,7 @@ def _resolve_refs(data: dict[str, Any], path: Path, allow_outside: bool, marks: 
             _check_urdf(agent, f"agents.{clip(str(name), 80)}", proj, allow_outside)
 
 
-def _resolve_world(data: dict[str, Any], proj: project.Project, allow_outside: bool,
+def _resolve_world(data: dict[str, Any], proj: Project, allow_outside: bool,
                    marks: Marks) -> None:
     """`world: <name>` or `world: {from: <name>, ...}` becomes the world file's keys (with those
     given replacing its own), and a relative track file its path on the search path."""
@@ -136,11 +130,10 @@ def _resolve_world(data: dict[str, Any], proj: project.Project, allow_outside: b
                 world["track"] = str(proj.world_file(track, allow_outside))
 
 
-def load_world(name: str, registries: core.Registries = core.DEFAULT_REGISTRIES
-               ) -> tuple[WorldParams, Path]:
-    """A world file by name on the project's search path (`winti/hall`), validated by its
-    world kind (looked up in `registries`), and where the file is."""
-    proj = project.current()
+def load_world(name: str, proj: Project,
+               registries: core.Registries = core.DEFAULT_REGISTRIES) -> tuple[WorldParams, Path]:
+    """A world file by name on `proj`'s search path (`winti/hall`), validated by its world
+    kind (looked up in `registries`), and where the file is."""
     path = proj.find_world(name)
     data: dict[str, Any] = {"world": name}
     _resolve_world(data, proj, allow_outside=False, marks={})
@@ -149,7 +142,7 @@ def load_world(name: str, registries: core.Registries = core.DEFAULT_REGISTRIES
     return world, path
 
 
-def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path,
+def _resolve_agent(agent: dict[str, Any], proj: Project, path: Path,
                    allow_outside: bool, marked: tuple[Marks, str]) -> None:
     """`model: <name>` becomes the model's parameters (its URDF a path on the search path), and
     a controller's relative source log a path relative to the scenario file at `path`."""
@@ -173,7 +166,7 @@ def _resolve_agent(agent: dict[str, Any], proj: project.Project, path: Path,
             source["log"] = str((path.parent / log).resolve())
 
 
-def _check_urdf(agent: dict[str, Any], where: str, proj: project.Project,
+def _check_urdf(agent: dict[str, Any], where: str, proj: Project,
                 allow_outside: bool) -> None:
     """An absolute URDF path (in a model file, inline, or from `--set`) must stay inside the
     project and kartci's data; a relative one is looked up on the model path when it runs."""
@@ -183,7 +176,7 @@ def _check_urdf(agent: dict[str, Any], where: str, proj: project.Project,
         proj.contained(Path(urdf), f"{where}.model.urdf", allow_outside)
 
 
-def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str],
+def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str], proj: Project,
                                 allow_outside: bool) -> None:
     """A data path given with `--set` may name a file relative to the working directory, as a
     user typing it expects, inside the project or kartci's data (anywhere with
@@ -194,23 +187,22 @@ def _resolve_command_line_paths(data: dict[str, Any], overrides: list[str],
         track = Path(world["track"])
         if not track.is_absolute():
             if keys & {"world.track", "world"} and track.is_file():
-                world["track"] = str(project.current().contained(track, "world.track",
-                                                                 allow_outside))
+                world["track"] = str(proj.contained(track, "world.track", allow_outside))
             else:  # raises: not on the search path
-                project.current().world_file(str(track), allow_outside)
+                proj.world_file(str(track), allow_outside)
     agents = data.get("agents")
     for name, agent in agents.items() if isinstance(agents, dict) else ():
         if isinstance(agent, dict):
-            _check_run_time_files(agent, f"agents.{clip(str(name), 80)}", allow_outside)
+            _check_run_time_files(agent, f"agents.{clip(str(name), 80)}", proj, allow_outside)
 
 
-def _check_run_time_files(agent: dict[str, Any], where: str, allow_outside: bool) -> None:
+def _check_run_time_files(agent: dict[str, Any], where: str, proj: Project,
+                          allow_outside: bool) -> None:
     """Files an agent reads when it runs (its controller's source log and joystick mapping,
     a node's map) become absolute paths checked here, where `allow_outside` is known, as
     world.track is: a worker then reads only what passed. A log typed on the command line
     (`kartci replay LOG`, `score`, `extract`) is the user's explicit choice and is not checked;
     it does not come through here."""
-    proj = project.current()
     controller = agent.get("controller")
     if isinstance(controller, dict):
         source = controller.get("source")
@@ -234,7 +226,7 @@ def _check_run_time_files(agent: dict[str, Any], where: str, allow_outside: bool
                                 else proj.world_file(str(given), allow_outside))
 
 
-def _mapping(value: str, kind: Any, what: str, proj: project.Project,
+def _mapping(value: str, kind: Any, what: str, proj: Project,
              allow_outside: bool) -> str:
     """A joystick mapping given by path (ending in .yaml / .yml or holding a separator) as its
     absolute, checked path; a name stays a name (it reads better in `kartci show`), its file
@@ -406,7 +398,7 @@ def _did_you_mean_key(error: dict[str, Any]) -> str:
     return did_you_mean(str(error["loc"][-1]), allowed)
 
 
-def load_scenario(name: str | Path, overrides: Sequence[str] | None = None, *,
+def load_scenario(name: str | Path, overrides: Sequence[str] | None = None, *, project: Project,
                   allow_outside_paths: bool = False,
                   registries: core.Registries = core.DEFAULT_REGISTRIES) -> Scenario:
     """Load and validate a scenario; every problem becomes one SpecError line.
@@ -415,62 +407,85 @@ def load_scenario(name: str | Path, overrides: Sequence[str] | None = None, *,
         name: A scenario name on the project's scenario path (`line_straight`), or the path of
             a YAML file (a `Path`, or a string ending in `.yaml` / `.yml` or holding a `/`).
         overrides: `dotted.key=value` assignments applied before validation, as `--set`.
+        project: The project whose folders its names are looked up in (handed in by the entry
+            point: the CLI, `kartci.api`, the pytest plugin); the scenario carries it.
         allow_outside_paths: Let track, world and model files (and the scenario's file when
             found by name) lie outside the project and kartci's data (`--allow-outside-paths`).
         registries: The controllers, robot kinds, world kinds, nodes and metric sets its names
             are looked up in (default: the process-wide ones, with every installed plugin).
     """
-    return scenario_loader(name, allow_outside_paths=allow_outside_paths,
+    return scenario_loader(name, project=project, allow_outside_paths=allow_outside_paths,
                            registries=registries)(overrides or ())
 
 
-def scenario_loader(name: str | Path, *, allow_outside_paths: bool = False,
+def scenario_loader(name: str | Path, *, project: Project, allow_outside_paths: bool = False,
                     registries: core.Registries = core.DEFAULT_REGISTRIES
                     ) -> Callable[[Sequence[str]], Scenario]:
     """`load_scenario(name, overrides)` for many override sets (a sweep's points): the file
     and the world and model files it names are read once, not once per point."""
-    path = scenario_path(name)
+    path = scenario_path(name, project)
     if path != Path(name):  # found by name in a scenario folder: maybe a symlink out of it
-        project.current().contained(path, f"scenario {clip(str(name), 80)!r}",
-                                    allow_outside_paths)
+        project.contained(path, f"scenario {clip(str(name), 80)!r}", allow_outside_paths)
     marks: Marks = {}
     data = _read_yaml(path, marks)
     data.setdefault("name", path.stem)
     # what _validated does first: a no-op again
-    _resolve_refs(data, path, allow_outside_paths, marks)
+    _resolve_refs(data, path, project, allow_outside_paths, marks)
 
     def load(overrides: Sequence[str]) -> Scenario:
-        return _validated(copy.deepcopy(data), path, list(overrides), allow_outside_paths,
-                          dict(marks), registries)
+        return _validated(copy.deepcopy(data), path, list(overrides), project,
+                          allow_outside_paths, dict(marks), registries)
 
     return load
 
 
-def with_overrides(scenario: Scenario, overrides: Sequence[str], *,
+def with_overrides(scenario: Scenario, overrides: Sequence[str], *, project: Project,
                    allow_outside_paths: bool = False,
                    registries: core.Registries = core.DEFAULT_REGISTRIES) -> Scenario:
-    """A validated scenario with `dotted.key=value` overrides applied (validated again);
-    a relative log path in an override is relative to the working directory."""
+    """A validated scenario with `dotted.key=value` overrides applied (validated again), in
+    `project` (`in_project`); a relative log path in an override is relative to the working
+    directory."""
     if not overrides:
-        return scenario
+        return in_project(scenario, project, allow_outside_paths)
     data = json.loads(scenario.model_dump_json())
-    return _validated(data, Path(f"scenario {scenario.name}"), list(overrides),
+    return _validated(data, Path(f"scenario {scenario.name}"), list(overrides), project,
                       allow_outside_paths, {}, registries)
 
 
-def _validated(data: dict[str, Any], path: Path, overrides: list[str],
+def in_project(scenario: Scenario, proj: Project, allow_outside: bool = False) -> Scenario:
+    """`scenario` carrying `proj` (`Scenario.project`: where its controllers find their data
+    files), with each robot's URDF named relative to `<kind>/` (a kind's default, an inline
+    model's) made its path on `proj`'s model path: resolved here, where the project is known,
+    so no simulator or worker looks a path up again. A URDF not found stays as given (a robot
+    that is never simulated needs none; one that is names it when it is built)."""
+    agents = dict(scenario.agents)
+    for name, agent in scenario.agents.items():
+        urdf = agent.model.urdf
+        if urdf and not Path(urdf).is_absolute():
+            with contextlib.suppress(SpecError):
+                found = proj.model_file(f"{agent.model.kind}/{urdf}", allow_outside)
+                model = agent.model.model_copy(update={"urdf": str(found)})
+                agents[name] = agent.model_copy(update={"model": model})
+    out = scenario.model_copy(update={"agents": agents}) if agents != scenario.agents else (
+        scenario.model_copy())
+    out.attach(proj)
+    return out
+
+
+def _validated(data: dict[str, Any], path: Path, overrides: list[str], proj: Project,
                allow_outside: bool, marks: Marks, registries: core.Registries) -> Scenario:
-    """`data` with the overrides applied, validated; `marks` (where each key was written) name
-    the file and line of a bad value."""
-    _resolve_refs(data, path, allow_outside, marks)
+    """`data` with the overrides applied, validated, in `proj`; `marks` (where each key was
+    written) name the file and line of a bad value."""
+    _resolve_refs(data, path, proj, allow_outside, marks)
     for assignment in overrides:
         apply_override(data, assignment)
         _forget(marks, assignment.partition("=")[0].strip())  # what it replaced
         # `--set world=line_lab/circle` names a file
-        _resolve_refs(data, path, allow_outside, marks)
-    _resolve_command_line_paths(data, overrides, allow_outside)
+        _resolve_refs(data, path, proj, allow_outside, marks)
+    _resolve_command_line_paths(data, overrides, proj, allow_outside)
     try:
-        return Scenario.model_validate(data, context=context(registries))
+        with held(proj):  # a name the registries lack is looked up in `proj`'s plugins
+            scenario = Scenario.model_validate(data, context=context(registries))
     except ParamsError as err:
         raise SpecError(_one_line(err.errors, path, overrides, marks, registries,
                                   err.loc)) from err
@@ -479,6 +494,7 @@ def _validated(data: dict[str, Any], path: Path, overrides: list[str],
                                   marks, registries)) from err
     except (ArithmeticError, RecursionError) as err:  # a validator's arithmetic on odd values
         raise SpecError(f"{path}: a value is out of range ({clip(str(err))})") from err
+    return in_project(scenario, proj, allow_outside)
 
 
 def scenario_from_json(text: str, registries: core.Registries = core.DEFAULT_REGISTRIES

@@ -8,6 +8,7 @@ from typing import Any
 
 from pydantic import (
     Field,
+    PrivateAttr,
     SerializeAsAny,
     ValidationInfo,
     field_validator,
@@ -23,6 +24,7 @@ from kartci.core.params import MetricParams as MetricParams
 from kartci.core.params import NodeParams as NodeParams
 from kartci.core.params import RobotParams as RobotParams
 from kartci.core.params import WorldParams as WorldParams
+from kartci.project import Project
 from kartci.scenario.dispatch import dispatch, registries_of
 from kartci.scenario.yamlio import preview
 
@@ -159,6 +161,25 @@ class Scenario(Frozen):
         {}, description="a grid: `dotted.key: [values]`, one run per combination when the "
         "scenario is run by name without `--sweep` (each point judged against its own baseline, "
         "`<scenario>@<key>=<value>`); a scenario with a sweep stays out of a plain `kartci run`")
+    # the project it was loaded in (`kartci.scenario.load.in_project`): not part of the
+    # scenario's value (never dumped, hashed or recorded), but carried with it to every process
+    _project: Project | None = PrivateAttr(None)
+
+    @property
+    def project(self) -> Project | None:
+        """The project the scenario was loaded in, whose folders its controllers and nodes
+        find their data files in; None for one built by hand (kartci's own data only)."""
+        return self._project
+
+    def attach(self, project: Project) -> None:
+        """Carry `project` (see `project`): done once, by the loader, to a fresh copy."""
+        self._project = project
+
+    def __eq__(self, other: object) -> bool:
+        """Equal values are equal scenarios, whichever project each was loaded in."""
+        if not isinstance(other, Scenario):
+            return NotImplemented
+        return type(self) is type(other) and self.__dict__ == other.__dict__
 
     @field_validator("agents")
     @classmethod

@@ -160,7 +160,8 @@ def build_nodes(scenario: Scenario) -> dict[str, list[NodeRun]]:
     dt = scenario.physics.dt_s
     out: dict[str, list[NodeRun]] = {}
     for name, spec in scenario.agents.items():
-        ctx = AgentContext(name, spec.model, tuple(n for n in scenario.agents if n != name))
+        ctx = AgentContext(name, spec.model, tuple(n for n in scenario.agents if n != name),
+                           project=scenario.project)
         runs = []
         for node, params in spec.nodes.items():
             agent = check_agent(f"{name}.nodes.{node}",
@@ -186,7 +187,7 @@ def build_world(scenario: Scenario, agents: Mapping[str, Agent] | None = None,
             if agent is None:
                 ctx = AgentContext(name, spec.model,
                                    tuple(n for n in scenario.agents if n != name), run_dir,
-                                   scenario.world)
+                                   scenario.world, scenario.project)
                 agent = core.CONTROLLERS.get(spec.controller.type).build(spec.controller, ctx)
             try:
                 robot_kind = core.ROBOTS.get(spec.model.kind)
@@ -342,7 +343,8 @@ class Session:
                               "make a new one")
         self._started = True
         try:
-            with held():  # every registry lookup asks for the project: found once, not 3+
+            # plugins load from the scenario's project; every registry lookup asks for it
+            with held(self.scenario.project):
                 self._world = build_world(self.scenario, self.agents,
                                           self.log_path.parent if self.log_path else None)
                 self._nodes = build_nodes(self.scenario)

@@ -13,20 +13,27 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.errors import SpecError
 from kartci.logs import msg
+from kartci.project import BUILTIN_MODELS
 from kartci.scenario.yamlio import read_bytes_bounded, read_text_bounded
 
 URDF_MAX_BYTES = 8 << 20  # a URDF (meshes are files of their own); the shipped ones are 6 KB
 
 
 def urdf_path(model: Any) -> Path:
-    """A robot model's URDF: an absolute path as resolved when the scenario was loaded, or a
-    name relative to `<kind>/` on the project's model path."""
+    """A robot model's URDF: an absolute path, as loading the scenario resolved it on its
+    project's model path (`kartci.scenario.load.in_project`), or, in a scenario built by hand,
+    a name relative to `<kind>/` in kartci's own models."""
     path = Path(str(model.urdf))
-    return path if path.is_absolute() else project.current().model_file(f"{model.kind}/{path}")
+    if path.is_absolute():
+        return path
+    builtin = BUILTIN_MODELS / str(model.kind) / path
+    if ".." not in path.parts and builtin.is_file():
+        return builtin
+    raise SpecError(f"{model.kind} URDF {str(path)[:120]!r}: not found on the model path of "
+                    "the project the scenario was loaded in, nor in kartci's models")
 
 
 def parsed(path: Path) -> ET.Element:

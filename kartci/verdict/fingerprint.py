@@ -24,8 +24,8 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from kartci import project
 from kartci.boundedio import open_regular
+from kartci.project import BUILTIN, Project
 from kartci.scenario.models import Scenario
 
 # what neither the run nor its metrics depend on: criteria are checked from the run's own
@@ -42,16 +42,17 @@ class Freshness(StrEnum):
     UNHASHED = "unhashed"  # accepted before baselines recorded their scenario: a warning
 
 
-def fields(scenario: Scenario, replaced: Mapping[str, str] | None = None) -> dict[str, Any]:
+def fields(scenario: Scenario, proj: Project, replaced: Mapping[str, str] | None = None
+           ) -> dict[str, Any]:
     """The scenario as `kartci show` prints it (world and model files inlined), flat, with data
     file paths relative to the world, model or scenario folder they were found in (else to the
     project, or `<kartci>/...` for kartci's data), so the same scenario gives the same fields on
     every machine and checkout, and when a data folder moves; the file's bytes are hashed
     beside its path. `replaced`: agents driven by an object handed to the Python API (agent
-    name -> class), as `replaced_agents.NAME`: their controller is not the scenario's."""
-    proj = project.current()
+    name -> class), as `replaced_agents.NAME`: their controller is not the scenario's. `proj`:
+    the project whose folders the paths are made relative to."""
     folders = (*proj.world_path, *proj.model_path, *proj.scenario_path)  # the most specific first
-    roots = (*(("", f) for f in folders), ("", proj.root), ("<kartci>", project.BUILTIN))
+    roots = (*(("", f) for f in folders), ("", proj.root), ("<kartci>", BUILTIN))
     out: dict[str, Any] = {}
     dumped = scenario.model_dump(mode="json")
     _flatten({k: v for k, v in dumped.items() if k not in IGNORED}, "", out, roots)

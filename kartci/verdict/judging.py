@@ -9,9 +9,10 @@ from collections.abc import Mapping
 from enum import StrEnum
 from typing import Any
 
-from kartci import portable, project
+from kartci import portable
 from kartci.core import Metric, RunFolder, definitions
 from kartci.errors import SpecError, did_you_mean, one_line
+from kartci.project import Project
 from kartci.scenario.models import Scenario
 from kartci.verdict import criteria, fingerprint
 from kartci.verdict.baseline import (
@@ -45,17 +46,17 @@ class Stale(StrEnum):
 
 
 def judge_folder(folder: RunFolder, scenario: Scenario, baseline: Baseline | None,
-                 stale: Stale = Stale.WARN) -> ScenarioResult:
+                 proj: Project, stale: Stale = Stale.WARN) -> ScenarioResult:
     """The result of the complete run in `folder` (made from `scenario`), judged against
-    `baseline` (None: the scenario has none). Raises KartciError for an unreadable metrics file
-    or run record."""
+    `baseline` (None: the scenario has none) by `proj`'s tolerance policy. Raises KartciError
+    for an unreadable metrics file or run record."""
     values = folder.read_metrics()
     record = folder.read_run_record()
     replaced = {str(k): str(v) for k, v in (record.get("replaced_agents") or {}).items()}
-    baseline, check, notes = _comparable(baseline, fingerprint.fields(scenario, replaced),
+    baseline, check, notes = _comparable(baseline, fingerprint.fields(scenario, proj, replaced),
                                          fingerprint.defaulted(scenario), stale)
     verdicts, doubts, strict = trusted(compare(values, None if baseline is None
-                                               else baseline.metrics), baseline, check)
+                                               else baseline.metrics), baseline, check, proj)
     platform = record.get("platform") or {}
     warnings = [str(w) for w in record.get("warnings") or [] if isinstance(w, str)]
     made_on = None if baseline is None else baseline.provenance.get("platform")
@@ -99,14 +100,15 @@ def not_comparable(baseline: Baseline, check: fingerprint.Check) -> str:
 
 
 def trusted(verdicts: list[MetricVerdict], baseline: Baseline | None,
-            check: fingerprint.Check | None) -> tuple[list[MetricVerdict], list[str], list[str]]:
+            check: fingerprint.Check | None, proj: Project
+            ) -> tuple[list[MetricVerdict], list[str], list[str]]:
     """How far `baseline` can be trusted (`check`: its recorded scenario against the one that
     ran): the verdicts with each stored tolerance checked against the policy bound, the warnings
     a reader must see, and those of them a strict run fails on (a stale baseline, a loosened
     tolerance not allowed by the project's configuration)."""
     if baseline is None or check is None:
         return verdicts, [], []
-    proj, label = project.current(), baseline.path.stem
+    label = baseline.path.stem
     allowed = dict(proj.allow_loose_tolerances)  # "scenario:metric" -> reason
     kept = {name for name in baseline.metrics if f"{label}:{name}" in allowed}
     verdicts = apply_tolerance_policy(verdicts, baseline.metrics, proj.loosen_factor, kept)
@@ -131,13 +133,12 @@ def _metric(name: str, entry: Mapping[str, Any]) -> Metric:
                   extra)
 
 
-def check_allowed() -> None:
+def check_allowed(proj: Project) -> None:
     """Every `[tool.kartci.allow_loose_tolerances]` entry names a scenario (or a sweep point
     or another baseline file of the project) and a metric kartci knows: a misspelt entry
     allows nothing, and a strict run then fails on the tolerance it meant to allow, for a
     reason nobody sees. SpecError (one line, with the nearest name) on the first bad entry.
     Called by each command that judges, before it runs or writes anything."""
-    proj = project.current()
     if not proj.allow_loose_tolerances:
         return
     scenarios = set(proj.all_scenarios())

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from kartci.project import current as active_project
 from kartci.robots.line_tracker.characterise import sweep
 from kartci.robots.line_tracker.controllers import LinePidController
 from kartci.robots.line_tracker.line_pid import widened
@@ -14,7 +15,8 @@ from kartci.scenario import load_scenario
 def _estimates() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """True offsets over +-21 mm and the plain and widened estimates from kartci's cameras."""
     offsets = np.round(np.arange(-0.021, 0.02101, 0.0005), 6)
-    s = sweep(load_scenario("line_straight"), "lt0", offsets, mode="geometric")
+    s = sweep(load_scenario("line_straight",
+                            project=active_project()), "lt0", offsets, mode="geometric")
     c = LinePidController()
     plain = c.slope_m * (s.left - s.right) + c.offset_m
     wide = np.array([c.wide_slope_m * (widened(left, right, c.edge_left, c.edge_right)

@@ -16,6 +16,7 @@ from pydantic import BaseModel
 from kartci.app.faults import Cell, Entry, Scope, catalogue, injection, select
 from kartci.core import Change, Fault, Op, unknown_keys
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.robots.gokart import GokartModel, KartSensors
 from kartci.scenario import load_scenario
 from kartci.scenario.load import scenario_loader
@@ -56,7 +57,7 @@ def test_a_fault_changes_the_scenario_as_declared(entry: Entry) -> None:
     """Injected into a scenario of its owner, every fault validates (the `--set` machinery)
     and leaves each key at the declared value, everything else as it was."""
     name = LIDAR_HOST if entry.fault.read_by else HOST[entry.owner]  # a sensor: its reader
-    load = scenario_loader(name)
+    load = scenario_loader(name, project=active_project())
     nominal = load([])
     acts = injection(nominal, entry)
     assert acts.overrides, acts.why_not
@@ -108,7 +109,7 @@ def _flat(doc: object, skip: set[str], prefix: str = "") -> dict[str, object]:
 ])
 def test_a_fault_with_nothing_to_act_on_is_not_applicable_and_says_why(
         fault: str, scenario: str, why: str) -> None:
-    acts = injection(load_scenario(scenario), BY_NAME[fault])
+    acts = injection(load_scenario(scenario, project=active_project()), BY_NAME[fault])
     assert acts.overrides == ()
     assert re.search(why, acts.why_not), acts.why_not
 
@@ -116,7 +117,7 @@ def test_a_fault_with_nothing_to_act_on_is_not_applicable_and_says_why(
 def test_a_fault_acts_on_every_agent_it_applies_to() -> None:
     """multi_agent has two karts, one of them on mpcc: a kart fault hits both, an mpcc gain
     only the mpcc one."""
-    spec = load_scenario("multi_agent")
+    spec = load_scenario("multi_agent", project=active_project())
     karts = sorted(spec.agents)
     kart = injection(spec, BY_NAME["gokart.motor_power_x0.5"]).overrides
     assert [o.split(".")[1] for o in kart] == karts

@@ -14,6 +14,7 @@ from helpers import kartci
 
 from kartci.app.search import Options, Request, make_axes, run_search
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.runner.search import AxisKind, Evaluation, Phase, Point, RunStatus
 from kartci.scenario import load_scenario
 from kartci.scenario.load import scenario_loader
@@ -59,7 +60,7 @@ def test_a_bad_axis_or_objective_is_refused_before_any_run(over: str, objective:
 
     with pytest.raises(SpecError, match=expected):
         run_search(Request("line_circle", (over,), objective=objective), tmp_path,
-                   Options(tmp_path), evaluate=run)
+                   Options(tmp_path, active_project()), evaluate=run)
     assert ran == []
 
 
@@ -79,7 +80,7 @@ def test_a_criterion_margin_is_the_room_left_as_a_fraction_of_its_bound() -> Non
 def test_a_period_range_gets_the_physics_step_as_its_grid() -> None:
     # period_s must be a whole number of 2 ms physics steps: any other value is refused
     request = Request("line_circle", (f"{PERIOD}=0.01..0.1", f"{KP}=20..80", "seed=1,2,3"))
-    period, kp, seed = make_axes(request, scenario_loader("line_circle"))
+    period, kp, seed = make_axes(request, scenario_loader("line_circle", project=active_project()))
     assert (period.kind, period.step, period.nominal) == (AxisKind.GRID, 0.002, "0.01")
     assert (kp.kind, kp.integer, kp.nominal) == (AxisKind.GRID, True, "50")
     assert (seed.kind, seed.nominal) == (AxisKind.CHOICE, "1")
@@ -99,9 +100,10 @@ def _fake(points: list[Point], phase: Phase) -> list[Evaluation]:
 
 def test_the_found_scenario_file_holds_the_failing_values_and_loads_as_is(tmp_path: Path) -> None:
     request = Request("line_circle", (f"{PERIOD}=0.01..0.1",), ("duration_s=20",), budget=40)
-    result = run_search(request, tmp_path, Options(tmp_path / "baselines"), evaluate=_fake)
+    result = run_search(request, tmp_path, Options(tmp_path / "baselines",
+                                                   active_project()), evaluate=_fake)
     assert result.exit_code == 1 and result.found_yaml == tmp_path / "found.yaml"
-    spec = load_scenario(result.found_yaml)
+    spec = load_scenario(result.found_yaml, project=active_project())
     assert spec.agents["lt0"].controller.period_s == pytest.approx(0.046)
     assert spec.duration_s == 20  # the fixed overrides are written in too
     text = result.found_yaml.read_text(encoding="utf-8")
@@ -114,7 +116,7 @@ def test_the_found_scenario_file_holds_the_failing_values_and_loads_as_is(tmp_pa
 def test_an_interrupted_search_resumes_from_its_journal_and_runs_only_the_rest(
         tmp_path: Path) -> None:
     quick = ("duration_s=1", "criteria={}", "metrics.line_tracking.transient_s=0.5")
-    opts = Options(tmp_path / "baselines")
+    opts = Options(tmp_path / "baselines", active_project())
     first = run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), quick, budget=2),
                        tmp_path, opts)
     assert first.exit_code == 0 and len(first.found.counted) == 2
@@ -129,7 +131,8 @@ def test_an_interrupted_search_resumes_from_its_journal_and_runs_only_the_rest(
 def test_a_search_interrupted_mid_way_resumes_to_the_same_result_running_only_the_rest(
         tmp_path: Path) -> None:
     request = Request("line_circle", (f"{PERIOD}=0.01..0.1",), budget=40, seed=5)
-    whole = run_search(request, tmp_path / "whole", Options(tmp_path), evaluate=_fake)
+    whole = run_search(request, tmp_path / "whole", Options(tmp_path,
+                                                            active_project()), evaluate=_fake)
     calls: list[list[Point]] = []
 
     def interrupted(points: list[Point], phase: Phase) -> list[Evaluation]:
@@ -139,14 +142,16 @@ def test_a_search_interrupted_mid_way_resumes_to_the_same_result_running_only_th
         return _fake(points, phase)
 
     with pytest.raises(KeyboardInterrupt):
-        run_search(request, tmp_path / "cut", Options(tmp_path), evaluate=interrupted)
+        run_search(request, tmp_path / "cut", Options(tmp_path,
+                                                      active_project()), evaluate=interrupted)
     ran: list[Point] = []
 
     def rest(points: list[Point], phase: Phase) -> list[Evaluation]:
         ran.extend(points)
         return _fake(points, phase)
 
-    resumed = run_search(request, tmp_path / "cut", Options(tmp_path), evaluate=rest)
+    resumed = run_search(request, tmp_path / "cut", Options(tmp_path,
+                                                            active_project()), evaluate=rest)
     assert [e.point for e in resumed.found.runs] == [e.point for e in whole.found.runs]
     assert resumed.found.failure == whole.found.failure
     before = [p for batch in calls for p in batch]
@@ -156,10 +161,10 @@ def test_a_search_interrupted_mid_way_resumes_to_the_same_result_running_only_th
 
 def test_a_journal_of_other_settings_is_refused_not_overwritten(tmp_path: Path) -> None:
     run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), budget=8), tmp_path,
-               Options(tmp_path), evaluate=_fake)
+               Options(tmp_path, active_project()), evaluate=_fake)
     with pytest.raises(Exception, match=r"holds a search with other settings \(seed\)"):
         run_search(Request("line_circle", (f"{PERIOD}=0.01..0.1",), budget=8, seed=1),
-                   tmp_path, Options(tmp_path), evaluate=_fake)
+                   tmp_path, Options(tmp_path, active_project()), evaluate=_fake)
 
 
 # The true boundary, from a sweep of every period the key takes (whole 2 ms physics steps) from
@@ -175,7 +180,7 @@ def test_the_line_tracker_search_finds_its_period_boundary_and_the_found_file_fa
                   "--out", tmp_path / "out")
     assert proc.returncode == 1, proc.stdout + proc.stderr
     found = tmp_path / "out" / "found.yaml"
-    period = load_scenario(found).agents["lt0"].controller.period_s
+    period = load_scenario(found, project=active_project()).agents["lt0"].controller.period_s
     assert abs(period - SMALLEST_FAILING_S) <= 0.005, proc.stdout
     assert "boundary of agents.lt0.controller.period_s: 0.042 passes, 0.044 fails" in proc.stdout
     again = kartci("run", found, "--out", tmp_path / "again")
@@ -190,8 +195,8 @@ def test_a_found_file_keeps_a_recorded_inputs_log_found_from_its_new_folder(
         return [Evaluation(p, "", RunStatus.FAIL, -1.0, None, ("laps",), phase) for p in points]
 
     result = run_search(Request("kart_manual", ("duration_s=1..5",), budget=2), tmp_path / "o",
-                        Options(tmp_path), evaluate=run)
+                        Options(tmp_path, active_project()), evaluate=run)
     assert result.found_yaml is not None
-    spec = load_scenario(result.found_yaml)
+    spec = load_scenario(result.found_yaml, project=active_project())
     log = Path(spec.agents["kart0"].controller.source.log)  # type: ignore[attr-defined]
     assert log.is_file() and log.name == "kart_manual_ps4.mcap"

@@ -14,11 +14,12 @@ from kartci.bridge.params import ExternalController
 from kartci.core import AgentContext
 from kartci.errors import RunError
 from kartci.logs.types import header, msg, typestore
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 
 
 def agent(commands: list[dict[str, str]]) -> ExternalAgent:
-    spec = load_scenario("external_pure_pursuit")
+    spec = load_scenario("external_pure_pursuit", project=active_project())
     params = ExternalController(commands=commands)  # no program: nothing is started
     built = core.CONTROLLERS.get("external").build(
         params, AgentContext("kart0", spec.agents["kart0"].model))

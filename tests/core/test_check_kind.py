@@ -12,6 +12,7 @@ import pytest
 
 from kartci import core
 from kartci.core import Direction, MetricDef, MetricSet, RobotKind
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.testing import (
     KindCheckError,
@@ -69,7 +70,7 @@ def test_the_runs_cover_every_simulated_built_in() -> None:
     used: dict[str, set[str]] = {"robot": set(), "world": set(), "controller": set(),
                                  "metrics": set()}
     for name in RUNS:
-        for key, names in parts_of(load_scenario(name)).items():
+        for key, names in parts_of(load_scenario(name, project=active_project())).items():
             used[key] |= names
     not_simulated = {"recorded", "external", "commands", "bridge", "motion", "simreal"}
     assert set(core.ROBOTS.names()) - not_simulated <= used["robot"]

@@ -16,6 +16,7 @@ from kartci.core import Controller, MetricDef, MetricSet
 from kartci.errors import SpecError
 from kartci.metrics import compute, definitions
 from kartci.project import BUILTIN_SCENARIOS
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.scenario.models import ControllerParams
 from kartci.sim import simulate
@@ -61,17 +62,19 @@ def test_every_world_kind_validates_its_own_parameters(name: str) -> None:
 def test_unknown_and_misspelt_names_get_one_line_with_a_suggestion(tmp_path: Path) -> None:
     with pytest.raises(SpecError, match=r"controller.type \(from --set\): unknown controller "
                                         r"'mpc' \(did you mean 'mpcc'\?\)"):
-        load_scenario("mpcc_lap", ["agents.kart0.controller.type=mpc"])
+        load_scenario("mpcc_lap", ["agents.kart0.controller.type=mpc"], project=active_project())
     with pytest.raises(SpecError, match=r"unknown scenario 'mpcc_lapp' \(did you mean"):
-        load_scenario("mpcc_lapp")
+        load_scenario("mpcc_lapp", project=active_project())
     with pytest.raises(SpecError, match=r"agents.kart0.controller.max_speed_mps \(from --set\)"):
-        load_scenario("mpcc_lap", ["agents.kart0.controller.max_speed_mps=-1"])
+        load_scenario("mpcc_lap", ["agents.kart0.controller.max_speed_mps=-1"],
+                      project=active_project())
     with pytest.raises(SpecError, match=r"max_speedmps \(from --set\): unknown key \(did you "
                                         r"mean 'max_speed_mps'\?\)"):
-        load_scenario("mpcc_lap", ["agents.kart0.controller.max_speedmps=1"])
+        load_scenario("mpcc_lap", ["agents.kart0.controller.max_speedmps=1"],
+                      project=active_project())
     with pytest.raises(SpecError, match=r"duraton_s \(from --set\): unknown key \(did you "
                                         r"mean 'duration_s'\?\)"):
-        load_scenario("mpcc_lap", ["duraton_s=1"])
+        load_scenario("mpcc_lap", ["duraton_s=1"], project=active_project())
 
 
 def test_a_controller_registered_from_python_drives_a_kart(tmp_path: Path) -> None:
@@ -101,14 +104,16 @@ def test_a_controller_registered_from_python_drives_a_kart(tmp_path: Path) -> No
     core.register(Controller("test_throttle", Params, Throttle, ("gokart",)))
     try:
         spec = load_scenario("kart_wall", ["agents.kart0.controller={type: test_throttle, "
-                                           "accel_mps2: 2.0}", "duration_s=2"])
+                                           "accel_mps2: 2.0}", "duration_s=2"],
+                                           project=active_project())
         simulate(spec, tmp_path / "run.mcap")
         m = compute(tmp_path / "run.mcap")[1]
         assert m["max_speed_mps"].value == pytest.approx(4.0, abs=0.4)  # 2 m/s^2 for 2 s
     finally:
         core.CONTROLLERS.items.pop("test_throttle")
     with pytest.raises(SpecError, match="unknown controller 'test_throttle'"):
-        load_scenario("kart_wall", ["agents.kart0.controller={type: test_throttle}"])
+        load_scenario("kart_wall", ["agents.kart0.controller={type: test_throttle}"],
+                      project=active_project())
 
 
 def test_a_metric_set_registered_from_python_is_computed(tmp_path: Path) -> None:
@@ -124,7 +129,8 @@ def test_a_metric_set_registered_from_python_is_computed(tmp_path: Path) -> None
         "m", Direction.EQUAL, 0.01, 0.0, "largest x reached")}, top_x))
     try:
         spec = load_scenario("line_straight", ["duration_s=3", "metrics.test_extent={}",
-                                               "metrics.line_tracking.transient_s=1"])
+                                               "metrics.line_tracking.transient_s=1"],
+                                               project=active_project())
         simulate(spec, tmp_path / "run.mcap")
         m = compute(tmp_path / "run.mcap")[1]
         odom_x = m["max_x_m"].value
@@ -149,7 +155,7 @@ def test_every_shipped_scenario_scores_exactly_its_baseline(
         name: str, shipped_run: Callable[[str], Path]) -> None:
     """Refactors keep metrics byte-identical: every value equals the committed baseline's,
     and every shipped scenario meets its own criteria."""
-    spec = load_scenario(name)
+    spec = load_scenario(name, project=active_project())
     got = {k: m.to_json() for k, m in compute(shipped_run(name))[1].items()
            if not (d := definitions().get(k.rsplit(".", 1)[-1])) or not d.timing}
     base = json.loads((ROOT / "baselines" / f"{name}.json").read_text())["metrics"]
@@ -192,7 +198,7 @@ def test_karts_take_standard_ackermann_and_twist_commands(topic: str, tmp_path: 
     core.register(Controller("test_standard", Params, Cruise, ("gokart",)))
     try:
         spec = load_scenario("kart_wall", ["agents.kart0.controller={type: test_standard}",
-                                           "duration_s=5"])
+                                           "duration_s=5"], project=active_project())
         simulate(spec, tmp_path / "run.mcap")
         m = compute(tmp_path / "run.mcap")[1]
     finally:

@@ -12,6 +12,7 @@ from kartci import core
 from kartci.core import AgentContext, Node, NodeParams
 from kartci.errors import SpecError
 from kartci.logs import msg
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim.session import Session
 
@@ -65,7 +66,8 @@ def test_a_node_runs_before_the_controller_of_its_robot(counter: Any) -> None:
     """Node every 0.02 s, controller every 0.06 s: at each controller tick the node's message
     of that very tick is already there, and the node ran 3 times per controller tick."""
     spec = load_scenario("line_straight", ["duration_s=0.5",
-                                           "agents.lt0.nodes={test_counter: {start: 100}}"])
+                                           "agents.lt0.nodes={test_counter: {start: 100}}"],
+                                           project=active_project())
     reader = Reader()
     with Session(spec, agents={"lt0": reader}) as s:
         r = s.reset()
@@ -81,15 +83,19 @@ def test_a_node_runs_before_the_controller_of_its_robot(counter: Any) -> None:
 def test_node_names_and_parameters_are_validated(counter: Any) -> None:
     with pytest.raises(SpecError, match=r"agents\.lt0\.nodes\.test_countr( \(from --set\))?: "
                                         r"unknown node 'test_countr'.*test_counter"):
-        load_scenario("line_straight", ["agents.lt0.nodes={test_countr: {}}"])
+        load_scenario("line_straight", ["agents.lt0.nodes={test_countr: {}}"],
+                      project=active_project())
     with pytest.raises(SpecError, match=r"agents\.lt0\.nodes\.test_counter\.start"):
-        load_scenario("line_straight", ["agents.lt0.nodes={test_counter: {start: many}}"])
+        load_scenario("line_straight", ["agents.lt0.nodes={test_counter: {start: many}}"],
+                      project=active_project())
     with pytest.raises(SpecError, match=r"nodes\.test_counter\.period_s.*not a whole multiple"):
-        load_scenario("line_straight", ["agents.lt0.nodes={test_counter: {period_s: 0.0033}}"])
+        load_scenario("line_straight", ["agents.lt0.nodes={test_counter: {period_s: 0.0033}}"],
+                      project=active_project())
 
 
 def test_a_node_for_another_robot_kind_is_refused() -> None:
-    spec = load_scenario("line_straight", ["agents.lt0.nodes={localization: {}}"])
+    spec = load_scenario("line_straight", ["agents.lt0.nodes={localization: {}}"],
+                         project=active_project())
     with pytest.raises(SpecError, match="node localization runs on gokart robots, not "
                                         "line_tracker"), Session(spec) as s:
         s.reset()

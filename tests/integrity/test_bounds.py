@@ -10,6 +10,7 @@ from helpers import kartci
 from typer.testing import CliRunner
 
 from kartci.cli import app
+from kartci.project import current as active_project
 from kartci.runner import expand
 
 SCENARIO = """\
@@ -59,7 +60,8 @@ def test_sweep_validation_is_reported_point_by_point(tmp_path: Path,
     """Each validated point reaches the progress callback as it is validated, and the CLI
     prints a line every SWEEP_LINE_EVERY points outside a terminal, before any run starts."""
     seen: list[tuple[int, int]] = []
-    jobs = expand([str(_scenario(tmp_path))], [], ["seed=1,2", "agents.lt0.controller.kp=5,6,7"],
+    jobs = expand([str(_scenario(tmp_path))], [],
+                  active_project(), ["seed=1,2", "agents.lt0.controller.kp=5,6,7"],
                   progress=lambda done, total: seen.append((done, total)))
     assert len(jobs) == 6
     assert seen == [(k, 6) for k in range(1, 7)]

@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 from helpers import ROOT, kartci
 
+from kartci.project import current as active_project
 from kartci.verdict import load
 from kartci.verdict.baseline import above, policy_bound
 
@@ -174,7 +175,8 @@ def test_a_data_file_edited_in_place_makes_the_fields_differ(
     project.activate(None)
 
     def flat() -> dict[str, Any]:
-        return fingerprint.fields(load_scenario("kart_manual", ["world=my/hall"]))
+        return fingerprint.fields(load_scenario("kart_manual", ["world=my/hall"],
+                                                project=active_project()), active_project())
 
     before = flat()
     assert before["world.track"] == "my/track.csv"  # portable: as named in its world folder
@@ -197,7 +199,8 @@ def test_committed_baselines_were_accepted_from_the_scenarios_as_they_are() -> N
     for path in sorted((ROOT / "baselines").glob("*.json")):
         name, _, point = path.stem.partition("@")
         found, _ = fingerprint.recorded(json.loads(path.read_text()))
-        flat = fingerprint.fields(load_scenario(name, point.split(",") if point else []))
+        flat = fingerprint.fields(load_scenario(name, point.split(",") if point else [],
+                                                project=active_project()), active_project())
         if found != fingerprint.digest(flat):
             stale.append(path.stem)
     assert stale == []
@@ -211,16 +214,17 @@ def test_a_parameter_added_at_its_default_leaves_older_baselines_current() -> No
     from kartci.verdict import fingerprint
 
     new = ("agents.kart0.model.steering_offset_rad", "agents.kart0.model.command_delay_s")
-    spec = load_scenario("kart_wall")
-    flat = fingerprint.fields(spec)
+    proj = active_project()
+    spec = load_scenario("kart_wall", project=proj)
+    flat = fingerprint.fields(spec, proj)
     assert set(new) <= fingerprint.defaulted(spec)
     old = {k: v for k, v in flat.items() if k not in new}
     doc = {"scenario_hash": fingerprint.digest(old), "scenario_fields": old}
     fresh = fingerprint.check(doc, flat, fingerprint.defaulted(spec))
     assert fresh.freshness is fingerprint.Freshness.CURRENT
     assert fingerprint.check(doc, flat).freshness is fingerprint.Freshness.STALE  # no defaults
-    offset = load_scenario("kart_wall", [f"{new[0]}=0.05"])
-    got = fingerprint.check(doc, fingerprint.fields(offset), fingerprint.defaulted(offset))
+    offset = load_scenario("kart_wall", [f"{new[0]}=0.05"], project=proj)
+    got = fingerprint.check(doc, fingerprint.fields(offset, proj), fingerprint.defaulted(offset))
     assert got.freshness is fingerprint.Freshness.STALE and got.fields == (new[0],)
     fewer = {k: v for k, v in flat.items() if k != "duration_s"}
     got = fingerprint.check(doc, fewer, fingerprint.defaulted(spec))

@@ -17,6 +17,7 @@ from helpers import kartci
 
 from kartci.errors import SpecError
 from kartci.project import BUILTIN_SCENARIOS
+from kartci.project import current as active_project
 from kartci.report import FILES, write_all
 from kartci.runner import expand, run_jobs
 from kartci.runner.outdir import clear_reports, write_manifest
@@ -45,7 +46,7 @@ def _run_here(proj: Path, out: Path, baselines: Path, *names: str) -> None:
     """A complete run of `names` with its reports, as `kartci run` leaves it (in this process:
     no start-up cost)."""
     paths = [str(proj / "scenarios" / f"{n}.yaml") for n in names]
-    results = run_jobs(expand(paths, []), out, baselines)
+    results = run_jobs(expand(paths, [], active_project()), out, baselines, active_project())
     assert [r.status for r in results] == [Status.NEW] * len(names)
     write_manifest(out, "run", list(names))
     write_all(results, out)

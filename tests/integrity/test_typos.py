@@ -15,6 +15,7 @@ from helpers import ROOT
 
 from kartci import project
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.runner.run import check_criteria_names
 
 
@@ -46,7 +47,8 @@ def test_an_allowed_loose_tolerance_must_name_a_scenario_and_a_metric(
         in_project: Path, entry: str, message: str) -> None:
     _allow(in_project, entry)
     with pytest.raises(SpecError) as err:
-        check_criteria_names([])  # what every judging command checks before it runs
+        check_criteria_names([],
+                             active_project())  # what every judging command checks before it runs
     assert str(err.value) == (f"{in_project / 'kartci.toml'}: "
                               f"[tool.kartci.allow_loose_tolerances] {message}")
 
@@ -68,7 +70,7 @@ def test_an_allow_list_entry_without_a_part_is_refused_when_the_project_loads(
 def test_a_sweep_point_and_an_agent_metric_are_valid_entries(in_project: Path) -> None:
     _allow(in_project, '"line_circle_edge_fast@seed=2:cross_track_rms_m" = "a point"',
            '"kart_wall:kart0.cross_track_rms_m" = "an agent\'s metric"')
-    check_criteria_names([])
+    check_criteria_names([], active_project())
 
 
 def test_the_shipped_allow_list_is_valid(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -77,7 +79,7 @@ def test_the_shipped_allow_list_is_valid(monkeypatch: pytest.MonkeyPatch) -> Non
     project.activate(None)
     try:
         assert project.current().allow_loose_tolerances
-        check_criteria_names([])
+        check_criteria_names([], active_project())
     finally:
         project.activate(None)
 

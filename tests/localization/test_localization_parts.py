@@ -5,6 +5,7 @@ shipped map finds a scan's true pose from an offset guess."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,8 +13,8 @@ from scipy.spatial import cKDTree
 
 from kartci.localization.deskew import deskew
 from kartci.localization.ekf import Noise, PlanarEkf
-from kartci.localization.node import map_path
 from kartci.localization.registration import MapMatcher, pose_matrix
+from kartci.project import current as active_project
 from kartci.robots.gokart.noise import distorted_scan
 from kartci.scenario.load import load_world
 from kartci.sim import lidar
@@ -26,8 +27,13 @@ VLP16 = lidar.MODELS["vlp16"]
 AZ = VLP16.azimuths(10.0)
 
 
+def hall_map() -> Path:
+    """The hall's point-cloud map (`kartci map winti/hall`)."""
+    return active_project().world_file("winti/hall_map.ply")
+
+
 def _hall() -> tuple[list[Block], float]:
-    world, _ = load_world("winti/hall")
+    world, _ = load_world("winti/hall", active_project())
     assert isinstance(world, HallWorld)
     return blocks(world), world.wall_height_m
 
@@ -152,7 +158,7 @@ def test_registration_finds_the_true_pose_from_an_offset_guess() -> None:
     x, y, yaw = 20.0, 4.5, 0.4
     ranges = lidar.scan_fast(VLP16, AZ, np.array([x, y, 1.28]), yaw, bl, ceiling, 100.0)
     ranges = ranges + 0.03 * np.random.default_rng(1).standard_normal(ranges.shape)
-    matcher = MapMatcher.from_file(map_path("winti/hall_map.ply"), 0.2, "GICP", 1.0, 30)
+    matcher = MapMatcher.from_file(hall_map(), 0.2, "GICP", 1.0, 30)
     m = matcher.align(_xyz(ranges), 0.3, pose_matrix(x + 0.3, y - 0.25, 1.2, yaw + 0.05))
     assert m.converged
     assert math.hypot(m.xy_yaw[0] - x, m.xy_yaw[1] - y) < 0.03

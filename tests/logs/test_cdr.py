@@ -11,6 +11,7 @@ from mcap.reader import make_reader
 
 from kartci.logs import header, msg, typestore
 from kartci.logs.cdr import compile_fixed
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 from kartci.sim.messages import joint_state
@@ -21,7 +22,8 @@ def test_every_logged_message_serialises_to_rosbags_bytes(tmp_path: Path,
                                                           scenario: str) -> None:
     """Each message of a run's log, decoded and serialised again by the layouts its topic
     gets (up to four, as the writer keeps): rosbags' bytes, or a decline."""
-    simulate(load_scenario(scenario, ["duration_s=1"]), tmp_path / "run.mcap")
+    simulate(load_scenario(scenario, ["duration_s=1"],
+                           project=active_project()), tmp_path / "run.mcap")
     store, layouts, fitted, total = typestore(), dict[str, list[Any]](), 0, 0
     with (tmp_path / "run.mcap").open("rb") as f:
         for schema, channel, record in make_reader(f).iter_messages():

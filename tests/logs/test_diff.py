@@ -22,6 +22,7 @@ from kartci.logs import McapLogWriter, header, msg, open_log, topics, typestore
 from kartci.logs.diff import DiffOptions, Ignore, diff_logs
 from kartci.logs.types import for_writing
 from kartci.logs.wallclock import wall_clock
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
@@ -58,7 +59,8 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """Two run folders of one MPCC scenario (1 s): identical but for the solve times."""
     root = tmp_path_factory.mktemp("runs")
     for name in ("a", "b"):
-        simulate(load_scenario("mpcc_lap", ["duration_s=1"]), root / name / "run.mcap")
+        simulate(load_scenario("mpcc_lap", ["duration_s=1"],
+                               project=active_project()), root / name / "run.mcap")
     return root / "a", root / "b"
 
 

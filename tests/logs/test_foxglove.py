@@ -18,6 +18,7 @@ from helpers import ROOT
 from mcap.reader import make_reader
 
 from kartci.logs.reader import messages
+from kartci.project import current as active_project
 from kartci.runner import expand, run_jobs
 
 LAYOUT = resources.files("kartci").joinpath("data", "foxglove", "kartci-layout.json")
@@ -30,9 +31,10 @@ def logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """A kart that hits a wall (collisions) and a short MPCC run among obstacles."""
     root = tmp_path_factory.mktemp("fox")
     (root / "baselines").mkdir()
-    res = run_jobs(expand(["kart_wall"], ["criteria={}"]) +
-                   expand(["obstacle_avoidance"], ["duration_s=1", "criteria={}"]),
-                   root / "out", root / "baselines")
+    res = run_jobs(expand(["kart_wall"], ["criteria={}"], active_project()) +
+                   expand(["obstacle_avoidance"], ["duration_s=1", "criteria={}"],
+                          active_project()),
+                   root / "out", root / "baselines", active_project())
     assert not [r.error for r in res if r.error]
     return {name: root / "out" / name / "run.mcap" for name in ("kart_wall", "obstacle_avoidance")}
 

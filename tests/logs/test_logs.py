@@ -20,6 +20,7 @@ from kartci.logs import (
     topics,
     typestore,
 )
+from kartci.project import current as active_project
 
 
 def _write_sample(path: Path) -> None:
@@ -155,7 +156,7 @@ def test_run_log_decodes_with_mcap_ros2_too(tmp_path: Path) -> None:
     from kartci.sim import simulate
 
     log = tmp_path / "run.mcap"
-    simulate(load_scenario("line_straight", ["duration_s=1"]), log)
+    simulate(load_scenario("line_straight", ["duration_s=1"], project=active_project()), log)
     counts: dict[str, int] = {}
     with log.open("rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])

@@ -16,6 +16,7 @@ from rosbags.typesys import Stores, get_typestore
 from kartci.logs import SalvagedLog, open_log, tables
 from kartci.logs.poses import LAID_OUT, decode_poses, odometry_cdr, same_definitions
 from kartci.logs.tables import _read
+from kartci.project import current as active_project
 from kartci.realdata.importer import import_log
 from kartci.realdata.profile import resolve_profile
 
@@ -129,7 +130,7 @@ def test_an_imported_logs_tables_equal_those_read_back(tmp_path: Path, ref: str,
     _write(tmp_path / "log")
     profile = tmp_path / "p.yaml"
     profile.write_text(f"name: p\npose: {{topic: {ref}}}\nestimate: {{topic: {est}}}\n")
-    prof, info = resolve_profile(tmp_path / "log", profile)
+    prof, info = resolve_profile(tmp_path / "log", profile, active_project())
     dst = tmp_path / "run.mcap"
     import_log(tmp_path / "log", prof, {r: i.msgtype for r, i in info.items()}, dst)
     handed, read = tables(dst), _read(dst, None)

@@ -193,7 +193,8 @@ def test_a_projects_own_mapping_is_found_and_listed(tmp_path: Path,
     monkeypatch.chdir(tmp_path)
     (tmp_path / "kartci.toml").write_text("")
     project.activate(None)
-    assert load_mapping("our_pad").name == "our pad"
-    assert load_mapping(str(joy / "our_pad.yml")).buttons == 11  # by path
+    models = project.current().model_path
+    assert load_mapping("our_pad", models).name == "our pad"
+    assert load_mapping(str(joy / "our_pad.yml"), models).buttons == 11  # by path
     with pytest.raises(SpecError, match=r"known: .*our_pad.*ps4.*xbox"):
-        load_mapping("qqqqqq")
+        load_mapping("qqqqqq", models)

@@ -21,6 +21,7 @@ from kartci.logs import open_log
 from kartci.logs.bulk import standard
 from kartci.logs.tables import _read, bulk_types, flatteners, tables_of
 from kartci.logs.types import header, msg, typestore
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
@@ -71,7 +72,7 @@ def run_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     logs = {}
     for name in SCENARIOS:
         logs[name] = root / f"{name}.mcap"
-        simulate(load_scenario(name, ["duration_s=3"]), logs[name])
+        simulate(load_scenario(name, ["duration_s=3"], project=active_project()), logs[name])
     return logs
 
 

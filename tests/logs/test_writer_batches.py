@@ -12,6 +12,7 @@ import pytest
 from mcap.writer import Writer
 
 from kartci.logs import McapLogWriter, header, messages, msg, writer
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
@@ -63,7 +64,7 @@ def _plain(value: Any) -> Any:
 
 def test_a_runs_log_reads_back_the_same_messages(tmp_path: Path,
                                                  monkeypatch: pytest.MonkeyPatch) -> None:
-    spec = load_scenario("line_circle", ["duration_s=3"])
+    spec = load_scenario("line_circle", ["duration_s=3"], project=active_project())
     simulate(spec, tmp_path / "batched.mcap")
     with monkeypatch.context() as m:
         _one_at_a_time(m)

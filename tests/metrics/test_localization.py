@@ -14,6 +14,7 @@ from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.metrics.localization import LocalizationMetricsParams, episodes
 from kartci.metrics.trajectory import Trajectory
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 from kartci.verdict.baseline import Status
@@ -22,7 +23,7 @@ from kartci.verdict.runs import compare_runs
 
 def _run(folder: Path, name: str, overrides: list[str]) -> dict[str, Metric]:
     folder.mkdir(parents=True, exist_ok=True)
-    simulate(load_scenario(name, overrides), folder / "run.mcap")
+    simulate(load_scenario(name, overrides, project=active_project()), folder / "run.mcap")
     return compute(folder / "run.mcap")[1]
 
 

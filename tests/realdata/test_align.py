@@ -27,6 +27,7 @@ from kartci.metrics.trajectory import (
     associate,
     rpe,
 )
+from kartci.project import current as active_project
 from kartci.realdata.profile import load_profile
 
 # a known Sim(3): rotated about a tilted axis, shifted, scaled
@@ -226,8 +227,8 @@ def test_score_pairs_poses_within_t_max_diff_as_evo_does(tmp_path: Path) -> None
 def test_a_profile_names_the_alignment(tmp_path: Path) -> None:
     path = tmp_path / "p.yaml"
     path.write_text("pose: {topic: /a}\nestimate: {topic: /b}\nalign: sim3\nalign_first: 50\n")
-    p = load_profile(path)
+    p = load_profile(path, active_project())
     assert (p.align, p.align_first) == (Alignment.SIM3, 50)
     path.write_text("pose: {topic: /a}\nalign: affine\n")
     with pytest.raises(SpecError, match="align"):
-        load_profile(path)
+        load_profile(path, active_project())

@@ -6,9 +6,10 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import KART, TRUTH
+from helpers import KART, TRUTH
 
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.realdata.calibrate import calibrate_log, parse_params
 from kartci.realdata.profile import load_profile
 from kartci.realdata.simreal import sim_setup
@@ -27,7 +28,8 @@ def test_calibrate_recovers_the_kart_parameters_its_trajectory_shows(
     matter would need a speed loop on wheel speed x a radius the controller believes apart
     from the true one, a plant change outside this test."""
     names = [f"model.{k}" for k in IDENTIFIABLE]
-    fit = calibrate_log(kart_logs[1.0], kart_profile, None, [], names, 2.0, tmp_path)
+    fit = calibrate_log(kart_logs[1.0], kart_profile, None, [], names, 2.0, tmp_path,
+                        active_project())
     for key, value in zip(IDENTIFIABLE, fit.values, strict=True):
         truth = TRUTH[key]
         assert value == pytest.approx(truth, rel=0.05), key
@@ -41,7 +43,7 @@ def test_calibrate_recovers_the_kart_parameters_its_trajectory_shows(
 
 
 def test_params_are_checked(kart_profile: Path) -> None:
-    setup = sim_setup(load_profile(kart_profile), None, [])
+    setup = sim_setup(load_profile(kart_profile, active_project()), None, [], active_project())
     (p,) = parse_params(setup, ["model.speed_gain_per_s=1:3"])
     assert (p.path, p.start, p.lo, p.hi) == (f"{KART}.speed_gain_per_s", 2.0, 1.0, 3.0)
     with pytest.raises(SpecError, match="must hold the start value"):

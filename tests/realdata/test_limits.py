@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from kartci.logs import msg
+from kartci.project import current as active_project
 from kartci.realdata.calibrate import Bound, Estimate, Fit, Param, estimate, with_values
 from kartci.realdata.divergence import run_whole
 from kartci.realdata.drive import read_drive
@@ -84,7 +85,7 @@ def test_the_base_controller_clamps_and_ramps_its_commands() -> None:
 def test_profile_parameters_are_set_for_calibration(tmp_path: Path) -> None:
     path = tmp_path / "p.yaml"
     path.write_text("pose: {topic: /odom}\ncommands: {topic: /cmd_vel, max_speed_mps: 0.3}\n")
-    p = with_values(load_profile(path), {"commands.max_speed_mps": 0.25})
+    p = with_values(load_profile(path, active_project()), {"commands.max_speed_mps": 0.25})
     assert p.commands is not None and p.commands.max_speed_mps == 0.25
 
 
@@ -93,7 +94,7 @@ def test_a_speed_limit_caps_the_simulated_turtlebot(bags: Path, tmp_path: Path) 
     """The TurtleBot3 bag commands up to 0.5 m/s; with a 0.2 m/s limit in its base controller
     the simulated robot, driven by the same commands over the whole log, stays below it."""
     log = bags / "turtlebot3_gazebo_cmd_odom_scan.bag"
-    profile, info = resolve_profile(log, ROOT / "profiles" / "turtlebot3.yaml")
+    profile, info = resolve_profile(log, ROOT / "profiles" / "turtlebot3.yaml", active_project())
     imported = tmp_path / "tb3.mcap"
     import_log(log, profile, {r: i.msgtype for r, i in info.items()}, imported)
     drive = read_drive(imported, profile.agent)
@@ -101,7 +102,7 @@ def test_a_speed_limit_caps_the_simulated_turtlebot(bags: Path, tmp_path: Path) 
     for limit in (None, 0.2):
         limited = with_values(profile, {"commands.max_speed_mps": limit} if limit else {})
         limited = with_values(limited, {"commands.max_accel_mps2": 1.0} if limit else {})
-        setup = sim_setup(limited, None, [])
+        setup = sim_setup(limited, None, [], active_project())
         plant = Plant(setup.scenario, drive, setup.convert)
         try:
             _, states = run_whole(plant, drive)

@@ -13,6 +13,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.realdata.profile import CommandRole, PoseRole, Profile
 from kartci.realdata.simreal import guess_scenario, sim_setup
 
@@ -41,12 +42,12 @@ def test_the_command_type_picks_the_scenario(msgtype: str, scenario: str,
     assert name == scenario
     if why is not None:
         assert said == why
-    setup = sim_setup(_profile(), None, [], {"commands": msgtype})
+    setup = sim_setup(_profile(), None, [], active_project(), {"commands": msgtype})
     assert setup.scenario.name == scenario and setup.picked == said
 
 
 def test_a_named_scenario_is_not_guessed() -> None:
-    setup = sim_setup(_profile(), "kart_simreal", [], {"commands": TWIST})
+    setup = sim_setup(_profile(), "kart_simreal", [], active_project(), {"commands": TWIST})
     assert setup.scenario.name == "kart_simreal" and setup.picked == ""
 
 

@@ -14,6 +14,7 @@ from rosbags.typesys import Stores, get_typestore
 import kartci as kartci_api
 from kartci.errors import LogError, SpecError
 from kartci.logs import extract, messages
+from kartci.project import current as active_project
 from kartci.realdata.profile import load_profile, resolve_profile
 from kartci.realdata.score import score_log
 from kartci.runner.run import rescore
@@ -40,17 +41,19 @@ def test_jackal_scored_with_its_profile_and_judged_against_its_baseline(
     assert 50 < m["distance_m"] < 120 and 0 < m["mean_speed_mps"] < m["max_speed_mps"] < 3
     assert (out / "report.html").is_file() and (out / "junit.xml").is_file()
     assert kartci("baseline", "update", out, "jackal", "--baselines", baselines).returncode == 0
-    again = score_log(bags / "jackal_imu_odom.bag", PROFILES / "jackal.yaml", out, baselines)
+    again = score_log(bags / "jackal_imu_odom.bag", PROFILES / "jackal.yaml", out, baselines,
+                      active_project())
     assert again.status is Status.PASS
     # a baseline the log no longer meets fails the gate like a simulated run's
     doc = json.loads((baselines / "jackal.json").read_text(encoding="utf-8"))
     doc["metrics"]["distance_m"]["value"] = 200.0
     (baselines / "jackal.json").write_text(json.dumps(doc), encoding="utf-8")
-    worse = score_log(bags / "jackal_imu_odom.bag", PROFILES / "jackal.yaml", out, baselines)
+    worse = score_log(bags / "jackal_imu_odom.bag", PROFILES / "jackal.yaml", out, baselines,
+                      active_project())
     assert worse.status is Status.REGRESSED
     # the imported run log is a kartci run log: `kartci report` re-scores it from it alone
     (out / "jackal" / "metrics.json").unlink()
-    (rescored,) = rescore(out, baselines)
+    (rescored,) = rescore(out, baselines, active_project())
     assert rescored.status is Status.REGRESSED and _metrics(out, "jackal") == m
 
 
@@ -76,7 +79,7 @@ def test_no_html_writes_the_same_metrics_and_no_html_report(bags: Path, tmp_path
 def test_every_shipped_profile_matches_its_fixture(bags: Path, profile: Path) -> None:
     logs = {"jackal": "jackal_imu_odom.bag", "turtlebot3": "turtlebot3_gazebo_cmd_odom_scan.bag",
             "luminar_stage": "luminar_points_stage.bag"}
-    p, info = resolve_profile(bags / logs[profile.stem], profile)
+    p, info = resolve_profile(bags / logs[profile.stem], profile, active_project())
     assert info["pose"].count > 0 and p.name == profile.stem
 
 
@@ -99,7 +102,7 @@ def test_every_storage_format_scores_the_same(bags: Path, tmp_path: Path) -> Non
     results = []
     for i, log in enumerate([src, bare, *folders]):
         out = tmp_path / f"out{i}"
-        result = score_log(log, None, out, tmp_path)
+        result = score_log(log, None, out, tmp_path, active_project())
         assert result.error is None, result.error
         results.append(_metrics(out, result.name))
     assert all(r == results[0] for r in results[1:])
@@ -109,7 +112,7 @@ def test_every_storage_format_scores_the_same(bags: Path, tmp_path: Path) -> Non
                                  "rosbag2_cdr_test_db3", "ros1_no_messages.bag"])
 def test_a_log_without_pose_is_refused(bags: Path, log: str) -> None:
     with pytest.raises(SpecError, match="no pose or odometry topic with messages"):
-        resolve_profile(bags / log, None)
+        resolve_profile(bags / log, None, active_project())
 
 
 def test_a_log_without_pose_is_one_line_and_exit_2(bags: Path, tmp_path: Path) -> None:
@@ -134,14 +137,14 @@ def test_profile_errors_name_the_file_and_key(tmp_path: Path) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("pose: {topic: /odom}\nimu: {topik: /imu}\n", encoding="utf-8")
     with pytest.raises(SpecError, match=r"bad.yaml: imu.topic"):
-        load_profile(bad)
+        load_profile(bad, active_project())
 
 
 def test_a_pose_of_the_wrong_type_is_refused(bags: Path, tmp_path: Path) -> None:
     profile = tmp_path / "w.yaml"
     profile.write_text("pose: {topic: /scan}\n", encoding="utf-8")
     with pytest.raises(SpecError, match="pose topic /scan is sensor_msgs/msg/LaserScan"):
-        resolve_profile(bags / "turtlebot3_gazebo_cmd_odom_scan.bag", profile)
+        resolve_profile(bags / "turtlebot3_gazebo_cmd_odom_scan.bag", profile, active_project())
 
 
 def test_localization_error_of_an_estimate(bags: Path, tmp_path: Path) -> None:
@@ -162,7 +165,7 @@ def test_localization_error_of_an_estimate(bags: Path, tmp_path: Path) -> None:
     profile.write_text("name: loc\npose: {topic: /jackal_velocity_controller/odom}\n"
                        "estimate: {topic: /ekf/odom}\n", encoding="utf-8")
     out = tmp_path / "out"
-    assert score_log(log, profile, out, tmp_path).error is None
+    assert score_log(log, profile, out, tmp_path, active_project()).error is None
     m = _metrics(out, "loc")
     assert m["ape_rmse_m"] == pytest.approx(0.3, abs=1e-9)
     assert m["ape_max_m"] == pytest.approx(0.3, abs=1e-9)
@@ -181,7 +184,8 @@ def test_a_run_log_scored_through_a_profile_gets_the_runs_own_track_metrics(
     profile.write_text(f"name: hall\npose: {{topic: /kart0/odom}}\ntrack: {track}\n"
                        "collisions: {topic: /kart0/collision}\n", encoding="utf-8")
     out = tmp_path / "out"
-    assert score_log(run / "kart_wall" / "run.mcap", profile, out, tmp_path).error is None
+    assert score_log(run / "kart_wall" / "run.mcap", profile, out, tmp_path,
+                     active_project()).error is None
     own, scored = _metrics(run, "kart_wall"), _metrics(out, "hall")
     for name in ("progress_m", "cross_track_rms_m", "mean_speed_mps", "max_speed_mps",
                  "laps_completed", "collisions"):
@@ -195,7 +199,8 @@ def test_a_pose_in_another_frame_than_the_profile_says_is_refused(bags: Path,
     profile = tmp_path / "tb.yaml"
     profile.write_text("name: tb\npose: {topic: /odom, frame_id: map}\n", encoding="utf-8")
     with pytest.raises(LogError, match="/odom is in frame 'odom', the profile expects 'map'"):
-        score_log(bags / "turtlebot3_gazebo_cmd_odom_scan.bag", profile, tmp_path / "o", tmp_path)
+        score_log(bags / "turtlebot3_gazebo_cmd_odom_scan.bag", profile, tmp_path / "o", tmp_path,
+                  active_project())
 
 
 def test_criteria_of_the_profile_gate_the_log(bags: Path, tmp_path: Path) -> None:
@@ -203,7 +208,8 @@ def test_criteria_of_the_profile_gate_the_log(bags: Path, tmp_path: Path) -> Non
     profile.write_text("name: fast\npose: {topic: /jackal_velocity_controller/odom}\n"
                        "criteria: {max_speed_mps: {max: 1.0}, duration_s: {min: 60}}\n",
                        encoding="utf-8")
-    result = score_log(bags / "jackal_imu_odom.bag", profile, tmp_path / "o", tmp_path)
+    result = score_log(bags / "jackal_imu_odom.bag", profile, tmp_path / "o", tmp_path,
+                       active_project())
     verdict = {c.name: c.ok for c in result.criteria}
     assert verdict == {"max_speed_mps": False, "duration_s": True}  # it reaches 1.99 m/s
     assert result.status is Status.FAILED

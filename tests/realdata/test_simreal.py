@@ -7,11 +7,11 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import changed
-from helpers import kartci
+from helpers import changed, kartci
 
 from kartci.core import RunFolder
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.realdata.calibrate import Objective, parse_params
 from kartci.realdata.drive import read_drive
 from kartci.realdata.importer import import_log
@@ -24,10 +24,11 @@ from kartci.verdict import Status
 def divergence_of(log: Path, profile: Path, overrides: list[str],
                   tmp: Path) -> dict[str, float]:
     """The simreal divergence metrics of a log, in process."""
-    p, info = resolve_profile(log, profile)
+    p, info = resolve_profile(log, profile, active_project())
     imported = tmp / f"{log.stem}.imported.mcap"
     import_log(log, p, {r: i.msgtype for r, i in info.items()}, imported)
-    objective = Objective(p, None, overrides, (), read_drive(imported, p.agent), 2.0)
+    objective = Objective(p, None, overrides, (), read_drive(imported, p.agent), 2.0,
+                          active_project())
     return objective.metrics([])
 
 
@@ -69,10 +70,11 @@ def test_simreal_command_writes_a_judged_report(kart_logs: dict[float, Path], ka
     base = json.loads(path.read_text(encoding="utf-8"))
     base["metrics"]["simreal_ape_window_rmse_m"]["value"] = m["simreal_ape_window_rmse_m"] / 10
     path.write_text(json.dumps(base), encoding="utf-8")
-    assert evaluate(RunFolder(out / "synth_kart_simreal"), baselines).status is Status.REGRESSED
+    assert evaluate(RunFolder(out / "synth_kart_simreal"), baselines,
+                    active_project()).status is Status.REGRESSED
 
 
 def test_unknown_parameter_is_refused(kart_profile: Path) -> None:
-    setup = sim_setup(load_profile(kart_profile), None, [])
+    setup = sim_setup(load_profile(kart_profile, active_project()), None, [], active_project())
     with pytest.raises(SpecError, match=r"model\.nope: no such key"):
         parse_params(setup, ["model.nope"])

@@ -17,6 +17,7 @@ from rosbags.typesys import Stores, get_typestore
 from scipy.spatial.transform import Rotation
 
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.realdata.profile import load_profile
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -136,4 +137,4 @@ def test_a_tf_pose_names_both_frames(tmp_path: Path) -> None:
     path = tmp_path / "p.yaml"
     path.write_text("pose: {topic: /tf, parent: map}\n")
     with pytest.raises(SpecError, match="both `parent` and `child`"):
-        load_profile(path)
+        load_profile(path, active_project())

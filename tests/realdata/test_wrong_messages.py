@@ -15,6 +15,7 @@ from helpers import kartci
 from kartci.errors import SpecError
 from kartci.logs import McapLogWriter
 from kartci.logs.types import header, msg
+from kartci.project import current as active_project
 from kartci.realdata.profile import check_profile, load_profile
 
 BAG = "turtlebot3_gazebo_cmd_odom_scan.bag"
@@ -48,7 +49,7 @@ def test_pose_and_estimate_on_one_topic_say_so(tmp_path: Path) -> None:
     path = tmp_path / "same.yaml"
     path.write_text("pose: {topic: /robot/odom}\nestimate: {topic: /robot/odom}\n")
     with pytest.raises(SpecError) as err:
-        check_profile(log, load_profile(path))
+        check_profile(log, load_profile(path, active_project()))
     assert str(err.value) == (
         f"{log}: profile same: estimate and pose name the same topic /robot/odom: an estimate "
         "judged against its own reference has no error to measure; name the estimate's own "
@@ -59,7 +60,7 @@ def test_pose_and_estimate_on_two_chains_of_one_tf_topic_are_fine(tmp_path: Path
     path = tmp_path / "tf.yaml"
     path.write_text("pose: {topic: /tf, parent: map, child: base_link}\n"
                     "estimate: {topic: /tf, parent: odom, child: base_link}\n")
-    profile = load_profile(path)
+    profile = load_profile(path, active_project())
     with pytest.raises(SpecError, match="pose topic /tf is not in the log"):
         check_profile(_odom_log(tmp_path / "run.mcap"), profile)  # not "the same TF chain"
 

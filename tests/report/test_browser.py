@@ -18,6 +18,7 @@ from cdp import Browser, find_browser
 from helpers import EMOJI, PAIR, ROOT, KartLap, glance_results
 from PIL import Image
 
+from kartci.project import current as active_project
 from kartci.report import COMPARE, write_all
 from kartci.report.history import write_history
 from kartci.runner import expand, run_jobs
@@ -38,14 +39,16 @@ def reports(tmp_path_factory: pytest.TempPathFactory, kart_lap: KartLap) -> tupl
     root = tmp_path_factory.mktemp("browser")
     baselines = root / "baselines"
     baselines.mkdir()
-    base = run_jobs(expand(PAIR, QUICK), root / "base", baselines)
-    head = run_jobs(expand(PAIR, [*QUICK, "agents.lt0.controller.kp=20"]), root / "head",
-                    baselines)
+    base = run_jobs(expand(PAIR, QUICK,
+                           active_project()), root / "base", baselines, active_project())
+    head = run_jobs(expand(PAIR, [*QUICK, "agents.lt0.controller.kp=20"],
+                           active_project()), root / "head",
+                    baselines, active_project())
     assert not [r.error for r in base + head if r.error]
     kart = kart_lap.result  # a lap judged against its baseline, with the reference trace
     write_all([*head, kart], root / "head")  # a line lab and a race track
     shutil.copytree(kart_lap.out / "kart_manual", root / "head" / "kart_manual")
-    cmp = compare_outs(root / "base", root / "head", baselines)
+    cmp = compare_outs(root / "base", root / "head", baselines, active_project())
     write_all(cmp, root / "cmp", COMPARE)
     return root / "head" / "report.html", root / "cmp" / "report.html"
 

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from helpers import KartLap, kartci
 
+from kartci.project import current as active_project
 from kartci.verdict.trace import load_trace
 
 
@@ -93,7 +94,7 @@ def test_every_shipped_scenario_has_a_small_reference_trace() -> None:
     from kartci.runner.jobs import default_suite
 
     proj = project.current()
-    for name in default_suite(proj.own_scenarios()):
+    for name in default_suite(proj.own_scenarios(), active_project()):
         path = proj.baselines / "traces" / f"{name}.json"
         assert path.is_file(), f"no reference trace for {name}: run `kartci baseline update`"
         assert path.stat().st_size < 20_000

@@ -8,14 +8,16 @@ from pathlib import Path
 from helpers import PAIR
 from rich.console import Console
 
+from kartci.project import current as active_project
 from kartci.report.progress import JobState, ProgressView
 from kartci.runner import Event, EventKind, Outcome, expand, run_jobs
 
 
 def test_pool_workers_report_start_sim_time_and_end(tmp_path: Path, baselines: Path) -> None:
     events: list[Event] = []
-    jobs = expand(PAIR, ["duration_s=2.5", "criteria={}", "metrics.line_tracking.transient_s=0.5"])
-    run_jobs(jobs, tmp_path, baselines, workers=2, on_event=events.append)
+    jobs = expand(PAIR, ["duration_s=2.5", "criteria={}", "metrics.line_tracking.transient_s=0.5"],
+                  active_project())
+    run_jobs(jobs, tmp_path, baselines, active_project(), workers=2, on_event=events.append)
     for name in PAIR:
         mine = [e for e in events if e.folder == name]
         kinds = [e.kind for e in mine]
@@ -30,7 +32,7 @@ def _console(terminal: bool) -> tuple[Console, io.StringIO]:
 
 
 def test_ci_view_prints_one_line_per_finished_job() -> None:
-    jobs = expand(PAIR, [])
+    jobs = expand(PAIR, [], active_project())
     console, buf = _console(False)
     with ProgressView(jobs, console, live=False) as view:
         view(Event(EventKind.STARTED, "line_circle"))
@@ -45,7 +47,7 @@ def test_ci_view_prints_one_line_per_finished_job() -> None:
 
 
 def test_live_view_counts_done_running_queued() -> None:
-    jobs = expand(PAIR, [], repeat=2)
+    jobs = expand(PAIR, [], active_project(), repeat=2)
     console, buf = _console(True)
     with ProgressView(jobs, console, live=True) as view:
         view(Event(EventKind.STARTED, "line_circle"))

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from kartci.project import current as active_project
 from kartci.runner import costs, expand
 from kartci.runner.jobs import Job, Outcome
 
@@ -18,7 +19,8 @@ def _cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def _jobs() -> dict[str, Job]:
-    return {j.label: j for j in expand(["line_straight", "kart_wall", "mpcc_lap"], [])}
+    return {j.label: j for j in expand(["line_straight", "kart_wall", "mpcc_lap"], [],
+                                       active_project())}
 
 
 def test_without_timings_the_longest_simulation_goes_first() -> None:
@@ -44,7 +46,7 @@ def test_learned_wall_times_set_the_order_and_unseen_ones_use_the_median_speed()
 def test_failed_runs_and_repeats_teach_nothing_and_a_broken_file_is_ignored(
         tmp_path: Path) -> None:
     jobs = _jobs()
-    repeat = expand(["kart_wall"], [], repeat=2)[1]
+    repeat = expand(["kart_wall"], [], active_project(), repeat=2)[1]
     costs.remember([Outcome(jobs["kart_wall"], error="boom", job_s=99.0),
                     Outcome(repeat, job_s=50.0)])
     assert not (tmp_path / costs.FILE).exists()
@@ -59,7 +61,7 @@ def test_failed_runs_and_repeats_teach_nothing_and_a_broken_file_is_ignored(
 
 def test_a_shortened_run_teaches_nothing_about_the_full_scenario() -> None:
     full = _jobs()["mpcc_lap"]
-    short = expand(["mpcc_lap"], ["duration_s=2"])[0]
+    short = expand(["mpcc_lap"], ["duration_s=2"], active_project())[0]
     assert short.label == full.label == "mpcc_lap"
     costs.remember([Outcome(short, job_s=0.5)])
     assert costs.estimate_s(short, costs.load()) == 0.5

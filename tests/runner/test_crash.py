@@ -11,6 +11,7 @@ from helpers import PAIR, QUICK, kartci
 
 from kartci.core import Outbox
 from kartci.project import BUILTIN_SCENARIOS
+from kartci.project import current as active_project
 from kartci.report import write_all
 from kartci.robots.line_tracker.line_pid import LinePid
 from kartci.runner import expand, run_jobs
@@ -30,8 +31,9 @@ def test_a_controller_exception_fails_its_scenario_only(tmp_path: Path, baseline
         return real(self, t_ns)
 
     monkeypatch.setattr(LinePid, "step", step)
-    jobs = expand(PAIR, ["duration_s=2", "criteria={}", "metrics.line_tracking.transient_s=0.5"])
-    results = {r.name: r for r in run_jobs(jobs, tmp_path, baselines)}
+    jobs = expand(PAIR, ["duration_s=2", "criteria={}", "metrics.line_tracking.transient_s=0.5"],
+                  active_project())
+    results = {r.name: r for r in run_jobs(jobs, tmp_path, baselines, active_project())}
     assert results["line_straight"].status is Status.ERROR
     assert "ZeroDivisionError: controller bug" in (results["line_straight"].error or "")
     assert results["line_circle"].status is Status.NEW  # finished and scored

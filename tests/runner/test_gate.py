@@ -29,6 +29,7 @@ from kartci.errors import BaselineError, RunError
 from kartci.logs import McapLogWriter, messages, msg
 from kartci.plotting import Plots
 from kartci.project import BUILTIN_SCENARIOS
+from kartci.project import current as active_project
 from kartci.report import write_all
 from kartci.robots.line_tracker.line_pid import LinePid
 from kartci.runner import expand, run_jobs
@@ -58,8 +59,8 @@ def _run(out: Path, baselines: Path, *names: str, extra: tuple[str, ...] = (),
 
 def test_a_scoring_failure_marks_the_folder_and_keeps_the_good_log(
         tmp_path: Path, baselines: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    jobs = expand(["line_straight"], OVERRIDES)
-    assert run_jobs(jobs, tmp_path, baselines)[0].status is Status.NEW
+    jobs = expand(["line_straight"], OVERRIDES, active_project())
+    assert run_jobs(jobs, tmp_path, baselines, active_project())[0].status is Status.NEW
     folder = tmp_path / "line_straight"
     good = (folder / "run.mcap").read_bytes()
 
@@ -67,8 +68,9 @@ def test_a_scoring_failure_marks_the_folder_and_keeps_the_good_log(
         raise KeyError("cross_track")  # a scoring bug after a complete simulation
 
     monkeypatch.setattr(metrics, "compute", broken)
-    slower = expand(["line_straight"], [*OVERRIDES, "agents.lt0.controller.kp=20"])
-    result = run_jobs(slower, tmp_path, baselines)[0]
+    slower = expand(["line_straight"], [*OVERRIDES, "agents.lt0.controller.kp=20"],
+                    active_project())
+    result = run_jobs(slower, tmp_path, baselines, active_project())[0]
     assert result.status is Status.ERROR
     assert (folder / "error.json").exists()
     assert (folder / "run.mcap").read_bytes() == good  # not replaced by the unscored run
@@ -84,7 +86,8 @@ def test_a_crashed_controller_leaves_its_traceback_beside_a_one_line_error(
         raise ZeroDivisionError("controller bug\nsecond line")
 
     monkeypatch.setattr(LinePid, "step", step)
-    result = run_jobs(expand(["line_straight"], OVERRIDES), tmp_path, baselines)[0]
+    result = run_jobs(expand(["line_straight"], OVERRIDES,
+                             active_project()), tmp_path, baselines, active_project())[0]
     assert result.error is not None and "\n" not in result.error
     assert "ZeroDivisionError: controller bug" in result.error
     trace = (tmp_path / "line_straight" / "traceback.txt").read_text()
@@ -340,8 +343,9 @@ def test_a_full_disk_leaves_no_partial_files_and_the_others_still_run(
     monkeypatch.setattr(McapLogWriter, "__init__", init)
     monkeypatch.setattr(Writer, "add_message", add_message)
     monkeypatch.setattr(Writer, "finish", finish_)
-    results = {r.name: r for r in run_jobs(expand(["line_straight", "line_circle"], OVERRIDES),
-                                           tmp_path, baselines)}
+    results = {r.name: r for r in run_jobs(expand(["line_straight", "line_circle"], OVERRIDES,
+                                                  active_project()),
+                                           tmp_path, baselines, active_project())}
     assert "No space left" in (results["line_straight"].error or "")
     assert results["line_circle"].status is Status.NEW
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".partial")
@@ -449,7 +453,8 @@ def test_a_time_limit_names_the_sim_time_it_stopped_at(
         return real(self, t_ns)
 
     monkeypatch.setattr(LinePid, "step", step)
-    result = run_jobs(expand(["line_straight"], OVERRIDES), tmp_path, baselines,
+    result = run_jobs(expand(["line_straight"], OVERRIDES,
+                             active_project()), tmp_path, baselines, active_project(),
                       timeout_s=600.0)[0]
     # line_pid steps every 0.06 s: at 0.24 s, one physics step (2 ms) after the 0.238 s reached
     assert result.error == "time limit: over 600 s wall clock (at sim time 0.238 s)"
@@ -468,7 +473,8 @@ def test_a_sleeping_controller_step_is_stopped_by_the_time_limit(
 
     monkeypatch.setattr(LinePid, "step", step)
     start = time.monotonic()
-    result = run_jobs(expand(["line_straight"], OVERRIDES), tmp_path, baselines,
+    result = run_jobs(expand(["line_straight"], OVERRIDES,
+                             active_project()), tmp_path, baselines, active_project(),
                       timeout_s=1.0)[0]
     assert result.status is Status.ERROR
     assert "time limit: over 1 s wall clock" in (result.error or "")

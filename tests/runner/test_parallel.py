@@ -10,6 +10,7 @@ from helpers import PAIR, QUICK, kartci
 from junitparser import JUnitXml
 
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.runner import expand, parse_shard, shard
 from kartci.runner.merge import merge
 
@@ -83,7 +84,7 @@ def test_ray_missing_is_one_line(tmp_path: Path) -> None:
 
 
 def test_shards_are_disjoint_deterministic_and_cover_everything() -> None:
-    jobs = expand(PAIR, [], ["seed=1,2,3"], repeat=2)
+    jobs = expand(PAIR, [], active_project(), ["seed=1,2,3"], repeat=2)
     assert len(jobs) == 12  # 2 scenarios x 3 sweep points x 2 repeats
     parts = [shard(jobs, i, 4) for i in range(1, 5)]
     labels = [{j.label for j in p} for p in parts]
@@ -105,9 +106,9 @@ def test_merge_refuses_a_missing_or_repeated_shard(tmp_path: Path, baselines: Pa
         (tmp_path / f"s{i}" / "shard.json").write_text(json.dumps(
             {"index": 1 if i == 1 else 3, "total": 3, "scenarios": []}))
     with pytest.raises(SpecError, match="shard 2 of 3 missing"):
-        merge([tmp_path / "s1", tmp_path / "s2"], tmp_path / "out", baselines)
+        merge([tmp_path / "s1", tmp_path / "s2"], tmp_path / "out", baselines, active_project())
     with pytest.raises(SpecError, match="given twice"):
-        merge([tmp_path / "s1", tmp_path / "s1"], tmp_path / "out", baselines)
+        merge([tmp_path / "s1", tmp_path / "s1"], tmp_path / "out", baselines, active_project())
 
 
 @pytest.mark.long(reason="four short runs in worker processes")
@@ -117,15 +118,17 @@ def test_warm_workers_serve_a_second_batch_with_the_same_processes_and_bits(
     from kartci.runner.suite import run_jobs
 
     quick = ["duration_s=1", "criteria={}", "metrics.line_tracking.transient_s=0.5"]
-    jobs = expand(PAIR, quick)
+    jobs = expand(PAIR, quick, active_project())
     (tmp_path / "b").mkdir()
     warm = Warm()
     try:
-        first = run_jobs(jobs, tmp_path / "one", tmp_path / "b", workers=2, warm=warm)
+        first = run_jobs(jobs, tmp_path / "one", tmp_path / "b",
+                         active_project(), workers=2, warm=warm)
         kept = warm.workers
         assert kept is not None
         pids = {p.pid for p in kept.ex._processes.values()}
-        second = run_jobs(jobs, tmp_path / "two", tmp_path / "b", workers=2, warm=warm)
+        second = run_jobs(jobs, tmp_path / "two", tmp_path / "b",
+                          active_project(), workers=2, warm=warm)
         assert warm.workers is kept and {p.pid for p in kept.ex._processes.values()} == pids
     finally:
         warm.close()

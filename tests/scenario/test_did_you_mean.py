@@ -8,6 +8,7 @@ import pytest
 
 from kartci.core import WORLDS
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.runner.run import check_criteria_names
 from kartci.scenario import load_scenario
 
@@ -39,7 +40,8 @@ CASES = {
 @pytest.mark.parametrize("override", list(CASES))
 def test_a_misspelt_name_gets_the_nearest_known_one(override: str) -> None:
     with pytest.raises(SpecError) as err:
-        check_criteria_names([load_scenario("line_straight", [override])])
+        check_criteria_names([load_scenario("line_straight", [override],
+                                            project=active_project())], active_project())
     assert CASES[override] in str(err.value)
 
 

@@ -18,6 +18,7 @@ from pydantic import Field
 from kartci import core
 from kartci.core import Agent
 from kartci.project import BUILTIN_SCENARIOS
+from kartci.project import current as active_project
 from kartci.scenario import json_schema, load_scenario
 from kartci.scenario.models import ControllerParams
 from kartci.scenario.schema import scenario_schema
@@ -77,7 +78,8 @@ def test_every_shipped_scenario_validates_as_written_and_resolved(
         path: Path, schema: dict[str, Any]) -> None:
     check = validator(schema)
     check.validate(yaml.safe_load(path.read_text(encoding="utf-8")))
-    resolved = load_scenario(str(path)).model_dump(mode="json")  # what `kartci show` prints
+    # what `kartci show` prints
+    resolved = load_scenario(str(path), project=active_project()).model_dump(mode="json")
     check.validate(resolved)
 
 

@@ -10,6 +10,7 @@ import pytest
 from helpers import kartci
 
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 
 ZONE = "{name: wet, min_m: [0.0, 0.0], max_m: [8.0, 20.0], friction: -0.5}"
@@ -19,14 +20,15 @@ def test_a_list_items_field_a_nested_item_and_a_whole_item_are_set() -> None:
     spec = load_scenario("obstacle_avoidance", [
         "world.zones.0.friction=0.3", "world.obstacles.1.center_m.0=30.0",
         "world.obstacles.4={center_m: [5.0, 4.0], size_m: [1.0, 1.0, 1.0]}",
-        "agents.kart0.model.steering_limit_rad.1=0.5"])
+        "agents.kart0.model.steering_limit_rad.1=0.5"], project=active_project())
     world = spec.world
     assert world.zones[0].friction == 0.3  # type: ignore[attr-defined]
     assert world.obstacles[1].center_m == (30.0, 5.94)  # type: ignore[attr-defined]
     assert world.obstacles[4].size_m == (1.0, 1.0, 1.0)  # type: ignore[attr-defined]
     assert spec.agents["kart0"].model.steering_limit_rad == (-1.845, 0.5)  # type: ignore[attr-defined]
     # the scenario file is untouched by the next load
-    assert load_scenario("obstacle_avoidance").world.zones[0].friction == 0.6  # type: ignore[attr-defined]
+    again = load_scenario("obstacle_avoidance", project=active_project())
+    assert again.world.zones[0].friction == 0.6  # type: ignore[attr-defined]
 
 
 @pytest.mark.parametrize(("assignment", "message"), [
@@ -47,7 +49,7 @@ def test_a_list_items_field_a_nested_item_and_a_whole_item_are_set() -> None:
 ])
 def test_an_item_that_is_not_there_is_one_line(assignment: str, message: str) -> None:
     with pytest.raises(SpecError) as err:
-        load_scenario("mpcc_lap", [assignment])
+        load_scenario("mpcc_lap", [assignment], project=active_project())
     assert str(err.value) == message
     p = kartci("show", "mpcc_lap", "--set", assignment)
     assert (p.returncode, p.stdout, p.stderr) == (2, "", f"kartci: error: {message}\n")
@@ -69,11 +71,12 @@ def test_a_bad_item_value_is_judged_as_in_a_file(tmp_path: Path) -> None:
                           (["world.zones=[{name: a, min_m: [0, 0], max_m: [1, 1], friction: -2}]"],
                            typed)):
         with pytest.raises(SpecError) as err:
-            load_scenario(scenario, sets)
+            load_scenario(scenario, sets, project=active_project())
         assert str(err.value) == message
     p = kartci("show", scenario, "--set", "world.zones.0.name=dry")
     assert (p.returncode, p.stdout, p.stderr) == (2, "", f"kartci: error: {in_file}\n")
-    fixed = load_scenario(scenario, ["world.zones.0.friction=0.3", "world.zones.0.name=dry"])
+    fixed = load_scenario(scenario, ["world.zones.0.friction=0.3", "world.zones.0.name=dry"],
+                          project=active_project())
     assert (fixed.world.zones[0].name, fixed.world.zones[0].friction) == (  # type: ignore[attr-defined]
         "dry", 0.3)
 
@@ -81,4 +84,4 @@ def test_a_bad_item_value_is_judged_as_in_a_file(tmp_path: Path) -> None:
 def test_an_unknown_field_of_an_item_is_named_with_the_nearest_one() -> None:
     with pytest.raises(SpecError, match=r"mpcc_lap.yaml: world\.zones\.0\.frictio \(from --set\): "
                        r"unknown key \(did you mean 'friction'\?\)$"):
-        load_scenario("mpcc_lap", ["world.zones.0.frictio=0.3"])
+        load_scenario("mpcc_lap", ["world.zones.0.frictio=0.3"], project=active_project())

@@ -25,6 +25,7 @@ from hypothesis import strategies as st
 
 from kartci.errors import KartciError, SpecError
 from kartci.project import BUILTIN_SCENARIOS, BUILTIN_SIMS
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.scenario.yamlio import (
     SPEC_MAX_BYTES,
@@ -54,7 +55,7 @@ def _spec_error(load: Callable[[], object]) -> str:
 
 
 def _scenario_error(name: str, *overrides: str) -> str:
-    return _spec_error(lambda: load_scenario(name, list(overrides)))
+    return _spec_error(lambda: load_scenario(name, list(overrides), project=active_project()))
 
 
 def _file(tmp_path: Path, text: str | bytes, name: str = "bad.yaml") -> str:
@@ -132,7 +133,8 @@ def _without_hanging(load: Callable[[], object], fifo: Path) -> BaseException | 
 def test_fifos_devices_and_directories_are_refused_without_reading(tmp_path: Path) -> None:
     fifo = tmp_path / "pipe.yaml"
     os.mkfifo(fifo)
-    for load in (lambda: load_scenario(str(fifo)), lambda: load_track(fifo)):
+    for load in (lambda: load_scenario(str(fifo),
+                                       project=active_project()), lambda: load_track(fifo)):
         err = _without_hanging(load, fifo)
         assert isinstance(err, SpecError) and "not a regular file (a FIFO)" in str(err)
     if Path("/dev/zero").exists():
@@ -361,11 +363,12 @@ LONG = settings(max_examples=12_000, database=None, deadline=None,
 def _check_document(data: bytes, folder: Path) -> None:
     path = folder / "fuzz.yaml"
     path.write_bytes(data)
-    _loads_or_one_line_error(lambda: load_scenario(str(path)))
+    _loads_or_one_line_error(lambda: load_scenario(str(path), project=active_project()))
 
 
 def _check_overrides(overrides: list[str]) -> None:
-    _loads_or_one_line_error(lambda: load_scenario("line_straight", overrides))
+    _loads_or_one_line_error(lambda: load_scenario("line_straight", overrides,
+                                                   project=active_project()))
 
 
 @FAST

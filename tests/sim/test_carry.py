@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from kartci.logs import tables
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
@@ -15,7 +16,8 @@ from kartci.sim import simulate
 def test_carry_moves_the_kart_once_and_keeps_its_speed(tmp_path: Path) -> None:
     log = tmp_path / "run.mcap"
     simulate(load_scenario("kart_manual", ["duration_s=2", "criteria={}",
-                                           "agents.kart0.carry={at_s: 1.0, offset_m: [0.0, 1.0]}"]),
+                                           "agents.kart0.carry={at_s: 1.0, offset_m: [0.0, 1.0]}"],
+                                           project=active_project()),
              log)
     odom = tables(log, ["/kart0/odom"])["/kart0/odom"]
     t, x, y, vx = (odom[c].to_numpy() for c in ("t", "x", "y", "vx"))

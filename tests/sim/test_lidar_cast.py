@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from kartci.project import current as active_project
 from kartci.robots.gokart.noise import SECTORS, distorted_scan
 from kartci.scenario import load_scenario
 from kartci.sim import lidar
@@ -18,7 +19,7 @@ AZ = VLP16.azimuths(10.0)
 
 
 def _hall() -> HallWorld:
-    world = load_scenario("kart_replay").world
+    world = load_scenario("kart_replay", project=active_project()).world
     assert isinstance(world, HallWorld)
     return world
 

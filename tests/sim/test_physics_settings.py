@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim.session import Session
 from kartci.worlds.track.world import TrackWorld
@@ -17,7 +18,7 @@ from kartci.worlds.track.world import TrackWorld
 def _drive(name: str, sets: list[str]) -> tuple[np.ndarray, list[Any]]:
     """Ground-truth (t, x, y, yaw, v) every 10 ms, and the collision messages, of a run."""
     states, collisions = [], []
-    with Session(load_scenario(name, sets)) as s:
+    with Session(load_scenario(name, sets, project=active_project())) as s:
         r = s.reset()
         body = s.world.robots[0].body  # type: ignore[attr-defined]  # a kart
         while not r.done:

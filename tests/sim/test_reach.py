@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from kartci._bullet import pb
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim.session import Session
 
@@ -14,7 +15,7 @@ def _touching(client: int, body: int, floor: int) -> bool:
 
 
 def test_reach_is_never_clear_where_the_kart_touches_a_wall() -> None:
-    with Session(load_scenario("kart_wall", ["duration_s=4"])) as s:
+    with Session(load_scenario("kart_wall", ["duration_s=4"], project=active_project())) as s:
         r = s.reset()
         w = s.world
         kart = w.robots[0]
@@ -32,7 +33,7 @@ def test_reach_is_never_clear_where_the_kart_touches_a_wall() -> None:
 
 
 def test_reach_always_asks_when_a_body_that_moves_is_in_the_world() -> None:
-    with Session(load_scenario("kart_manual", ["duration_s=1"])) as s:
+    with Session(load_scenario("kart_manual", ["duration_s=1"], project=active_project())) as s:
         s.reset()
         w = s.world
         kart = w.robots[0]

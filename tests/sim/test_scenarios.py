@@ -7,13 +7,14 @@ from pathlib import Path
 import pytest
 
 from kartci.metrics import Metric, compute
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
 
 def _run(tmp_path: Path, name: str, *sets: str) -> dict[str, Metric]:
     log = tmp_path / f"{name}.mcap"
-    simulate(load_scenario(name, list(sets)), log)
+    simulate(load_scenario(name, list(sets), project=active_project()), log)
     return compute(log)[1]
 
 

@@ -10,6 +10,7 @@ from helpers import PAIR, QUICK, ROOT, kartci
 from junitparser import JUnitXml
 
 from kartci.core import Direction
+from kartci.project import current as active_project
 from kartci.report.ci import annotation_lines, scenario_files, truncate
 from kartci.report.markdown import summary_md
 from kartci.verdict import MetricVerdict, Status
@@ -94,12 +95,13 @@ def test_annotations_stop_at_ten_and_say_how_many_more() -> None:
 
 def test_annotations_are_anchored_to_the_scenario_file() -> None:
     r = ScenarioResult("line_circle@kp=20", "", [_v("m", 2.0, 0.0, 1.0)])
-    files = scenario_files([r], ROOT)
+    files = scenario_files([r], active_project(), ROOT)
     assert files == {"line_circle@kp=20": "scenarios/line_circle.yaml"}
     [line] = annotation_lines([r], files=files)
     assert line.startswith("::error file=scenarios/line_circle.yaml,line=1,title=")
-    assert scenario_files([r], ROOT / "tests") == {}  # not in that repository: no anchor
-    assert scenario_files([ScenarioResult("no_such", "")], ROOT) == {}
+    # not in that repository: no anchor
+    assert scenario_files([r], active_project(), ROOT / "tests") == {}
+    assert scenario_files([ScenarioResult("no_such", "")], active_project(), ROOT) == {}
 
 
 def test_summary_puts_the_largest_regression_first_and_truncates_with_a_note() -> None:

@@ -11,6 +11,7 @@ import pytest
 from helpers import QUICK, kartci
 
 from kartci import portable
+from kartci.project import current as active_project
 from kartci.runner.jobs import START_STEP_M, Vary, replica
 from kartci.scenario import load_scenario
 from kartci.verdict import Conditioning, Status, load, spread, update
@@ -63,7 +64,7 @@ def test_update_records_spreads_and_where_it_was_made(tmp_path: Path) -> None:
 
 
 def test_a_start_replica_moves_every_robot_k_nanometres_and_nothing_else() -> None:
-    spec = load_scenario("multi_agent")
+    spec = load_scenario("multi_agent", project=active_project())
     r = replica(spec, Vary.START, 3)
     for name, agent in spec.agents.items():
         assert r.agents[name].start.lateral_m == agent.start.lateral_m + 3 * START_STEP_M

@@ -12,6 +12,7 @@ import pytest
 from helpers import kartci
 
 from kartci.core import RunFolder
+from kartci.project import current as active_project
 from kartci.report import summary_json, summary_md
 from kartci.runner.gate import require_baselines
 from kartci.scenario import load_scenario
@@ -43,8 +44,8 @@ def _judged(tmp_path: Path, criteria: dict[str, dict[str, float]] | None,
         doc["criteria"] = criteria
     (tmp_path / "line_straight.json").write_text(json.dumps(doc))
     baseline = read_baseline(tmp_path / "line_straight.json")
-    spec = load_scenario("line_straight", overrides)
-    return judge_folder(RunFolder(folder), spec, baseline)
+    spec = load_scenario("line_straight", overrides, project=active_project())
+    return judge_folder(RunFolder(folder), spec, baseline, active_project())
 
 
 NOW = ["criteria={}", "criteria.line_lost.equal=0", "criteria.completion.min=0.95",

@@ -7,6 +7,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from kartci.project import current as active_project
 from kartci.robots.line_tracker.metrics import LineMetricsParams, line_metrics
 from kartci.scenario import Criterion, load_scenario
 from kartci.verdict import Status, check_criteria, compare, update
@@ -58,7 +59,7 @@ def test_update_keeps_hand_tolerance_but_replaces_one_set_on_a_null(tmp_path: Pa
 
 
 def test_circle_completion_counts_one_lap_from_any_start() -> None:
-    spec = load_scenario("line_circle", ["agents.lt0.start.along_m=2.0"])
+    spec = load_scenario("line_circle", ["agents.lt0.start.along_m=2.0"], project=active_project())
     r = spec.world.course.radius_m  # type: ignore[attr-defined]
     import numpy as np
 

@@ -10,6 +10,7 @@ import pytest
 
 from kartci import core
 from kartci.core.course import Course
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.worlds.track import track_from_rows
 from kartci.worlds.track.model import TrackCourse
@@ -51,7 +52,7 @@ def test_progress_runs_on_over_laps(ring: TrackCourse) -> None:
 
 @pytest.mark.parametrize("scenario", ["mpcc_lap", "mpcc_circuit", "line_circle"])
 def test_world_kinds_hand_out_their_course(scenario: str) -> None:
-    spec = load_scenario(scenario)
+    spec = load_scenario(scenario, project=active_project())
     make = core.WORLDS.get(spec.world.kind).course
     assert make is not None
     course = make(spec.world)

@@ -25,7 +25,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from kartci import project
 from kartci.atomic import write_text_atomic
 from kartci.bridge import ros2
 from kartci.bridge.agent import CLOCK, ExternalAgent, substitute
@@ -150,7 +149,7 @@ class DdsAgent(ExternalAgent):
         self._relay_error = self._relay_error or "it closed its connection"
 
     def _start(self, run_dir: Path | None) -> Child:
-        root = project.current().root
+        root = self.root
         values = {"python": sys.executable, "ros_python": str(self.python),
                   "endpoint": self.endpoint, "root": str(root),
                   "domain_id": str(self.domain_id), "namespace": self.name}

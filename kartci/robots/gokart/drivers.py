@@ -25,6 +25,7 @@ from kartci.robots.gokart.joy import (
     check_pad,
     kart_command,
     load_mapping,
+    model_folders,
     to_command,
     to_joy,
 )
@@ -47,10 +48,10 @@ class ManualAgent:
     def __init__(self, spec: ManualController, ctx: AgentContext) -> None:
         self.period_s, self.model = spec.period_s, _kart(ctx)
         self.frame = base_link(ctx.name)
-        self.mapping = load_mapping(spec.mapping)
+        self.mapping = load_mapping(spec.mapping, model_folders(ctx))
         self.source = Recorded(spec.source, JOY)
         check_counts(self.mapping, spec.mapping, self.source.msgs[0],
-                     f"{self.source.path} {self.source.topic}")
+                     f"{self.source.path} {self.source.topic}", model_folders(ctx))
         self._last = -1
 
     def on_message(self, topic: str, message: Any) -> None:
@@ -133,7 +134,7 @@ class JoyDriver:
     def __init__(self, spec: JoyDriverController, ctx: AgentContext) -> None:
         self.spec, self.model, self.period_s = spec, _kart(ctx), spec.period_s
         self.frame = base_link(ctx.name)
-        self.mapping = load_mapping(spec.mapping)
+        self.mapping = load_mapping(spec.mapping, model_folders(ctx))
         self._pose: tuple[float, float, float, float] | None = None
         self.track: Track | None = None
 
@@ -168,12 +169,13 @@ class JoyDriver:
         return [("joy", joy), ("cmd", kart_command(cmd, t_ns, self.frame))]
 
 
-def replay(log: Path, topic: str, msgtype: str, mapping: str) -> ControllerParams:
+def replay(log: Path, topic: str, msgtype: str, mapping: str, models: tuple[Path, ...]
+           ) -> ControllerParams:
     """The kart's `RobotKind.replay` (`kartci replay`): a Joy stream drives it through
     `mapping`, whose axis and button counts the log's pad must have; a command stream is
     republished on its standard command topic."""
     source = LogSource(log=str(log.resolve()), topic=topic)
     if msgtype in JOY:
-        check_pad(load_mapping(mapping), mapping, log, topic)
+        check_pad(load_mapping(mapping, models), mapping, log, topic, models)
         return ManualController(mapping=mapping, source=source)
     return CommandsController(source=source)

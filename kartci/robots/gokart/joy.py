@@ -12,11 +12,11 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from kartci import project
-from kartci.core import JoyCommand, RobotParams
+from kartci.core import AgentContext, JoyCommand, RobotParams
 from kartci.errors import SpecError, did_you_mean
 from kartci.logs import messages
 from kartci.logs.types import header, msg, stamp_ns, typestore
+from kartci.project import BUILTIN_MODELS
 from kartci.robots.gokart.params import GokartModel
 from kartci.robots.gokart.steering import KartInput
 from kartci.scenario.yamlio import read_yaml
@@ -62,11 +62,18 @@ class JoyMapping(_M):
     buttons: int = Field(ge=1)
 
 
-def known_mappings() -> dict[str, Path]:
-    """Mapping name -> file, from `gokart/joy/` on the project's model path (its own folders
-    first, then the built-in ones); `.yaml` and `.yml` alike."""
+def model_folders(ctx: AgentContext) -> tuple[Path, ...]:
+    """The robot model folders of the project an agent runs in (`AgentContext.project`), where
+    a mapping name is looked up; kartci's own for a scenario built by hand."""
+    return ctx.project.model_path if ctx.project is not None else (BUILTIN_MODELS,)
+
+
+def known_mappings(models: tuple[Path, ...]) -> dict[str, Path]:
+    """Mapping name -> file, from `gokart/joy/` in the robot model folders `models` (a
+    project's `model_path`: its own folders first, then the built-in ones); `.yaml` and `.yml`
+    alike."""
     found: dict[str, Path] = {}
-    for folder in project.current().model_path:
+    for folder in models:
         for p in sorted((folder / "gokart" / "joy").glob("*.y*ml")):
             if p.suffix in (".yaml", ".yml"):
                 found.setdefault(p.stem, p)
@@ -74,13 +81,13 @@ def known_mappings() -> dict[str, Path]:
 
 
 @cache
-def load_mapping(name: str) -> JoyMapping:
-    """A mapping by name (`gokart/joy/<name>.yaml` or `.yml` on the project's model path) or by
-    path to a YAML file (anything ending in .yaml / .yml or holding a path separator)."""
+def load_mapping(name: str, models: tuple[Path, ...]) -> JoyMapping:
+    """A mapping by name (`gokart/joy/<name>.yaml` or `.yml` in the model folders `models`) or
+    by path to a YAML file (anything ending in .yaml / .yml or holding a path separator)."""
     if name.endswith((".yaml", ".yml")) or "/" in name or os.sep in name:
         path = Path(name).expanduser()
         return _parse(path)  # read_yaml names a missing file, a FIFO, a device
-    known = known_mappings()
+    known = known_mappings(models)
     if name not in known:
         raise SpecError(f"unknown joystick mapping '{name}'{did_you_mean(name, known)}; "
                         "or give the path of a mapping YAML file")
@@ -100,22 +107,25 @@ def _parse(path: Path) -> JoyMapping:
         raise SpecError(f"{path}: invalid joystick mapping ({key}: {first['msg']})") from err
 
 
-def check_pad(m: JoyMapping, name: str, log: Path, topic: str) -> None:
+def check_pad(m: JoyMapping, name: str, log: Path, topic: str, models: tuple[Path, ...]
+              ) -> None:
     """The recorded pad must have the mapping's axis and button counts: a pad of another make
     would otherwise be read with the wrong axes, silently."""
     for _, _, joy in messages(log, [topic]):
-        check_counts(m, name, joy, f"{log} {topic}")
+        check_counts(m, name, joy, f"{log} {topic}", models)
         return
 
 
-def check_counts(m: JoyMapping, name: str, joy: Any, where: str) -> None:
+def check_counts(m: JoyMapping, name: str, joy: Any, where: str, models: tuple[Path, ...]
+                 ) -> None:
     """One Joy message against the mapping's counts (SpecError, one line, when they differ)."""
     axes, buttons = len(joy.axes), len(joy.buttons)
     if (axes, buttons) != (m.axes, m.buttons):
         raise SpecError(f"{where}: the pad has {axes} axes and {buttons} buttons, but mapping "
                         f"'{name}' ({m.name}) expects {m.axes} axes and {m.buttons} buttons; "
-                        f"choose a matching mapping (known: {', '.join(known_mappings())}) or "
-                        "give the path of your own mapping file")
+                        "choose a matching mapping (known: "
+                        f"{', '.join(known_mappings(models))}) or give the path of your own "
+                        "mapping file")
 
 
 def _pedal(p: PedalAxis, axes: Any) -> float:
@@ -160,10 +170,11 @@ def to_joy(m: JoyMapping, model: GokartModel, cmd: KartInput, t_ns: int, frame: 
     return msg("sensor_msgs/msg/Joy", header=header(t_ns, frame), axes=axes, buttons=buttons)
 
 
-def joystick(model: RobotParams, mapping: str) -> JoyCommand:
-    """The kart's `RobotKind.joystick`: a Joy message through `mapping` to the `cmd`
-    (kartci_msgs/KartCommand) it means, stamped with the Joy's time."""
-    m = load_mapping(mapping)
+def joystick(model: RobotParams, mapping: str, models: tuple[Path, ...]) -> JoyCommand:
+    """The kart's `RobotKind.joystick`: a Joy message through `mapping` (a name looked up in
+    the model folders `models`) to the `cmd` (kartci_msgs/KartCommand) it means, stamped with
+    the Joy's time."""
+    m = load_mapping(mapping, models)
     assert isinstance(model, GokartModel)  # a kind is asked only about its own robots
 
     def command(joy: Any, frame: str) -> tuple[str, Any]:

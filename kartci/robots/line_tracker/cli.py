@@ -12,7 +12,14 @@ from typing import Annotated
 import typer
 
 from kartci.atomic import check_target, write_text_atomic
-from kartci.command_options import AllowOutsideOpt, OutOpt, SetOpt, out_console, out_dir
+from kartci.command_options import (
+    AllowOutsideOpt,
+    OutOpt,
+    SetOpt,
+    command_project,
+    out_console,
+    out_dir,
+)
 from kartci.errors import SpecError
 from kartci.scenario import load_scenario
 
@@ -38,7 +45,8 @@ def characterise(
     from kartci.robots.line_tracker.characterise import sweep
 
     out = out_dir(out, "characterisation")
-    spec = load_scenario(scenario, set_ or [], allow_outside_paths=allow_outside_paths)
+    spec = load_scenario(scenario, set_ or [], project=command_project(),
+                         allow_outside_paths=allow_outside_paths)
     agent = next(iter(spec.agents))
     try:
         fov_list = [float(f) for f in fovs.split(",") if f.strip()]

@@ -18,7 +18,8 @@ from typing import Any
 import pytest
 import yaml
 from helpers import ROOT, kartci
-from ros2python import ros_python_or_skip
+
+from bridge.dds.ros2python import ros_python_or_skip
 
 EXAMPLE = ROOT / "examples" / "ros2_stack"
 

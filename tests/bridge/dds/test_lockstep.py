@@ -19,12 +19,13 @@ from typing import Any
 
 import pytest
 from helpers import ROOT, kartci
-from ros2python import ros_python_or_skip
-from test_shm import _families_of, _left_of
 
+from bridge.dds.ros2python import ros_python_or_skip
+from bridge.dds.test_shm import _families_of, _left_of
 from kartci.bridge.dds.env import dds_env
 from kartci.bridge.dds.shm import clean_zombies
 from kartci.errors import RunError
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import Session
 
@@ -129,7 +130,7 @@ def _group(pgid: int) -> list[int]:
 
 @pytest.fixture
 def session(example: Path) -> Iterator[Session]:
-    spec = load_scenario("dds_pure_pursuit", ["duration_s=2.0"])
+    spec = load_scenario("dds_pure_pursuit", ["duration_s=2.0"], project=active_project())
     with Session(spec, example / "run.mcap") as s:
         yield s
 
@@ -175,7 +176,7 @@ def test_a_stack_started_by_hand_meets_kartci_on_its_domain(example: Path,
     try:
         spec = load_scenario("dds_pure_pursuit", [
             "duration_s=1.0", "agents.kart0.controller.command=[]",
-            "agents.kart0.controller.domain_id=97"])
+            "agents.kart0.controller.domain_id=97"], project=active_project())
         with Session(spec, example / "run.mcap") as s:
             r = s.reset()
             while not r.done:
@@ -193,7 +194,7 @@ def test_paced_mode_runs_on_the_latest_command(example: Path) -> None:
     no tick waited for (so none is late)."""
     spec = load_scenario("dds_pure_pursuit", [
         "duration_s=1.0", "agents.kart0.controller.mode=paced",
-        "agents.kart0.controller.real_time_factor=2.0"])
+        "agents.kart0.controller.real_time_factor=2.0"], project=active_project())
     with Session(spec, example / "run.mcap") as s:
         r = s.reset()
         while not r.done:

@@ -30,11 +30,11 @@ from typing import Any
 
 import numpy as np
 import pytest
-from ros2python import ros_python_or_skip
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from bridge.dds.ros2python import ros_python_or_skip
 from kartci.bridge import ros2
 from kartci.logs.types import typestore
 

@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from ros2python import ros_python_or_skip
 
+from bridge.dds.ros2python import ros_python_or_skip
 from kartci.bridge import ros2
 from kartci.bridge.dds import relay as wire
 from kartci.bridge.dds.env import dds_env

@@ -24,8 +24,8 @@ from typing import Any
 import pytest
 import yaml
 from helpers import ROOT, kartci
-from ros2python import ros_python_or_skip
 
+from bridge.dds.ros2python import ros_python_or_skip
 from kartci.bridge import attach
 from kartci.bridge.child import Child
 from kartci.bridge.dds import env as ros_env
@@ -35,6 +35,7 @@ from kartci.bridge.dds.relay import description
 from kartci.bridge.dds.shm import FIRST_DOMAIN, Domain, clean_zombies, discovery_port
 from kartci.core import RunFolder
 from kartci.errors import RunError, SpecError
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import Session
 
@@ -492,7 +493,7 @@ def test_a_run_whose_stack_is_killed_leaves_nothing_of_it(ros_python: Path, tmp_
                     ignore=shutil.ignore_patterns("reports"))
     monkeypatch.chdir(proj)
     monkeypatch.setenv("KARTCI_ROS2_PYTHON", str(ros_python))
-    spec = load_scenario("dds_pure_pursuit", ["duration_s=2.0"])
+    spec = load_scenario("dds_pure_pursuit", ["duration_s=2.0"], project=active_project())
     with Session(spec, proj / "run.mcap") as s:
         s.reset()
         for _ in range(5):

@@ -11,16 +11,17 @@ import pytest
 
 from kartci._bullet import pb
 from kartci.metrics import compute
+from kartci.project import current as active_project
 from kartci.robots.gokart import KartInput, wheel_angles
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GokartModel
-from kartci.scenario import load_scenario, project_root
+from kartci.scenario import load_scenario
 from kartci.sim import lidar, simulate
 from kartci.worlds.hall import HallWorld
 from kartci.worlds.hall.world import Hall as World
 from kartci.worlds.hall.world import blocks
 
-MODELS = project_root() / "models" / "gokart"
+MODELS = active_project().root / "models" / "gokart"
 TABLE_3_2 = {  # joint: (type, axis, parent, child, translation)
     "cog_joint": ("fixed", None, "base_link", "cog_link", (0.36, 0.0, 0.0)),
     "rear_left_wheel_joint": ("continuous", "y", "base_link", "rear_left_wheel_link",
@@ -88,7 +89,8 @@ def test_urdf_joints_and_sensor_frames_match_the_tables(variant: str) -> None:
 
 
 def _kart(steering: str = "measured") -> tuple[World, Gokart, GokartModel]:
-    spec = load_scenario("kart_replay", [f"agents.kart0.model.steering={steering}"])
+    spec = load_scenario("kart_replay", [f"agents.kart0.model.steering={steering}"],
+                         project=active_project())
     assert isinstance(spec.world, HallWorld)
     model = spec.agents["kart0"].model
     assert isinstance(model, GokartModel)
@@ -139,7 +141,7 @@ def test_lidar_models_follow_table_3_5(name: str, rings: int, lowest: float, hig
 @pytest.mark.parametrize("name", ["vlp16", "hdl32e"])
 def test_fast_lidar_agrees_with_pybullet_rays(name: str) -> None:
     spec = load_scenario("kart_replay", ["world.obstacles=[{center_m: [14, 3.2], "
-                                         "size_m: [0.6, 0.6, 0.5]}]"])
+                                         "size_m: [0.6, 0.6, 0.5]}]"], project=active_project())
     assert isinstance(spec.world, HallWorld)
     world = World(spec.world, 0.002)
     try:
@@ -159,7 +161,7 @@ def test_fast_lidar_agrees_with_pybullet_rays(name: str) -> None:
 
 def _run(tmp_path: Path, name: str, *sets: str) -> dict[str, float]:
     log = tmp_path / f"{name}.mcap"
-    simulate(load_scenario(name, list(sets)), log)
+    simulate(load_scenario(name, list(sets), project=active_project()), log)
     return {k: v.value for k, v in compute(log)[1].items()}
 
 
@@ -176,7 +178,7 @@ def test_steering_into_a_wall_is_a_collision(tmp_path: Path) -> None:
     log = tmp_path / "crash.mcap"
     spec = load_scenario("kart_replay", [
         "duration_s=8", "agents.kart0.controller.steps=[{t_s: 0, accel_mps2: 3.0}, "
-        "{t_s: 1.0, steering_rad: -1.7, accel_mps2: 2.0}]"])
+        "{t_s: 1.0, steering_rad: -1.7, accel_mps2: 2.0}]"], project=active_project())
     simulate(spec, log)
     _, metrics = compute(log)
     assert metrics["collisions"].value >= 1
@@ -202,7 +204,8 @@ def test_imu_reads_gravity_at_rest(tmp_path: Path) -> None:
 
     log = tmp_path / "rest.mcap"
     simulate(load_scenario("kart_replay", ["duration_s=2",
-                                           "agents.kart0.sensors.imu.accel_noise_std_mps2=0"]), log)
+                                           "agents.kart0.sensors.imu.accel_noise_std_mps2=0"],
+                                           project=active_project()), log)
     imu = tables(log, ["/kart0/imu"])["/kart0/imu"]
     assert len(imu) == 201  # 100 Hz over 2 s, both ends
     settled = imu[imu["t"] > 1.0]
@@ -214,7 +217,7 @@ def test_imu_reads_gravity_at_rest(tmp_path: Path) -> None:
 
 def _noisy(tmp_path: Path) -> Path:
     log = tmp_path / "noisy.mcap"
-    simulate(load_scenario("kart_replay", ["duration_s=2"]), log)
+    simulate(load_scenario("kart_replay", ["duration_s=2"], project=active_project()), log)
     return log
 
 
@@ -223,7 +226,8 @@ def test_camera_and_moving_frames(tmp_path: Path) -> None:
 
     log = tmp_path / "cam.mcap"
     simulate(load_scenario("kart_replay", ["duration_s=1",
-                                           "agents.kart0.sensors.camera.enabled=true"]), log)
+                                           "agents.kart0.sensors.camera.enabled=true"],
+                                           project=active_project()), log)
     images = [m for _, _, m in messages(log, ["/kart0/camera/image_raw"])]
     assert len(images) == 6  # 5 Hz over 1 s, both ends
     img = np.asarray(images[-1].data).reshape(60, 80, 3)
@@ -259,8 +263,8 @@ def test_reverse_and_emergency_stop() -> None:
 def test_joystick_mappings_round_trip(mapping: str) -> None:
     from kartci.robots.gokart.joy import load_mapping, to_command, to_joy
 
-    m = load_mapping(mapping)
-    model = load_scenario("kart_replay").agents["kart0"].model
+    m = load_mapping(mapping, active_project().model_path)
+    model = load_scenario("kart_replay", project=active_project()).agents["kart0"].model
     assert isinstance(model, GokartModel)
     wish = KartInput(steering_rad=-0.9, accel_mps2=2.5, brake_mps2=0.0, reverse=True)
     got = to_command(m, model, to_joy(m, model, wish, 0, "joy"))

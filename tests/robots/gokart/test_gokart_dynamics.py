@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from kartci._bullet import pb
+from kartci.project import current as active_project
 from kartci.robots.gokart import KartInput, wheel_angles
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.mpcc.model import ACC, DELTA, NU, NX, VX, VY, R, SingleTrack, discrete
@@ -27,10 +28,10 @@ from kartci.robots.gokart.params import (
     air_drag_per_m,
     rolling_decel_mps2,
 )
-from kartci.scenario import load_scenario, project_root
+from kartci.scenario import load_scenario
 from kartci.worlds.circuit.world import Circuit
 
-MODELS = project_root() / "models" / "gokart"
+MODELS = active_project().root / "models" / "gokart"
 DT = 0.002
 ODOM_EVERY = 10  # the robot re-reads the floor friction and its pedals at 50 Hz, as here
 SLIPPERY = "[{name: coated, min_m: [-30, -20], max_m: [100, 60], friction: 0.6}]"
@@ -50,7 +51,8 @@ def drive(driver: Driver, seconds: float, v0_mps: float, zones: str = "[]",
     angle, body vy, yaw] per physics step. `model_set`: `--set` overrides of the kart's model,
     e.g. "mass_kg=340"."""
     spec = load_scenario("mpcc_circuit", ["world.barriers=false", f"world.zones={zones}",
-                                          *(f"agents.kart0.model.{s}" for s in model_set)])
+                                          *(f"agents.kart0.model.{s}" for s in model_set)],
+                                          project=active_project())
     model = spec.agents["kart0"].model
     assert isinstance(model, GokartModel)
     assert getattr(spec.world, "floor_friction", None) == FLOOR_MU

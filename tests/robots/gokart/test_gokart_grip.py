@@ -12,6 +12,7 @@ import pytest
 from test_gokart_dynamics import DT, everywhere
 from test_gokart_dynamics import drive as drive_on
 
+from kartci.project import current as active_project
 from kartci.robots.gokart import KartInput
 from kartci.robots.gokart.params import GRAVITY_MPS2, GokartModel, Tyre, axle_distance_m
 from kartci.robots.gokart.stability import critical_speed_mps, speed_warnings
@@ -127,19 +128,22 @@ def _stability(scenario: Scenario) -> list[str]:
 
 
 def test_a_scenario_faster_than_the_critical_speed_is_warned() -> None:
-    fast = load_scenario("kart_manual", ["agents.kart0.model.max_speed_mps=14"])
+    fast = load_scenario("kart_manual", ["agents.kart0.model.max_speed_mps=14"],
+                         project=active_project())
     (line,) = _stability(fast)
     # the hall's coated zone (mu 0.6) is its slipperiest floor: 10.6 m/s there
     assert line.startswith("kart0: speed limit 14 m/s exceeds the kart's critical speed "
                            "10.6 m/s")
     # the MPCC's own limit binds below the kart's governor: 10 m/s is below 12.9 m/s ...
-    assert _stability(load_scenario("mpcc_lap", ["agents.kart0.model.max_speed_mps=14"])) == []
+    assert _stability(load_scenario("mpcc_lap", ["agents.kart0.model.max_speed_mps=14"],
+                                    project=active_project())) == []
     # ... but not on a floor of mu 0.3 somewhere on the way (critical speed 7.5 m/s there)
     slippery = load_scenario("mpcc_lap", [
-        "world.zones=[{name: ice, min_m: [0, 0], max_m: [1, 1], friction: 0.3}]"])
+        "world.zones=[{name: ice, min_m: [0, 0], max_m: [1, 1], friction: 0.3}]"],
+        project=active_project())
     (line,) = _stability(slippery)
     assert "speed limit 10 m/s" in line and "critical speed 7.5 m/s" in line
     # the shipped karts stay below it
     for name in ("kart_manual", "mpcc_lap", "mpcc_circuit", "obstacle_avoidance"):
-        assert _stability(load_scenario(name)) == []
+        assert _stability(load_scenario(name, project=active_project())) == []
     assert speed_warnings(object(), None, None) == []  # another kind's model: nothing

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from kartci._bullet import pb
+from kartci.project import current as active_project
 from kartci.robots.gokart.robot import KartRobot
 from kartci.scenario import load_scenario
 from kartci.sim.session import Session
@@ -26,7 +27,8 @@ def _numpy_imu(robot: KartRobot, prev: np.ndarray, rel: np.ndarray,
 def test_the_scalar_imu_equals_numpys_products() -> None:
     spec = load_scenario("kart_manual", ["duration_s=2",
                                          "agents.kart0.sensors.imu.accel_noise_std_mps2=0",
-                                         "agents.kart0.sensors.imu.gyro_noise_std_radps=0"])
+                                         "agents.kart0.sensors.imu.gyro_noise_std_radps=0"],
+                                         project=active_project())
     with Session(spec, None) as s:
         s.reset()
         robot = s.world.robots[0]

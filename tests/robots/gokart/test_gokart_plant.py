@@ -11,6 +11,7 @@ import pytest
 
 from kartci._bullet import pb
 from kartci.errors import SpecError
+from kartci.project import current as active_project
 from kartci.robots.gokart.body import Gokart
 from kartci.robots.gokart.params import GRAVITY_MPS2, GokartModel, axle_distance_m, cog_x_m
 from kartci.robots.gokart.tyres import (
@@ -24,9 +25,8 @@ from kartci.robots.gokart.tyres import (
     wheel_force,
     wheels,
 )
-from kartci.scenario import project_root
 
-MODELS = project_root() / "models" / "gokart"
+MODELS = active_project().root / "models" / "gokart"
 NOMINAL = GokartModel()
 
 

@@ -13,6 +13,7 @@ import pytest
 from kartci.logs import McapLogWriter, header, msg
 from kartci.logs.types import SCENARIO_TOPIC
 from kartci.metrics import Metric, compute
+from kartci.project import current as active_project
 from kartci.robots.gokart.race import overtakes
 from kartci.scenario import load_scenario
 from kartci.sim.messages import ZEROS36, pose, vec
@@ -71,7 +72,7 @@ def _tyres(t_ns: int, t: float) -> object:
 
 
 def _write(path: Path) -> None:
-    scenario = load_scenario("multi_agent")
+    scenario = load_scenario("multi_agent", project=active_project())
     w = McapLogWriter(path)
     w.write(SCENARIO_TOPIC, msg("std_msgs/msg/String", data=scenario.model_dump_json()), 0)
     rows = [f"{R_M * math.cos(a):.9f},{R_M * math.sin(a):.9f},2.5,2.5"

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from kartci._bullet import pb
+from kartci.project import current as active_project
 from kartci.robots.line_tracker.body import LineTracker
 from kartci.robots.line_tracker.params import LineSensorSpec
 from kartci.robots.line_tracker.render import RenderScene, unseen_links
@@ -24,7 +25,7 @@ DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # x axis 
 def _poses() -> list[tuple[np.ndarray, np.ndarray]]:
     """Cameras along and across the ring, on and off arc boundaries (every 10 degrees), a few
     tilted, one looking at the horizon (the footprint is unbounded: every arc shown)."""
-    course = load_scenario("line_circle").world.course  # type: ignore[attr-defined]
+    course = load_scenario("line_circle", project=active_project()).world.course  # type: ignore[attr-defined]
     assert isinstance(course, CircleCourse)
     cx, cy = course.center_m
     out = []
@@ -40,7 +41,7 @@ def _poses() -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def test_the_render_scene_gives_the_full_scenes_pixels() -> None:
-    spec = load_scenario("line_circle")
+    spec = load_scenario("line_circle", project=active_project())
     sensor = LineSensorSpec(mode="rendered")
     full, cheap = LineLab(spec.world, DT), LineLab(spec.world, DT)
     try:
@@ -61,7 +62,7 @@ def test_the_render_scene_gives_the_full_scenes_pixels() -> None:
 def test_the_robots_own_cameras_never_see_its_chassis_or_wheels() -> None:
     """Hiding the links `unseen_links` names leaves the robot's own camera readings unchanged
     (robot placed around the ring, wheels turned); a near-180-degree camera sees everything."""
-    spec = load_scenario("line_circle")
+    spec = load_scenario("line_circle", project=active_project())
     agent = spec.agents["lt0"]
     urdf = urdf_path(agent.model)
     cams = [fixed_frames(urdf)[f"line_camera_{s}"] for s in ("left", "right")]

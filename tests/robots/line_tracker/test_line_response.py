@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from kartci.metrics import ScoreContext
+from kartci.project import current as active_project
 from kartci.robots.line_tracker.response import LineResponseParams, response_metrics
 from kartci.scenario import load_scenario
 
@@ -23,7 +24,7 @@ def _odom(t: np.ndarray, d: np.ndarray) -> pd.DataFrame:
 
 
 def _metrics(odom: pd.DataFrame) -> dict[str, float]:
-    spec = load_scenario("line_straight_grid")
+    spec = load_scenario("line_straight_grid", project=active_project())
     ctx = ScoreContext(spec, {"/lt0/odom": odom}, Path("synthetic"), "lt0")
     return {m.name: m.value for m in response_metrics(ctx, LineResponseParams(transient_s=5.0))}
 

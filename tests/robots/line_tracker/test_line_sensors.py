@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from kartci._bullet import pb
+from kartci.project import current as active_project
 from kartci.robots.line_tracker.characterise import Sweep, sweep
 from kartci.robots.line_tracker.params import LineSensorSpec
 from kartci.robots.line_tracker.sensors import GEOMETRIC_GRID_PX, LineCamera
@@ -17,7 +18,7 @@ OFFSETS = np.round(np.arange(-0.025, 0.02501, 0.0005), 6)
 
 @pytest.fixture(scope="module")
 def geometric_and_rendered() -> tuple[Sweep, Sweep]:
-    spec = load_scenario("line_straight")
+    spec = load_scenario("line_straight", project=active_project())
     return (sweep(spec, "lt0", OFFSETS, mode="geometric"),
             sweep(spec, "lt0", OFFSETS, mode="rendered"))
 
@@ -52,7 +53,7 @@ def test_characterisation_matches_the_source_documents_slope_and_linear_range(
 def test_each_camera_dims_over_the_line_and_sees_white_far_away(geometric_and_rendered: Pair
                                                                 ) -> None:
     geo, _ = geometric_and_rendered
-    light = load_scenario("line_straight").world.light_level  # type: ignore[attr-defined]
+    light = load_scenario("line_straight", project=active_project()).world.light_level  # type: ignore[attr-defined]
     assert geo.left[0] == pytest.approx(light) and geo.right[-1] == pytest.approx(light)
     assert geo.left.min() < 0.5 * light
     # the two cameras are 0.01 m apart: their curves are shifted copies of each other
@@ -61,7 +62,7 @@ def test_each_camera_dims_over_the_line_and_sees_white_far_away(geometric_and_re
 
 
 def test_wider_field_of_view_flattens_the_response() -> None:
-    spec = load_scenario("line_straight")
+    spec = load_scenario("line_straight", project=active_project())
     slopes = [sweep(spec, "lt0", OFFSETS, fov_rad=f).fit()[0] for f in (0.75, 1.2, 1.4, 2.0)]
     assert slopes[0] > slopes[1] > slopes[2] > slopes[3]
     assert abs(slopes[3]) < 1.0  # the dead zone beyond 2 atan(12 / 14.5) = 1.38 rad (Eq. 5.2)

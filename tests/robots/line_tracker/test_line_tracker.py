@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from kartci.metrics import compute
+from kartci.project import current as active_project
 from kartci.robots.line_tracker.body import LineTracker
-from kartci.scenario import load_scenario, project_root
+from kartci.scenario import load_scenario
 from kartci.sim import simulate
 from kartci.worlds.line_lab.world import LineLab as World
 
@@ -18,10 +19,10 @@ DT = 0.002
 
 
 def _robot() -> tuple[World, LineTracker]:
-    spec = load_scenario("line_straight")
+    spec = load_scenario("line_straight", project=active_project())
     world = World(spec.world, DT)
     robot = LineTracker(world.client, spec.agents["lt0"], spec.world,  # type: ignore[arg-type]
-                        project_root() / "models" / "line_tracker", DT)
+                        active_project().root / "models" / "line_tracker", DT)
     return world, robot
 
 
@@ -75,7 +76,8 @@ def test_equal_wheel_speeds_drive_straight_at_r_omega() -> None:
 def test_sonar_stops_the_robot_before_an_obstacle(tmp_path: Path) -> None:
     """HC-SR04 below 0.1 m gates the wheels (seed TestSensor.cc, cb4)."""
     spec = load_scenario("line_straight", ["duration_s=16",
-                                           "world.obstacles=[{center_m: [1.2, 0.0]}]"])
+                                           "world.obstacles=[{center_m: [1.2, 0.0]}]"],
+                                           project=active_project())
     log = tmp_path / "run.mcap"
     simulate(spec, log)
     from kartci.logs import tables
@@ -99,7 +101,8 @@ def _frames(*sets: str) -> list[tuple[int, float, float]]:
     from kartci.sim.session import Session
 
     out = []
-    with Session(load_scenario("line_straight", ["duration_s=1", *sets])) as s:
+    with Session(load_scenario("line_straight", ["duration_s=1", *sets],
+                               project=active_project())) as s:
         r = s.reset()
         while True:
             out += [(r.t_ns, m.left, m.right) for topic, m in r.messages

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from kartci.metrics import compute
+from kartci.project import current as active_project
 from kartci.scenario import load_scenario
 from kartci.sim import simulate
 
@@ -21,7 +22,7 @@ SEED_GAZEBO = [f"{MODEL}.wheel_drive=set_velocity", f"{MODEL}.wheel_mass_kg=1",
 
 
 def _run(tmp_path: Path, name: str, *sets: str) -> dict[str, float]:
-    spec = load_scenario(name, list(sets))
+    spec = load_scenario(name, list(sets), project=active_project())
     log = tmp_path / f"{len(list(tmp_path.iterdir()))}.mcap"
     simulate(spec, log)
     return {k: m.value for k, m in compute(log)[1].items()}

@@ -15,6 +15,7 @@ from kartci.metrics import Metric, compute
 from kartci.metrics.outline import outline_gap_m, placed
 from kartci.metrics.progress import kart_track
 from kartci.project import BUILTIN_SIMS
+from kartci.project import current as active_project
 from kartci.robots.gokart.mpcc.cache import get_solver, solver_key
 from kartci.robots.gokart.mpcc.model import SingleTrack
 from kartci.robots.gokart.mpcc.params import MpccController, MpccMethod, MpccWeights
@@ -26,7 +27,7 @@ from kartci.worlds.track import load_track
 
 def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]]:
     log = tmp_path / f"{name}.mcap"
-    simulate(load_scenario(name, list(sets)), log)
+    simulate(load_scenario(name, list(sets), project=active_project()), log)
     return log, compute(log)[1]
 
 

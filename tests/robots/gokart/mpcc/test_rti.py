@@ -17,6 +17,7 @@ from kartci.errors import SpecError
 from kartci.logs import tables
 from kartci.metrics import Metric, compute
 from kartci.project import BUILTIN_SIMS
+from kartci.project import current as active_project
 from kartci.robots.gokart.mpcc.cache import solver_key
 from kartci.robots.gokart.mpcc.controller import Mpcc
 from kartci.robots.gokart.mpcc.direct import OcpQp
@@ -34,7 +35,7 @@ RTI = "agents.kart0.controller.method=rti"
 
 def _run(tmp_path: Path, name: str, *sets: str) -> tuple[Path, dict[str, Metric]]:
     log = tmp_path / f"{name}.mcap"
-    simulate(load_scenario(name, list(sets)), log)
+    simulate(load_scenario(name, list(sets), project=active_project()), log)
     return log, compute(log)[1]
 
 
@@ -58,12 +59,12 @@ def _reference(name: str, metric: str) -> float:
 
 def test_the_method_is_selectable_with_set_and_a_bad_one_is_one_clear_error() -> None:
     spec = load_scenario("mpcc_lap", [RTI, "agents.kart0.controller.qp_solver=osqp"]
-                         ).agents["kart0"].controller
+                         , project=active_project()).agents["kart0"].controller
     assert isinstance(spec, MpccController)
     assert spec.method is MpccMethod.RTI and spec.qp_solver is QpSolver.OSQP
     assert MpccController().method is MpccMethod.RTI  # the default
     with pytest.raises(SpecError, match="method"):
-        load_scenario("mpcc_lap", ["agents.kart0.controller.method=sqp"])
+        load_scenario("mpcc_lap", ["agents.kart0.controller.method=sqp"], project=active_project())
 
 
 @pytest.mark.long(reason="closed-loop MPCC laps")
