@@ -28,13 +28,12 @@ def merge(
     """Join partial results into one run: copy the scenario folders into OUT, then judge and
     report them exactly as an unsharded run would (same summary, verdicts, exit code). Shards
     of `kartci faults --shard` give one detection matrix, judged with today's baselines."""
-    from kartci.app.faults import is_faults_folder
+    # CLI start-up: the faults workflow and its matrix, for this command only
+    from kartci.app.faults import is_faults_folder, merge_faults
+    from kartci.cli.faults import conclude_faults
 
     kinds = {is_faults_folder(d) for d in dirs}
     if kinds == {True}:
-        from kartci.app.faults import merge_faults
-        from kartci.cli.faults import conclude_faults
-
         conclude_faults(merge_faults(dirs, out, baselines or project.current().baselines,
                                      project.current()), None)
     if len(kinds) > 1:
