@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
-from rich.table import Table
+from rich.box import SIMPLE_HEAD
+from rich.table import Column, Table
 from rich.text import Text
 
 from kartci import project
@@ -31,10 +32,10 @@ if TYPE_CHECKING:
     from kartci.runner.events import Listener
     from kartci.runner.jobs import Job
 
-# a cell of the terminal matrix: the same words as summary.json and the page, short
-_CELL = {"caught": ("caught", "green"), "missed": ("MISSED", "bold red"),
-         "no effect": ("none", "yellow"), "not applicable": ("·", "dim"),
-         "error": ("ERROR", "magenta")}
+# a cell of the terminal matrix: one mark, as on the page's heat map, so that 14 scenarios
+# and full fault names fit in 100 columns; the legend names them
+_CELL = {"caught": ("✓", "green"), "missed": ("✗", "bold red"), "no effect": ("=", "yellow"),
+         "not applicable": ("·", "dim"), "error": ("!", "magenta")}
 
 
 @contextmanager
@@ -46,20 +47,26 @@ def _running(todo: list[Job], live: bool) -> Iterator[Listener]:
 
 
 def print_matrix(matrix: Matrix) -> None:
-    """Faults (rows) x scenarios (columns) on the terminal, the scores in the margins, then
-    each caught cell's metrics and each missed cell's nearest metric."""
-    table = Table("fault", *matrix.scenarios, "caught",
-                  title=Text("detection matrix"), title_justify="left")
+    """Faults (rows) x scenarios (numbered columns, named below) on the terminal, each fault's
+    score in the margin, each scenario's under the table, then each caught cell's metrics and
+    each missed cell's nearest metric."""
+    table = Table(Column("fault", no_wrap=True),
+                  *(Column(str(i), justify="center") for i, _ in enumerate(matrix.scenarios, 1)),
+                  Column("caught", no_wrap=True), title=Text("detection matrix"),
+                  title_justify="left", box=SIMPLE_HEAD, pad_edge=False)
     for e in matrix.faults:
         row = []
         for s in matrix.scenarios:
             word, style = _CELL[matrix.cell(e.name, s).cell.value]
             row.append(Text(word, style=style))
         table.add_row(Text(e.name), *row, matrix.fault_score(e.name).text() or "-")
-    table.add_row(Text("score", style="bold"),
-                  *(Text(matrix.scenario_score(s).text()) for s in matrix.scenarios),
-                  Text(matrix.score.text(), style="bold"))
     out_console.print(table)
+    out_console.print(Text("  ".join(f"{mark} {word}" for word, (mark, _) in _CELL.items())),
+                      highlight=False)
+    for i, s in enumerate(matrix.scenarios, 1):
+        out_console.print(Text(f"{i:>3} {s}: {matrix.scenario_score(s).text() or '-'}"),
+                          highlight=False)
+    out_console.print(Text(f"suite: {matrix.score.text()}", style="bold"), highlight=False)
     if none := matrix.score.no_effect:
         out_console.print(Text(f"{none} cells with no effect (no metric moved beyond its "
                                "resolution) are not scored"), highlight=False)
