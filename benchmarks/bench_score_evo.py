@@ -4,7 +4,11 @@ interleaved round by round, median of repeats, on a Nav2-like rosbag2 (MCAP) log
 (`map`) at 20 Hz and wheel odometry (`odom`) at 50 Hz, SE(3)-aligned (`--align se3` / `-a`).
 `kartci score` runs as it comes (run log + HTML reports) and with `--no-html`, started as the
 `kartci` script starts it (`python -m kartci`). Both APE RMSEs
-are printed too: they must agree. Asserts nothing. CPU time is the steadier figure on a
+are printed too: they must agree. With `--fixtures`, also on the shared fixture logs
+(../shared/fixtures/bags: the Jackal's and the TurtleBot3's ROS 1 bags through their shipped
+profiles in profiles/; neither holds a second trajectory, so kartci scores the odometry alone,
+no APE, and evo_ape reads the odometry as reference and estimate, an APE of 0). Asserts
+nothing. CPU time is the steadier figure on a
 shared machine: wall time there includes waiting for a core. kartci's modules are byte-compiled
 first, as an installed kartci's (and evo's) are: a checkout run with PYTHONDONTWRITEBYTECODE
 set would compile them on every run (about 0.3 s; `--source` measures that).
@@ -13,7 +17,7 @@ evo is GPL and never a kartci dependency: its CLI runs from its own venv (KARTCI
 else .venv-evo/bin, else /tmp/venv-evo/bin).
 
     .venv/bin/python benchmarks/bench_score_evo.py [--minutes 10] [--repeats 3] [--json OUT]
-        [--source]
+        [--source] [--fixtures]
 """
 
 from __future__ import annotations
@@ -42,6 +46,10 @@ from kartci.bench import Better, Record
 
 ROOT = Path(__file__).resolve().parents[1]
 PROFILE = "name: nav2\npose: {topic: /amcl_pose}\nestimate: {topic: /odom}\n"
+FIXTURES = ROOT.parent / "shared" / "fixtures" / "bags"
+# fixture log -> (its profile in profiles/, its odometry topic)
+FIXTURE_LOGS = {"jackal_imu_odom.bag": ("jackal", "/jackal_velocity_controller/odom"),
+                "turtlebot3_gazebo_cmd_odom_scan.bag": ("turtlebot3", "/odom")}
 
 
 def evo_bin() -> Path:
@@ -116,6 +124,50 @@ def timed(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
+def compare(label: str, name: str, log: Path, profile: str, evo_ape: list[str], folder: Path,
+            repeats: int, record: Record, align: bool = True) -> None:
+    """kartci score (with and without HTML) and evo_ape on one log, interleaved round by round;
+    medians printed and recorded under `label`."""
+    work = folder / name
+    work.mkdir()
+    (work / "profile.yaml").write_text(profile, encoding="utf-8")
+    (work / "bl").mkdir()
+    env = {**os.environ, "HOME": str(work), "MPLBACKEND": "Agg"}  # evo's ~/.evo
+    # `python -m kartci` is what the `kartci` script runs; `-m kartci.cli` would import the
+    # whole CLI (~0.4 s CPU) before the pinned re-exec imports it again
+    kartci = [sys.executable, "-m", "kartci", "score", str(log), "--profile",
+              str(work / "profile.yaml"), *(["--align", "se3"] if align else []),
+              "--baselines", str(work / "bl")]
+    runs: dict[str, Callable[[int], list[str]]] = {
+        "kartci score": lambda i: [*kartci, "--out", str(work / f"out{i}")],
+        "kartci score --no-html": lambda i: [*kartci, "--no-html", "--out",
+                                             str(work / f"plain{i}")],
+        "evo_ape": lambda i: [*evo_ape, "--save_results", str(work / f"evo{i}.zip")]}
+    print(f"{label}; s per command (fresh process)")
+    samples: dict[str, list[tuple[float, float]]] = {n: [] for n in runs}
+    for i in range(repeats):  # interleaved: a load change hits every command alike
+        for n, make in runs.items():
+            samples[n].append(timed(make(i), env))
+    medians = {}
+    for n, got in samples.items():
+        for k, what in enumerate(("wall", "cpu")):
+            values = [g[k] for g in got]
+            medians[n, what] = statistics.median(values)
+            record.add(f"{name}: {n} {what}", "s", values, Better.LOWER)
+            print(f"  {n:24s} {what:4s} median {medians[n, what]:6.2f}  "
+                  f"({', '.join(f'{v:.2f}' for v in values)})")
+    with zipfile.ZipFile(work / "evo0.zip") as z:
+        evo_rmse = json.loads(z.read("stats.json"))["rmse"]
+    doc = json.loads((work / "out0" / name / "metrics.json").read_text())
+    ours = doc["metrics"].get("ape_rmse_m", {}).get("value")
+    print(f"  APE RMSE: evo {evo_rmse:.9f} m, " + (
+        "kartci none (no estimate)" if ours is None else
+        f"kartci {ours:.9f} m (difference {abs(ours - evo_rmse):.2e})"))
+    for n in ("kartci score", "kartci score --no-html"):
+        ratio = {w: medians[n, w] / medians["evo_ape", w] for w in ("wall", "cpu")}
+        print(f"  {n} / evo_ape: wall {ratio['wall']:.2f}x, cpu {ratio['cpu']:.2f}x")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--minutes", type=float, default=10.0, help="log length, min")
@@ -123,6 +175,8 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="also write the figures to this file")
     parser.add_argument("--source", action="store_true",
                         help="do not byte-compile kartci first (as a checkout without .pyc)")
+    parser.add_argument("--fixtures", action="store_true",
+                        help="also the shared fixture logs (../shared/fixtures/bags)")
     args = parser.parse_args()
     evo = evo_bin()
     if not args.source:
@@ -130,45 +184,17 @@ def main() -> None:
     record = Record("bench_score_evo")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        log = folder / "nav2"
+        log = folder / "nav2.log"
         n = write_log(log, args.minutes)
-        profile = folder / "nav2.yaml"
-        profile.write_text(PROFILE, encoding="utf-8")
-        (folder / "bl").mkdir()
-        env = {**os.environ, "HOME": str(folder), "MPLBACKEND": "Agg"}  # evo's ~/.evo
-        # `python -m kartci` is what the `kartci` script runs; `-m kartci.cli` would import the
-        # whole CLI (~0.4 s CPU) before the pinned re-exec imports it again
-        kartci = [sys.executable, "-m", "kartci", "score", str(log), "--profile",
-                  str(profile), "--align", "se3", "--baselines", str(folder / "bl")]
-        evo_ape = [str(evo / "evo_ape"), "bag2", str(log), "/amcl_pose", "/odom", "-a",
-                   "--no_warnings"]
-        runs: dict[str, Callable[[int], list[str]]] = {
-            "kartci score": lambda i: [*kartci, "--out", str(folder / f"out{i}")],
-            "kartci score --no-html": lambda i: [*kartci, "--no-html", "--out",
-                                                 str(folder / f"plain{i}")],
-            "evo_ape": lambda i: [*evo_ape, "--save_results", str(folder / f"evo{i}.zip")]}
-        print(f"{args.minutes:g} min log, {n} messages; s per command (fresh process)")
-        samples: dict[str, list[tuple[float, float]]] = {name: [] for name in runs}
-        for i in range(args.repeats):  # interleaved: a load change hits every command alike
-            for name, make in runs.items():
-                samples[name].append(timed(make(i), env))
-        medians = {}
-        for name, got in samples.items():
-            for k, what in enumerate(("wall", "cpu")):
-                values = [g[k] for g in got]
-                medians[name, what] = statistics.median(values)
-                record.add(f"{name} {what}", "s", values, Better.LOWER)
-                print(f"  {name:24s} {what:4s} median {medians[name, what]:6.2f}  "
-                      f"({', '.join(f'{v:.2f}' for v in values)})")
-        with zipfile.ZipFile(folder / "evo0.zip") as z:
-            evo_rmse = json.loads(z.read("stats.json"))["rmse"]
-        doc = json.loads((folder / "out0" / "nav2" / "metrics.json").read_text())
-        ours = doc["metrics"]["ape_rmse_m"]["value"]
-        print(f"APE RMSE: kartci {ours:.9f} m, evo {evo_rmse:.9f} m "
-              f"(difference {abs(ours - evo_rmse):.2e})")
-        for name in ("kartci score", "kartci score --no-html"):
-            ratio = {w: medians[name, w] / medians["evo_ape", w] for w in ("wall", "cpu")}
-            print(f"{name} / evo_ape: wall {ratio['wall']:.2f}x, cpu {ratio['cpu']:.2f}x")
+        compare(f"{args.minutes:g} min Nav2-like log, {n} messages", "nav2", log, PROFILE,
+                [str(evo / "evo_ape"), "bag2", str(log), "/amcl_pose", "/odom", "-a",
+                 "--no_warnings"], folder, args.repeats, record)
+        for bag, (name, topic) in FIXTURE_LOGS.items() if args.fixtures else ():
+            profile = (ROOT / "profiles" / f"{name}.yaml").read_text(encoding="utf-8")
+            compare(f"fixture {bag} (evo_ape: {topic} against itself)", name, FIXTURES / bag,
+                    profile, [str(evo / "evo_ape"), "bag", str(FIXTURES / bag), topic, topic,
+                              "-a", "--no_warnings"], folder, args.repeats, record,
+                    align=False)
     if args.json:
         record.save(args.json)
 

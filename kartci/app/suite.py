@@ -258,12 +258,14 @@ def compare_suites(base: Path, head: Path, out: Path, baselines: Path | None,
 
 
 def write_reports(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-                  history: Path | None = None, html: bool = True) -> dict[str, Path]:
-    """Every report in `out` (the HTML ones with `html`), by kind. A report that cannot be
+                  history: Path | None = None, html: bool = True,
+                  static: bool = True) -> dict[str, Path]:
+    """Every report in `out` (the HTML ones with `html`, report-static.html with `static` too),
+    by kind. A report that cannot be
     drawn is a RunError (bad input, not a regression), and no earlier report stays in its
     place (write_all removes them first)."""
     try:
-        return write_all(results, out, words, history, html)
+        return write_all(results, out, words, history, html, static)
     except (KartciError, OSError):
         raise
     except Exception as err:

@@ -169,10 +169,12 @@ def print_verdicts(results: list[ScenarioResult], words: Wording) -> None:
 
 
 def finish(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-           ci: bool = True, history: Path | None = None, html: bool = True) -> NoReturn:
-    """Write every report (the HTML ones with `html`; see `kartci.app.suite.write_reports`),
-    then `conclude`."""
-    conclude(results, write_reports(results, out, words, history, html), words, ci, html)
+           ci: bool = True, history: Path | None = None, html: bool = True,
+           static: bool = True) -> NoReturn:
+    """Write every report (the HTML ones with `html`, the static page with `static` too; see
+    `kartci.app.suite.write_reports`), then `conclude`."""
+    conclude(results, write_reports(results, out, words, history, html, static), words, ci,
+             html)
 
 
 def conclude(results: list[ScenarioResult], paths: dict[str, Path], words: Wording = RUN,

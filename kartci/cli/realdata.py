@@ -69,9 +69,9 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
                   "s, of an estimate / reference pose pair (evo --t_max_diff); default: the "
                   "profile's, else 0.01 s as evo's.")] = None,
               html: Annotated[bool, typer.Option(
-                  help="Write the HTML reports (report.html, report-static.html); "
-                  "--no-html: the metrics, summary.md/json and junit.xml only, about a third "
-                  "faster on a long log.")] = True) -> None:
+                  help="Write report.html (interactive figures; no report-static.html, whose "
+                  "matplotlib would double the command's start-up); --no-html: the metrics, "
+                  "summary.md/json and junit.xml only.")] = True) -> None:
     """Score a recorded log with the same metric code as a run (duration, distance, speeds;
     laps, lap times and cross-track error with a track; localization error with an estimate),
     write the same reports and judge it against baselines/<profile name>.json."""
@@ -88,7 +88,7 @@ def score_cmd(log: LogArg, profile: ProfileOpt = None, out: OutOpt = None,
         if strict_mode(strict):
             result = require_baselines(result, out, base)
         write_manifest(out, "score", [result.name])
-        finish([result], out, html=html)
+        finish([result], out, html=html, static=False)
 
 
 @app.command("simreal")

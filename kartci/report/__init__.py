@@ -17,10 +17,10 @@ if TYPE_CHECKING:
 
 
 def __getattr__(name: str) -> Any:
-    """The writers load on first use (report_html brings matplotlib and the figures), so a
+    """The writers load on first use (report_html brings the figures), so a
     command that prints a table starts fast."""
     if name == "report_html":
-        from kartci.report.html import report_html  # start-up: matplotlib, on first use
+        from kartci.report.html import report_html  # start-up: the figures, on first use
         return report_html
     if name == "junit_xml":
         from kartci.report.junit import junit_xml  # start-up, as report_html
@@ -68,25 +68,29 @@ def _history(results: list[ScenarioResult], folder: Path | None) -> tuple[list[s
 
 
 def write_all(results: list[ScenarioResult], out: Path, words: Wording = RUN,
-              history: Path | None = None, html: bool = True) -> dict[str, Path]:
+              history: Path | None = None, html: bool = True,
+              static: bool = True) -> dict[str, Path]:
     """report.html (interactive), report-static.html (SVG, no script), summary.md, summary.json
     and junit.xml in `out` (without `html`: no HTML, whose figures are most of the time a
-    scored log's reports take). The old ones are removed
+    scored log's reports take; without `static`: no report-static.html, whose matplotlib is
+    most of the rest). The old ones are removed
     first: a report that fails half-way leaves some missing, never an earlier one standing."""
     out.mkdir(parents=True, exist_ok=True)
     paths = {key: out / name for key, name in FILES.items()}
     for path in paths.values():
         path.unlink(missing_ok=True)
-    # start-up: the writers (matplotlib, the figures) load when reports are written
+    # start-up: the writers (the figures; matplotlib for the static page) load when written
     from kartci.report.junit import junit_xml
     from kartci.report.markdown import summary_md
 
     if html:
-        from kartci.report.html import report_html  # start-up: matplotlib (+1 s), HTML only
+        from kartci.report.html import report_html  # start-up: the figures, HTML only
 
         write_text_atomic(paths["html"], report_html(results, words,
-                                                     history=_history(results, history)))
-        write_text_atomic(paths["static"], report_html(results, words, static=True))
+                                                     history=_history(results, history),
+                                                     static_page=static))
+        if static:
+            write_text_atomic(paths["static"], report_html(results, words, static=True))
     write_text_atomic(paths["markdown"], summary_md(results, words))
     write_json_atomic(paths["json"], summary_json(results))
     main = paths["html" if html else "markdown"]

@@ -11,7 +11,6 @@ from kartci.report.history import history_sections
 from kartci.report.interactive import body_assets, figures_block, head_assets
 from kartci.report.laps import lap_tables
 from kartci.report.markdown import VERDICT_WORD
-from kartci.report.static import scenario_svgs
 from kartci.report.tables import (
     CSS,
     RUN,
@@ -30,8 +29,8 @@ from kartci.verdict.result import ScenarioResult, exit_code
 HELP = ("<p>Figures: hover to read values (the time cursor is shared by a scenario's plots and "
         "shown as a dot on the view from above), wheel to zoom, drag to zoom to a range, "
         "shift+drag to pan, double-click to reset. Dashed grey: the baseline's reference "
-        "trace; red dotted lines and crosses: collisions and solver failures. "
-        '<a href="report-static.html">Static version</a> (no script).</p>')
+        "trace; red dotted lines and crosses: collisions and solver failures.")
+STATIC_LINK = ' <a href="report-static.html">Static version</a> (no script).'  # when written
 
 
 def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
@@ -67,6 +66,8 @@ def _scenario(r: ScenarioResult, words: Wording, static: bool) -> str:
     if r.plots is not None:
         out.append(lap_tables(r.plots))
         if static:
+            from kartci.report.static import scenario_svgs  # start-up: matplotlib (~0.5 s)
+
             svgs = r.static_figures if r.static_figures is not None else scenario_svgs(r.plots)
             out.append('<div class="figs">' + "".join(svgs) + "</div>")
         else:
@@ -84,11 +85,13 @@ def _history(results: list[ScenarioResult], history: tuple[list[str], Any]) -> s
 
 
 def report_html(results: list[ScenarioResult], words: Wording = RUN,
-                static: bool = False, history: tuple[list[str], Any] | None = None) -> str:
+                static: bool = False, history: tuple[list[str], Any] | None = None,
+                static_page: bool = True) -> str:
     """report.html, self-contained and offline: the verdict, a table of scenarios, and each
     scenario's metrics, criteria, lap tables and figures: interactive (uPlot, inlined once), or
-    `static` SVG with no script (report-static.html, for e-mail). Scenarios come worst first,
-    in the index and in the sections, under a one-line verdict."""
+    `static` SVG with no script (report-static.html, for e-mail; `static_page`: one is written
+    beside, linked). Scenarios come worst first, in the index and in the sections, under a
+    one-line verdict."""
     code = exit_code(results)
     results = worst_first(results)
     rows = "".join(f'<tr><td><a href="#{html.escape(r.name)}">{html.escape(r.name)}</a></td>'
@@ -106,5 +109,5 @@ def report_html(results: list[ScenarioResult], words: Wording = RUN,
             f'<p class="verdict {verdict[:4].lower()}">{html.escape(verdict)}</p>'
             f"<p>written {stamp}; exit code {code}</p>"
             f"<table><tr><th>scenario</th><th>status</th></tr>{rows}</table>"
-            f"{'' if static else HELP}"
+            f"{'' if static else HELP + (STATIC_LINK if static_page else '') + '</p>'}"
             f"{body}{'' if static else body_assets()}</body></html>\n")

@@ -59,10 +59,17 @@ def test_jackal_scored_with_its_profile_and_judged_against_its_baseline(
 
 def test_no_html_writes_the_same_metrics_and_no_html_report(bags: Path, tmp_path: Path,
                                                              baselines: Path) -> None:
+    """With HTML: report.html alone, its figures interactive, and no matplotlib imported (the
+    static page's matplotlib doubled the command's start-up)."""
     args = ("score", bags / "jackal_imu_odom.bag", "--profile", PROFILES / "jackal.yaml",
             "--baselines", baselines)
     full, plain = tmp_path / "full", tmp_path / "plain"
-    assert kartci(*args, "--out", full).returncode == 0
+    r = kartci(*args, "--out", full, env={"PYTHONPROFILEIMPORTTIME": "1"})
+    assert r.returncode == 0, r.stderr
+    assert "import time:" in r.stderr and "matplotlib" not in r.stderr
+    page = (full / "report.html").read_text(encoding="utf-8")
+    assert '<div class="kfigs" data-scenario="jackal">' in page
+    assert "report-static.html" not in page and not (full / "report-static.html").exists()
     (full / "report.html").rename(tmp_path / "kept.html")  # --no-html leaves none behind
     r = kartci(*args, "--out", plain, "--no-html")
     assert r.returncode == 0, r.stderr
