@@ -392,12 +392,14 @@ def run_faults(request: Request, proj: Project, running: Running | None = None
     return FaultsResult(matrix, out, summary, page, r.min_score)
 
 
-def _summary(out: Path) -> dict[str, Any]:
+def read_summary(out: Path) -> dict[str, Any]:
+    """OUT/summary.json of `kartci faults`; a SpecError (one line) when it is missing or not
+    one."""
     path = out / SUMMARY
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as err:
-        raise SpecError(f"{path}: no detection matrix to judge ({type(err).__name__}); run "
+        raise SpecError(f"{path}: no detection matrix to read ({type(err).__name__}); run "
                         "`kartci faults --out DIR` first") from None
     if not isinstance(doc, dict) or "kartci_faults" not in doc:
         raise SpecError(f"{path}: not written by `kartci faults`")
@@ -407,7 +409,7 @@ def _summary(out: Path) -> dict[str, Any]:
 def is_faults_folder(out: Path) -> bool:
     """Whether OUT holds a `kartci faults` matrix (so `kartci merge` merges matrices)."""
     try:
-        _summary(out)
+        read_summary(out)
     except SpecError:
         return False
     return True
@@ -416,7 +418,7 @@ def is_faults_folder(out: Path) -> bool:
 def rejudge(out: Path, baselines: Path, min_score: float | None = None) -> FaultsResult:
     """Judge a `kartci faults` folder's runs again with today's baselines, running nothing:
     after `kartci baseline tolerances --write`, the matrix the new tolerances give."""
-    old = _summary(out)
+    old = read_summary(out)
     with locked(out):
         return _judge_again(out, old, baselines, min_score)
 
@@ -428,7 +430,7 @@ def merge_faults(dirs: Sequence[Path], out: Path, baselines: Path, proj: Project
     again together with today's baselines."""
     from kartci.runner.merge import merge  # start-up: PyBullet (+0.4 s)
 
-    docs = [_summary(d) for d in dirs]
+    docs = [read_summary(d) for d in dirs]
     if len({d["catalogue"] for d in docs}) > 1:
         raise SpecError("the shards ran different catalogues ("
                         + ", ".join(sorted({d["catalogue"] for d in docs})) + "); merge one's")

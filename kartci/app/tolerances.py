@@ -29,6 +29,7 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
+from kartci.app.faults import read_summary
 from kartci.core import Direction, RunFolder
 from kartci.errors import SpecError
 from kartci.runner.compare import samples
@@ -37,7 +38,6 @@ from kartci.verdict.baseline import SPREAD_MULTIPLE, definition
 from kartci.verdict.runs import compare_runs
 
 MARGIN = 2.0  # a tightened tolerance is the smallest move it must catch over this
-FAULTS_SUMMARY = "summary.json"
 JUDGED = ("caught", "missed")  # cells of the matrix with both runs finished
 
 
@@ -110,15 +110,8 @@ def _bad_move(direction: str, delta: float) -> float:
 
 def _runs(out: Path) -> list[dict[str, Any]]:
     """The judged cells of a `kartci faults` folder's matrix."""
-    path = out / FAULTS_SUMMARY
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as err:
-        raise SpecError(f"{path}: no detection matrix to read ({type(err).__name__}); run "
-                        "`kartci faults --out DIR` first") from None
-    if not isinstance(doc, dict) or "kartci_faults" not in doc:
-        raise SpecError(f"{path}: not written by `kartci faults`")
-    return [c for c in doc.get("cells", []) if c.get("result") in JUDGED and c.get("run")]
+    return [c for c in read_summary(out).get("cells", [])
+            if c.get("result") in JUDGED and c.get("run")]
 
 
 def _judge(out: Path, cells: Sequence[Mapping[str, Any]],
